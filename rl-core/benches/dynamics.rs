@@ -1,0 +1,2 @@
+//! Dynamics benchmarks (issue 3; being built).
+fn main() {}

@@ -1,0 +1,2 @@
+//! Trajectory benchmarks (issue 4; being built).
+fn main() {}

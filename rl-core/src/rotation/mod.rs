@@ -1,0 +1,1 @@
+//! Rotations: unit-quaternion extensions (exp, log, pow, angular velocity and acceleration).

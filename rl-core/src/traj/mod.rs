@@ -1,0 +1,1 @@
+//! Algebraic trajectory functions with exact derivatives (issue 4; being built).
