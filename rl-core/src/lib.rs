@@ -10,3 +10,15 @@ extern crate std;
 
 pub mod rotation;
 pub mod traj;
+
+pub mod algo;
+mod error;
+pub mod joint;
+#[cfg(feature = "std")]
+pub mod loader;
+pub mod math;
+pub mod model;
+pub mod spatial;
+
+pub use error::Error;
+pub use model::{Data, Model, ModelBuilder};

@@ -1,0 +1,41 @@
+//! Forward position kinematics: the world pose of every body and tool.
+//!
+//! `q` has `model.nq()` elements. Results: [`Data::world_pose`]. O(n). Does not allocate.
+
+use crate::error::{Error, check_len};
+use crate::model::{Data, Model, ROOT};
+use crate::spatial::PlueckerTransform;
+
+/// Computes every body's pose relative to its parent and to the world.
+pub fn forward_position<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+) -> Result<(), Error> {
+    check_len("q", q, model.nq)?;
+    for i in 0..model.nbodies {
+        body_pose(model, data, q, i);
+    }
+    Ok(())
+}
+
+/// Body `i`'s pose in its parent (`placement · X_J(q)`) and in the world, into `data`.
+#[inline]
+pub(crate) fn body_pose<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64], i: usize) {
+    let joint = &model.joints[i];
+    let sq = model.idx_q[i];
+    let x = model.placements[i] * joint.transform(&q[sq..sq + joint.nq()]);
+    data.parent_pose[i] = x;
+    let p = model.parents[i];
+    data.world_pose[i] = if p == ROOT { x } else { data.world_pose[p] * x };
+}
+
+/// The world pose of tool `tool`, from the body poses of the last forward sweep.
+pub fn tool_pose<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    tool: usize,
+) -> Result<PlueckerTransform, Error> {
+    let t = model.tools().get(tool).ok_or(Error::UnknownTool { tool })?;
+    Ok(if t.body == ROOT { t.placement } else { data.world_pose[t.body] * t.placement })
+}

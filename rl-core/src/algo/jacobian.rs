@@ -1,0 +1,108 @@
+//! Tool Jacobians in the world frame, and `J̇ q̇`.
+//!
+//! `J` maps `q̇` to the tool's velocity in world coordinates at the tool's origin, rows
+//! `[linear xyz; angular xyz]` (RL's layout, Pinocchio's `LOCAL_WORLD_ALIGNED`). One forward
+//! sweep computes every DOF's motion subspace in world coordinates; each tool then fills its
+//! columns from its own ancestors only — one sweep for all tools, where RL runs `n` velocity
+//! sweeps. `q`: `nq`. O(n + tools·depth). Does not allocate.
+
+use crate::error::{Error, check_len};
+use crate::model::{Data, Model, ROOT};
+
+use super::forward_position::{body_pose, tool_pose};
+
+/// A 6 × `N` Jacobian, rows `[linear xyz; angular xyz]`; columns past `model.dof()` unused.
+pub type Jacobian<const N: usize> = [[f64; N]; 6];
+
+/// Forward position plus every DOF's motion subspace in world coordinates.
+fn world_subspaces<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+    for i in 0..model.nbodies {
+        body_pose(model, data, q, i);
+        let sv = model.idx_v[i];
+        let x = data.world_pose[i];
+        for k in sv..sv + model.joints[i].nv() {
+            data.world_subspace[k] = x.act_motion(&model.subspace[k]);
+        }
+    }
+}
+
+/// Fills `out` with tool `tool`'s Jacobian from the world subspaces in `data`.
+fn fill<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    tool: usize,
+    out: &mut Jacobian<N>,
+) -> Result<(), Error> {
+    let p = tool_pose(model, data, tool)?.translation;
+    for row in out.iter_mut() {
+        row[..model.nv].fill(0.0);
+    }
+    let mut b = model.tools[tool].body;
+    while b != ROOT {
+        let sv = model.idx_v[b];
+        for k in sv..sv + model.joints[b].nv() {
+            let s = &data.world_subspace[k];
+            let lin = s.linear + s.angular.cross(p);
+            out[0][k] = lin.x;
+            out[1][k] = lin.y;
+            out[2][k] = lin.z;
+            out[3][k] = s.angular.x;
+            out[4][k] = s.angular.y;
+            out[5][k] = s.angular.z;
+        }
+        b = model.parents[b];
+    }
+    Ok(())
+}
+
+/// The world Jacobian of tool `tool` at configuration `q` (forward position included).
+pub fn jacobian<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    tool: usize,
+    out: &mut Jacobian<N>,
+) -> Result<(), Error> {
+    check_len("q", q, model.nq)?;
+    if tool >= model.ntools {
+        return Err(Error::UnknownTool { tool });
+    }
+    world_subspaces(model, data, q);
+    fill(model, data, tool, out)
+}
+
+/// The world Jacobians of all tools in one sweep; `out` needs at least `tools().len()`
+/// elements (tool `t` goes to `out[t]`).
+pub fn jacobians<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    out: &mut [Jacobian<N>],
+) -> Result<(), Error> {
+    check_len("q", q, model.nq)?;
+    if out.len() < model.ntools {
+        return Err(Error::Dimension { argument: "out", expected: model.ntools, got: out.len() });
+    }
+    world_subspaces(model, data, q);
+    for (t, j) in out.iter_mut().enumerate().take(model.ntools) {
+        fill(model, data, t, j)?;
+    }
+    Ok(())
+}
+
+/// `J̇ q̇` of tool `tool` in the Jacobian's convention: the tool's classical acceleration
+/// when `q̈ = 0`, so that `ẍ = J q̈ + J̇ q̇`. Runs forward acceleration with `q̈ = 0`
+/// (overwriting `data`'s velocities and accelerations).
+pub fn jacobian_derivative_times_qd<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+    tool: usize,
+) -> Result<[f64; 6], Error> {
+    check_len("q", q, model.nq)?;
+    check_len("qd", qd, model.nv)?;
+    let zeros = [0.0; N];
+    super::forward_acceleration(model, data, q, qd, &zeros[..model.nv])?;
+    super::tool_acceleration(model, data, tool)
+}

@@ -1,0 +1,1 @@
+//! Model loading: RL XML and URDF (being built).

@@ -1,0 +1,293 @@
+//! The immutable description of a tree of rigid bodies.
+
+use glam::DVec3;
+
+use super::{JointLimits, Name};
+use crate::joint::{Joint, Revolute};
+use crate::spatial::{MotionVector, PlueckerTransform, RigidBodyInertia};
+
+/// The parent index of a body attached to the world (the fixed base).
+pub const ROOT: usize = usize::MAX;
+
+/// A tool (operational frame, RL's end-effector): a frame rigidly attached to a body.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tool {
+    /// The tool's name.
+    pub name: Name,
+    /// The body it is attached to, or [`ROOT`] for the world.
+    pub body: usize,
+    /// Its pose in the body's frame.
+    pub placement: PlueckerTransform,
+}
+
+/// A tree of up to `N` moving bodies with up to `N` degrees of freedom in total.
+///
+/// Body `i` hangs from `parent(i)` (an earlier body, or [`ROOT`]) through its joint: the
+/// joint frame sits at `placement(i)` in the parent's frame, and the body frame is the joint's
+/// child frame. Build one with [`super::ModelBuilder`] or a loader; it never changes after.
+#[derive(Clone, Debug)]
+pub struct Model<const N: usize> {
+    pub(crate) name: Name,
+    pub(crate) nbodies: usize,
+    pub(crate) nq: usize,
+    pub(crate) nv: usize,
+    pub(crate) parents: [usize; N],
+    pub(crate) joints: [Joint; N],
+    pub(crate) placements: [PlueckerTransform; N],
+    pub(crate) inertias: [RigidBodyInertia; N],
+    pub(crate) idx_q: [usize; N],
+    pub(crate) idx_v: [usize; N],
+    pub(crate) joint_names: [Name; N],
+    pub(crate) body_names: [Name; N],
+    /// Motion subspace columns, one per DOF, in the owning body's coordinates.
+    pub(crate) subspace: [MotionVector; N],
+    /// The body that owns each DOF.
+    pub(crate) dof_body: [usize; N],
+    /// The DOF before each DOF on the path to the root (Featherstone's λ for the sparse
+    /// factorisation), or [`ROOT`].
+    pub(crate) dof_parent: [usize; N],
+    pub(crate) limits: [JointLimits; N],
+    pub(crate) tools: [Tool; N],
+    pub(crate) ntools: usize,
+    /// Physical gravitational acceleration in world coordinates, m/s².
+    pub(crate) gravity: DVec3,
+    /// Mass rigidly attached to the world (does not move; reported, never simulated).
+    pub(crate) base_mass: f64,
+}
+
+impl<const N: usize> Default for Model<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Model<N> {
+    /// An empty model (no bodies), gravity `(0, 0, -9.80665)`.
+    pub fn new() -> Self {
+        let filler = Tool { name: Name::EMPTY, body: ROOT, placement: PlueckerTransform::IDENTITY };
+        Self {
+            name: Name::EMPTY,
+            nbodies: 0,
+            nq: 0,
+            nv: 0,
+            parents: [ROOT; N],
+            joints: [Joint::Revolute(Revolute { axis: DVec3::Z }); N],
+            placements: [PlueckerTransform::IDENTITY; N],
+            inertias: [RigidBodyInertia::ZERO; N],
+            idx_q: [0; N],
+            idx_v: [0; N],
+            joint_names: [Name::EMPTY; N],
+            body_names: [Name::EMPTY; N],
+            subspace: [MotionVector::ZERO; N],
+            dof_body: [0; N],
+            dof_parent: [ROOT; N],
+            limits: [JointLimits::UNLIMITED; N],
+            tools: [filler; N],
+            ntools: 0,
+            gravity: DVec3::new(0.0, 0.0, -9.80665),
+            base_mass: 0.0,
+        }
+    }
+
+    /// The model's name.
+    pub fn name(&self) -> &str {
+        self.name.as_str()
+    }
+
+    /// Number of moving bodies (= number of joints).
+    #[inline]
+    pub fn body_count(&self) -> usize {
+        self.nbodies
+    }
+
+    /// Number of position coordinates (length of `q`).
+    #[inline]
+    pub fn nq(&self) -> usize {
+        self.nq
+    }
+
+    /// Number of velocity coordinates, the degrees of freedom (length of `q̇`, `q̈`, `τ`).
+    #[inline]
+    pub fn dof(&self) -> usize {
+        self.nv
+    }
+
+    /// The parent of body `i`, or [`ROOT`].
+    pub fn parent(&self, i: usize) -> usize {
+        self.parents[i]
+    }
+
+    /// The joint of body `i`.
+    pub fn joint(&self, i: usize) -> &Joint {
+        &self.joints[i]
+    }
+
+    /// The joint frame's pose in the parent body's frame.
+    pub fn placement(&self, i: usize) -> &PlueckerTransform {
+        &self.placements[i]
+    }
+
+    /// Body `i`'s inertia in its own frame (fixed children merged in).
+    pub fn inertia(&self, i: usize) -> &RigidBodyInertia {
+        &self.inertias[i]
+    }
+
+    /// The name of body `i`'s joint.
+    pub fn joint_name(&self, i: usize) -> &str {
+        self.joint_names[i].as_str()
+    }
+
+    /// The name of body `i`.
+    pub fn body_name(&self, i: usize) -> &str {
+        self.body_names[i].as_str()
+    }
+
+    /// The first index of body `i`'s coordinates in `q`.
+    pub fn q_index(&self, i: usize) -> usize {
+        self.idx_q[i]
+    }
+
+    /// The first index of body `i`'s coordinates in `q̇`.
+    pub fn v_index(&self, i: usize) -> usize {
+        self.idx_v[i]
+    }
+
+    /// Limits of DOF `k` (index into `q̇`).
+    pub fn limits(&self, k: usize) -> &JointLimits {
+        &self.limits[k]
+    }
+
+    /// The body that owns DOF `k`.
+    pub fn dof_body(&self, k: usize) -> usize {
+        self.dof_body[k]
+    }
+
+    /// The tools (operational frames).
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools[..self.ntools]
+    }
+
+    /// The index of the tool called `name`.
+    pub fn tool_index(&self, name: &str) -> Option<usize> {
+        self.tools().iter().position(|t| t.name.as_str() == name)
+    }
+
+    /// The index of the body called `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.body_names[..self.nbodies].iter().position(|n| n.as_str() == name)
+    }
+
+    /// Physical gravitational acceleration in world coordinates, m/s² (e.g. `(0, 0, -9.81)`).
+    pub fn gravity(&self) -> DVec3 {
+        self.gravity
+    }
+
+    /// Sets the physical gravitational acceleration.
+    pub fn set_gravity(&mut self, g: DVec3) {
+        self.gravity = g;
+    }
+
+    /// Total mass of the moving bodies, kg.
+    pub fn moving_mass(&self) -> f64 {
+        self.inertias[..self.nbodies].iter().map(|i| i.mass).sum()
+    }
+
+    /// Mass rigidly attached to the world (a fixed base), kg.
+    pub fn base_mass(&self) -> f64 {
+        self.base_mass
+    }
+
+    /// Whether body `a` is `b` or one of its ancestors.
+    pub fn is_ancestor(&self, a: usize, mut b: usize) -> bool {
+        while b != ROOT {
+            if a == b {
+                return true;
+            }
+            b = self.parents[b];
+        }
+        false
+    }
+
+    /// The neutral configuration (zeros, identity quaternions) into `q[..nq]`.
+    pub fn neutral(&self, q: &mut [f64]) {
+        for i in 0..self.nbodies {
+            let j = &self.joints[i];
+            let s = self.idx_q[i];
+            j.neutral(&mut q[s..s + j.nq()]);
+        }
+    }
+
+    /// `q ⊕ v dt` for the whole model (see [`Joint::integrate`]).
+    pub fn integrate(&self, q: &[f64], v: &[f64], dt: f64, out: &mut [f64]) {
+        for i in 0..self.nbodies {
+            let j = &self.joints[i];
+            let (sq, sv) = (self.idx_q[i], self.idx_v[i]);
+            j.integrate(
+                &q[sq..sq + j.nq()],
+                &v[sv..sv + j.nv()],
+                dt,
+                &mut out[sq..sq + j.nq()],
+            );
+        }
+    }
+
+    /// Renormalises every quaternion in `q`.
+    pub fn normalize(&self, q: &mut [f64]) {
+        for i in 0..self.nbodies {
+            let j = &self.joints[i];
+            let s = self.idx_q[i];
+            j.normalize(&mut q[s..s + j.nq()]);
+        }
+    }
+
+    /// A configuration drawn from `next_uniform` (uniform in `[0, 1)`): uniform within finite
+    /// limits, in `[-π, π]` (angles) or `[-1, 1]` m (translations) where unlimited, and a
+    /// uniformly random unit quaternion for ball and free joints.
+    pub fn random_configuration(&self, q: &mut [f64], mut next_uniform: impl FnMut() -> f64) {
+        for i in 0..self.nbodies {
+            let j = &self.joints[i];
+            let (sq, sv) = (self.idx_q[i], self.idx_v[i]);
+            let mut draw = |k: usize, default_half_range: f64| {
+                let l = &self.limits[sv + k];
+                let u = next_uniform();
+                if l.is_bounded() {
+                    l.lower + (l.upper - l.lower) * u
+                } else {
+                    (2.0 * u - 1.0) * default_half_range
+                }
+            };
+            let pi = core::f64::consts::PI;
+            match j {
+                Joint::Revolute(_) | Joint::Helical(_) => q[sq] = draw(0, pi),
+                Joint::Prismatic(_) => q[sq] = draw(0, 1.0),
+                Joint::Cylindrical(_) => {
+                    q[sq] = draw(0, pi);
+                    q[sq + 1] = draw(1, 1.0);
+                }
+                Joint::Planar(_) => {
+                    q[sq] = draw(0, 1.0);
+                    q[sq + 1] = draw(1, 1.0);
+                    q[sq + 2] = draw(2, pi);
+                }
+                Joint::Spherical(_) | Joint::SixDof(_) => {
+                    let o = if matches!(j, Joint::SixDof(_)) {
+                        for k in 0..3 {
+                            q[sq + k] = draw(k, 1.0);
+                        }
+                        3
+                    } else {
+                        0
+                    };
+                    // Shoemake's uniform random rotation.
+                    let (u1, u2, u3) = (next_uniform(), next_uniform(), next_uniform());
+                    let (a, b) = (libm::sqrt(1.0 - u1), libm::sqrt(u1));
+                    let t = 2.0 * pi;
+                    q[sq + o] = a * libm::sin(t * u2);
+                    q[sq + o + 1] = a * libm::cos(t * u2);
+                    q[sq + o + 2] = b * libm::sin(t * u3);
+                    q[sq + o + 3] = b * libm::cos(t * u3);
+                }
+            }
+        }
+    }
+}
