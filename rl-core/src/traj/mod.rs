@@ -1,1 +1,123 @@
-//! Algebraic trajectory functions with exact derivatives (issue 4; being built).
+//! Algebraic trajectory functions of time with exact derivatives (RL's central idea for motion):
+//! position, velocity, acceleration and jerk come from closed forms, never from sampling, so
+//! limits and continuity are checked exactly.
+//!
+//! - [`Trajectory`]: a vector-valued function on `[0, duration]` with `D` axes fixed at compile
+//!   time, evaluating any derivative order; [`Piecewise`] composes any of them in time (a spline
+//!   of polynomials, a spline of jerk-limited moves) and checks continuity at every boundary.
+//! - [`Polynomial`]: any degree, boundary-condition constructors from linear to septic, at-rest
+//!   time-optimal constructors synchronised over axes, derivative, integral and extrema.
+//! - Splines through waypoints ([`spline`]): natural and clamped cubic, linear segments with
+//!   parabolic, quartic or sextic blends, 4-1-4 and 6-1-6 at rest, and the 7-segment
+//!   jerk-limited profile ([`JerkLimited`], Biagiotti & Melchiorri 2008, §3.4).
+//! - Rotations ([`RotationTrajectory`]): slerp, a jerk-limited rotation at rest and a cubic
+//!   quaternion spline, with world-frame angular velocity and acceleration.
+//! - [`Circular`] arcs in 2-D and 3-D with derivatives of every order, and Cartesian
+//!   [`PoseTrajectory`] = position + rotation.
+//!
+//! Capacity is a const generic everywhere; construction and evaluation allocate nothing and
+//! never panic: bad input is a [`TrajectoryError`]. Times outside `[0, duration]` are clamped
+//! to the interval, so a finished trajectory holds its end state.
+
+mod blend;
+mod cartesian;
+mod circular;
+mod error;
+mod jerk_limited;
+mod piecewise;
+mod polynomial;
+mod quaternion_spline;
+mod roots;
+pub mod spline;
+
+pub use blend::{BlendShape, BlendTime};
+pub use cartesian::{PoseSample, PoseTrajectory};
+pub use circular::Circular;
+pub use error::{Discontinuity, LimitKind, TrajectoryError};
+pub use jerk_limited::{JerkLimited, JerkLimitedRotation};
+pub use piecewise::Piecewise;
+pub use polynomial::{Extrema, Limits, Polynomial};
+pub use quaternion_spline::{
+    CubicQuaternionSpline, RotationSample, RotationTrajectory, SlerpTrajectory,
+};
+
+/// Position, velocity, acceleration and jerk of every axis at one time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample<const D: usize> {
+    /// Value of each axis.
+    pub position: [f64; D],
+    /// First time derivative.
+    pub velocity: [f64; D],
+    /// Second time derivative.
+    pub acceleration: [f64; D],
+    /// Third time derivative.
+    pub jerk: [f64; D],
+}
+
+/// A vector-valued function of time on `[0, duration]` with `D` axes and exact derivatives.
+pub trait Trajectory<const D: usize> {
+    /// Length of the time interval in seconds.
+    fn duration(&self) -> f64;
+
+    /// The `order`-th time derivative at `t` (0 = value), `t` clamped to `[0, duration]`.
+    fn derivative(&self, t: f64, order: usize) -> [f64; D];
+
+    /// Value at `t`.
+    fn position(&self, t: f64) -> [f64; D] {
+        self.derivative(t, 0)
+    }
+
+    /// Position, velocity, acceleration and jerk at `t` in one call (implementations fuse the
+    /// four evaluations).
+    fn sample(&self, t: f64) -> Sample<D> {
+        Sample {
+            position: self.derivative(t, 0),
+            velocity: self.derivative(t, 1),
+            acceleration: self.derivative(t, 2),
+            jerk: self.derivative(t, 3),
+        }
+    }
+}
+
+/// `t` clamped to `[0, duration]`; NaN stays NaN (and evaluates to NaN, never panics).
+#[inline]
+pub(crate) fn clamp_time(t: f64, duration: f64) -> f64 {
+    if t > duration {
+        duration
+    } else if t < 0.0 {
+        0.0
+    } else {
+        t
+    }
+}
+
+/// Finite check for a waypoint list, naming the first bad waypoint.
+pub(crate) fn check_finite_points<const D: usize>(
+    points: &[[f64; D]],
+) -> Result<(), TrajectoryError> {
+    for (index, p) in points.iter().enumerate() {
+        if p.iter().any(|x| !x.is_finite()) {
+            return Err(TrajectoryError::NotFinite {
+                what: "waypoint",
+                index,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Times must be finite and strictly increasing.
+pub(crate) fn check_times(times: &[f64]) -> Result<(), TrajectoryError> {
+    for (index, t) in times.iter().enumerate() {
+        if !t.is_finite() {
+            return Err(TrajectoryError::NotFinite {
+                what: "time",
+                index,
+            });
+        }
+        if index > 0 && *t <= times[index - 1] {
+            return Err(TrajectoryError::NonIncreasingTime { index });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,275 @@
+//! The 7-segment jerk-limited profile with trapezoidal acceleration ("double S") from rest to
+//! rest, after Biagiotti & Melchiorri, *Trajectory Planning for Automatic Machines and Robots*
+//! (Springer 2008), §3.4: jerk `+J, 0, -J, 0, -J, 0, +J`. For rest-to-rest motion this is the
+//! time-optimal profile under velocity, acceleration and jerk limits (the same duration as
+//! Ruckig's). Axes are synchronised by stretching each faster axis in time to the slowest
+//! duration, which keeps every limit (velocity scales by `k`, acceleration `k²`, jerk `k³`,
+//! `k ≤ 1`).
+
+use glam::{DQuat, DVec3};
+
+use super::{
+    Limits, Piecewise, RotationSample, RotationTrajectory, Sample, Trajectory, TrajectoryError,
+    check_finite_points, clamp_time,
+};
+
+/// One axis: seven phases of constant jerk.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Profile {
+    /// Phase end times.
+    end: [f64; 7],
+    /// Phase start times.
+    start: [f64; 7],
+    /// Position, velocity, acceleration at each phase start, then the phase's jerk.
+    state: [[f64; 4]; 7],
+}
+
+/// Phase durations `(Tj, Ta, Tv)` of the time-optimal rest-to-rest profile over distance
+/// `h ≥ 0` (Biagiotti & Melchiorri eqs. 3.30-3.33 with zero boundary velocities).
+fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
+    if h == 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let (mut tj, mut ta) = if v * j >= a * a {
+        (a / j, a / j + v / a)
+    } else {
+        let tj = libm::sqrt(v / j);
+        (tj, 2.0 * tj)
+    };
+    let mut tv = h / v - ta;
+    if tv < 0.0 {
+        tv = 0.0;
+        if h >= 2.0 * a * a * a / (j * j) {
+            tj = a / j;
+            ta = 0.5 * tj + libm::sqrt(0.25 * tj * tj + h / a);
+        } else {
+            tj = libm::cbrt(h / (2.0 * j));
+            ta = 2.0 * tj;
+        }
+    }
+    (tj, ta, tv)
+}
+
+impl Profile {
+    /// Builds the phases from the phase times, stretched by `1/k` in time (`k ≤ 1`).
+    fn new(x0: f64, x1: f64, jerk: f64, (tj, ta, tv): (f64, f64, f64), k: f64) -> Self {
+        let sign = if x1 >= x0 { 1.0 } else { -1.0 };
+        let j = sign * jerk * k * k * k;
+        let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
+        let durations =
+            [tj, ta - 2.0 * tj, tj, tv, tj, ta - 2.0 * tj, tj].map(|d| d.max(0.0) * stretch);
+        let jerks = [j, 0.0, -j, 0.0, -j, 0.0, j];
+        let mut p = Profile {
+            end: [0.0; 7],
+            start: [0.0; 7],
+            state: [[0.0; 4]; 7],
+        };
+        let (mut x, mut v, mut a, mut t) = (x0, 0.0, 0.0, 0.0);
+        for i in 0..7 {
+            let (d, ji) = (durations[i], jerks[i]);
+            p.start[i] = t;
+            p.state[i] = [x, v, a, ji];
+            x += d * (v + d * (0.5 * a + d * ji / 6.0));
+            v += d * (a + 0.5 * d * ji);
+            a += d * ji;
+            t += d;
+            p.end[i] = t;
+        }
+        // Rounding leaves |x - x1| at a few ulps; the last phase is exact by construction.
+        p
+    }
+
+    fn duration(&self) -> f64 {
+        self.end[6]
+    }
+
+    #[inline]
+    fn phase(&self, t: f64) -> (usize, f64) {
+        let mut i = 0;
+        while i < 6 && t >= self.end[i] {
+            i += 1;
+        }
+        (i, t - self.start[i])
+    }
+
+    #[inline]
+    fn eval(&self, t: f64) -> [f64; 4] {
+        let t = clamp_time(t, self.duration());
+        let (i, tau) = self.phase(t);
+        let [x, v, a, j] = self.state[i];
+        [
+            x + tau * (v + tau * (0.5 * a + tau * j / 6.0)),
+            v + tau * (a + 0.5 * tau * j),
+            a + tau * j,
+            j,
+        ]
+    }
+}
+
+/// Jerk-limited rest-to-rest motion of `D` axes, synchronised to the slowest axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JerkLimited<const D: usize> {
+    axes: [Profile; D],
+    duration: f64,
+}
+
+impl<const D: usize> JerkLimited<D> {
+    /// The time-optimal motion from `start` to `goal` at rest under finite, positive limits.
+    pub fn new(
+        start: [f64; D],
+        goal: [f64; D],
+        limits: &Limits<D>,
+    ) -> Result<Self, TrajectoryError> {
+        limits.validate(true)?;
+        check_finite_points(&[start, goal])?;
+        let mut times = [(0.0, 0.0, 0.0); D];
+        let mut duration: f64 = 0.0;
+        for axis in 0..D {
+            let h = libm::fabs(goal[axis] - start[axis]);
+            times[axis] = phase_times(
+                h,
+                limits.velocity[axis],
+                limits.acceleration[axis],
+                limits.jerk[axis],
+            );
+            let (_, ta, tv) = times[axis];
+            duration = duration.max(2.0 * ta + tv);
+        }
+        if !duration.is_finite() {
+            return Err(TrajectoryError::Unreachable);
+        }
+        let axes = core::array::from_fn(|axis| {
+            let (_, ta, tv) = times[axis];
+            let own = 2.0 * ta + tv;
+            let k = if duration > 0.0 { own / duration } else { 1.0 };
+            Profile::new(start[axis], goal[axis], limits.jerk[axis], times[axis], k)
+        });
+        Ok(Self { axes, duration })
+    }
+
+    /// The duration each axis would need alone (its time-optimal duration).
+    pub fn axis_durations(start: [f64; D], goal: [f64; D], limits: &Limits<D>) -> [f64; D] {
+        core::array::from_fn(|axis| {
+            let (_, ta, tv) = phase_times(
+                libm::fabs(goal[axis] - start[axis]),
+                limits.velocity[axis],
+                limits.acceleration[axis],
+                limits.jerk[axis],
+            );
+            2.0 * ta + tv
+        })
+    }
+}
+
+impl<const D: usize> Trajectory<D> for JerkLimited<D> {
+    fn duration(&self) -> f64 {
+        self.duration
+    }
+
+    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
+        core::array::from_fn(|axis| {
+            if order < 4 {
+                self.axes[axis].eval(t)[order]
+            } else {
+                0.0
+            }
+        })
+    }
+
+    #[inline]
+    fn sample(&self, t: f64) -> Sample<D> {
+        let mut s = Sample {
+            position: [0.0; D],
+            velocity: [0.0; D],
+            acceleration: [0.0; D],
+            jerk: [0.0; D],
+        };
+        for axis in 0..D {
+            let [p, v, a, j] = self.axes[axis].eval(t);
+            s.position[axis] = p;
+            s.velocity[axis] = v;
+            s.acceleration[axis] = a;
+            s.jerk[axis] = j;
+        }
+        s
+    }
+}
+
+/// Jerk-limited rest-to-rest moves through `points` in order (a spline of jerk-limited
+/// profiles). Needs capacity for `n - 1` moves.
+pub fn jerk_limited_through<const D: usize, const MAX: usize>(
+    points: &[[f64; D]],
+    limits: &Limits<D>,
+) -> Result<Piecewise<JerkLimited<D>, MAX>, TrajectoryError> {
+    if points.len() < 2 {
+        return Err(TrajectoryError::TooFewWaypoints {
+            required: 2,
+            given: points.len(),
+        });
+    }
+    if points.len() - 1 > MAX {
+        return Err(TrajectoryError::Capacity {
+            capacity: MAX,
+            requested: points.len() - 1,
+        });
+    }
+    let mut spline = Piecewise::new();
+    for pair in points.windows(2) {
+        spline.push(JerkLimited::new(pair[0], pair[1], limits)?)?;
+    }
+    Ok(spline)
+}
+
+/// A rotation from rest to rest about a fixed world axis, with the rotation angle following the
+/// jerk-limited profile (limits on angular velocity, acceleration and jerk in rad/s^n).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JerkLimitedRotation {
+    start: DQuat,
+    axis: DVec3,
+    angle: JerkLimited<1>,
+}
+
+impl JerkLimitedRotation {
+    /// Shortest rotation from `q0` to `q1`.
+    pub fn new(
+        q0: DQuat,
+        q1: DQuat,
+        velocity: f64,
+        acceleration: f64,
+        jerk: f64,
+    ) -> Result<Self, TrajectoryError> {
+        if !q0.is_finite() || !q1.is_finite() {
+            return Err(TrajectoryError::NotFinite {
+                what: "quaternion",
+                index: 0,
+            });
+        }
+        let q0 = q0.normalize();
+        let mut delta = q1.normalize() * q0.conjugate();
+        if delta.w < 0.0 {
+            delta = -delta;
+        }
+        let (axis, angle) = delta.to_axis_angle();
+        let limits = Limits::uniform(velocity, acceleration, jerk);
+        Ok(Self {
+            start: q0,
+            axis,
+            angle: JerkLimited::new([0.0], [angle], &limits)?,
+        })
+    }
+}
+
+impl RotationTrajectory for JerkLimitedRotation {
+    fn duration(&self) -> f64 {
+        self.angle.duration
+    }
+
+    fn rotation(&self, t: f64) -> RotationSample {
+        let [p, v, a, _] = self.angle.axes[0].eval(t);
+        RotationSample {
+            orientation: DQuat::from_axis_angle(self.axis, p) * self.start,
+            angular_velocity: self.axis * v,
+            angular_acceleration: self.axis * a,
+        }
+    }
+}
