@@ -1,4 +1,59 @@
 //! Cyclic devices (open, start, step, stop, close), protocol codecs and loopback fake robots.
 //!
-//! Not built yet: see issue 6. This crate is a placeholder so the workspace builds.
-#![cfg_attr(not(feature = "std"), no_std)]
+//! Features:
+//! - `std` (default): socket transports, the [`MitsubishiH7`] and [`Coach`] drivers and the
+//!   loopback fakes in [`fake`]. Without it the crate is `no_std` and allocation-free: the device
+//!   traits, the capability traits and the wire codecs in [`proto`] remain.
+//!
+//! The model follows the Robotics Library (RL): every device is opened, started, stepped once per
+//! control cycle, stopped and closed. All communication happens inside
+//! [`CyclicDevice::step`]; getters and setters only touch buffered values. No device ever starts
+//! a thread: the application owns concurrency (the fakes do run their own thread, because they
+//! imitate a remote controller).
+//!
+//! ```no_run
+//! # #[cfg(feature = "std")] fn main() -> Result<(), rl_drivers::Error> {
+//! use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor};
+//! use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+//! use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+//!
+//! let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake controller");
+//! let mut robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))?;
+//! robot.open()?;
+//! robot.start()?;
+//! let mut q = [0.0; 6];
+//! for _ in 0..100 {
+//!     robot.joint_position(&mut q)?;
+//!     q[0] += 0.001;
+//!     robot.set_joint_position(&q)?;
+//!     robot.step()?; // sleep until the next 7.11 ms period between steps
+//! }
+//! robot.stop()?;
+//! robot.close()?;
+//! # Ok(()) }
+//! # #[cfg(not(feature = "std"))] fn main() {}
+//! ```
+#![cfg_attr(not(any(feature = "std", test)), no_std)]
+#![deny(missing_docs)]
+
+pub mod capability;
+pub mod device;
+pub mod proto;
+
+#[cfg(feature = "std")]
+pub mod coach;
+#[cfg(feature = "std")]
+pub mod fake;
+#[cfg(feature = "std")]
+pub mod mitsubishi_h7;
+#[cfg(feature = "std")]
+pub mod transport;
+
+pub use capability::*;
+#[cfg(feature = "std")]
+pub use coach::Coach;
+pub use device::{
+    CyclicDevice, Device, DeviceError, Error, ErrorKind, Lifecycle, Operation, ProtocolError, State,
+};
+#[cfg(feature = "std")]
+pub use mitsubishi_h7::MitsubishiH7;

@@ -1,0 +1,6 @@
+//! Loopback fakes that speak the real wire formats from the other side, so every driver can be
+//! tested (and tried by a user) without hardware. A fake imitates a remote controller, so unlike
+//! a device it runs its own server threads; it is not meant for the real-time path.
+
+pub mod coach_server;
+pub mod h7_controller;

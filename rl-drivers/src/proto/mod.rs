@@ -1,0 +1,8 @@
+//! Wire codecs: pure, `no_std`, allocation-free, `#![forbid(unsafe_code)]`. Decoding returns a
+//! typed error saying what and where, and never panics on any input (fuzzed under
+//! `rl-drivers/fuzz` and property-tested in `tests/proto_properties.rs`).
+#![forbid(unsafe_code)]
+
+pub mod coach;
+pub mod h7;
+pub mod r3;

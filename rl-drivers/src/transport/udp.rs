@@ -1,0 +1,121 @@
+//! A UDP link to one peer: a non-blocking, unconnected socket that accepts datagrams only from
+//! the configured peer. Anything else is dropped and counted (the kernel's own filter of a
+//! connected socket would hide it).
+
+use std::io;
+use std::net::{SocketAddr, UdpSocket};
+use std::os::fd::AsFd;
+use std::time::Instant;
+
+use socket2::{Domain, Protocol, Socket, Type};
+
+use super::{Readiness, wait};
+
+/// Datagram counts of a [`UdpLink`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UdpCounters {
+    /// Datagrams sent.
+    pub sent: u64,
+    /// Datagrams received from the peer.
+    pub received: u64,
+    /// Datagrams from any other address, dropped.
+    pub foreign: u64,
+}
+
+/// A UDP socket bound locally that exchanges datagrams with one peer.
+#[derive(Debug)]
+pub struct UdpLink {
+    socket: UdpSocket,
+    peer: SocketAddr,
+    counters: UdpCounters,
+}
+
+impl UdpLink {
+    /// Binds a non-blocking socket to `local` (port 0 for an ephemeral one) for talking to `peer`.
+    pub fn bind(local: SocketAddr, peer: SocketAddr) -> io::Result<Self> {
+        let socket = Socket::new(Domain::for_address(local), Type::DGRAM, Some(Protocol::UDP))?;
+        socket.set_nonblocking(true)?;
+        socket.bind(&local.into())?;
+        Ok(Self { socket: socket.into(), peer, counters: UdpCounters::default() })
+    }
+
+    /// The local address (with the port the system chose).
+    pub fn local_addr(&self) -> io::Result<SocketAddr> {
+        self.socket.local_addr()
+    }
+
+    /// The only address replies are accepted from.
+    pub fn peer(&self) -> SocketAddr {
+        self.peer
+    }
+
+    /// Counts so far.
+    pub fn counters(&self) -> UdpCounters {
+        self.counters
+    }
+
+    /// Sends one datagram to the peer without blocking.
+    pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let n = self.socket.send_to(bytes, self.peer)?;
+        if n != bytes.len() {
+            return Err(io::Error::new(io::ErrorKind::WriteZero, "datagram sent partially"));
+        }
+        self.counters.sent += 1;
+        Ok(())
+    }
+
+    /// Receives one pending datagram from the peer, if any, without waiting. Foreign datagrams
+    /// are dropped and counted. Returns its length (datagrams longer than `buf` are cut).
+    pub fn try_recv(&mut self, buf: &mut [u8]) -> io::Result<Option<usize>> {
+        loop {
+            match self.socket.recv_from(buf) {
+                Ok((n, from)) if from == self.peer => {
+                    self.counters.received += 1;
+                    return Ok(Some(n));
+                }
+                Ok(_) => self.counters.foreign += 1,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(None),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    /// Waits until a datagram from the peer arrives or `deadline` passes (`Ok(None)`).
+    pub fn recv_until(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<Option<usize>> {
+        loop {
+            if let Some(n) = self.try_recv(buf)? {
+                return Ok(Some(n));
+            }
+            if !wait(self.socket.as_fd(), Readiness::Readable, deadline)? {
+                return Ok(None);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn only_the_peer_is_heard_and_others_are_counted() {
+        let any: SocketAddr = "127.0.0.1:0".parse().unwrap();
+        let peer = UdpSocket::bind(any).unwrap();
+        let stranger = UdpSocket::bind(any).unwrap();
+        let mut link = UdpLink::bind(any, peer.local_addr().unwrap()).unwrap();
+        let me = link.local_addr().unwrap();
+        stranger.send_to(b"spoof", me).unwrap();
+        peer.send_to(b"real", me).unwrap();
+        let mut buf = [0u8; 16];
+        let deadline = Instant::now() + Duration::from_secs(2);
+        assert_eq!(link.recv_until(&mut buf, deadline).unwrap(), Some(4));
+        assert_eq!(&buf[..4], b"real");
+        assert_eq!(link.counters().foreign, 1);
+        let start = Instant::now();
+        let short = start + Duration::from_millis(20);
+        assert_eq!(link.recv_until(&mut buf, short).unwrap(), None);
+        assert!(start.elapsed() >= Duration::from_millis(20));
+    }
+}

@@ -1,0 +1,299 @@
+//! The H7 driver against the fake controller on loopback (random ports, bounded waits).
+
+use std::time::{Duration, Instant};
+
+use rl_drivers::fake::h7_controller::{Fault, FaultPlan, FakeH7, FakeH7Config};
+use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+use rl_drivers::proto::h7::{DecodeError, MxtType};
+use rl_drivers::{
+    CyclicDevice, Device, DeviceError, Error, ErrorKind, Gripper, JointPositionActuator,
+    JointPositionSensor, ProtocolError, State,
+};
+
+const DOF: usize = 6;
+
+fn fake() -> FakeH7 {
+    FakeH7::spawn(FakeH7Config::loopback(DOF)).expect("fake controller starts")
+}
+
+fn device(fake: &FakeH7) -> MitsubishiH7 {
+    let mut config = MitsubishiH7Config::new(DOF, fake.udp_addr(), fake.r3_addr());
+    config.r3_timeout = Duration::from_millis(500);
+    MitsubishiH7::new(config).unwrap()
+}
+
+fn running(fake: &FakeH7) -> MitsubishiH7 {
+    let mut robot = device(fake);
+    robot.open().unwrap();
+    robot.start().unwrap();
+    for _ in 0..3 {
+        robot.step().unwrap();
+    }
+    robot
+}
+
+/// The R3 requests RL's `start()` sends, in order (reference, "Session as RL runs it"); the
+/// DSTATE polls repeat until the fake reports the servo on (it needs 2 polls).
+fn expected_start_log(program: &str) -> Vec<String> {
+    [
+        "STOP",
+        "NEW",
+        "LOAD=1432",
+        "ECLR",
+        &format!("EMDAT{program}"),
+        "SAVE",
+        "CNTLON",
+        "SRVON",
+        "CNTLOFF",
+        "DSTATE",
+        "DSTATE",
+        "CNTLON",
+        "SLOTINIT",
+        "RUN1432;1",
+        "CNTLOFF",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+#[test]
+fn a_thousand_cycles_at_the_real_period_follow_a_ramp() {
+    let fake = fake();
+    let mut robot = device(&fake);
+    assert_eq!(robot.update_period(), Duration::from_micros(7110));
+    robot.open().unwrap();
+    robot.start().unwrap();
+
+    let program = "10 OPEN \"ENET:127.0.0.1\" AS #1\u{b}20 MXT 1,1,0\u{b}30 HLT\u{b}40 END";
+    let s = fake.status();
+    assert_eq!(s.r3_log, expected_start_log(program));
+    assert_eq!((s.program.as_str(), s.program_name.as_str()), (program, "1432"));
+    assert!(s.servo_on && s.program_running);
+
+    const CYCLES: usize = 1000;
+    const SLOPE: f64 = 0.0005; // rad per cycle
+    let period = robot.update_period();
+    let mut q = [0.0; DOF];
+    let mut measured = [0.0; DOF];
+    let mut next = Instant::now();
+    for k in 0..CYCLES {
+        if k > 0 {
+            robot.joint_position(&mut measured).unwrap();
+            for (i, qi) in q.iter_mut().enumerate() {
+                *qi = SLOPE * k as f64 * (i + 1) as f64 / DOF as f64;
+            }
+            robot.set_joint_position(&q).unwrap();
+        }
+        robot.step().unwrap_or_else(|e| panic!("cycle {k}: {e}"));
+        next += period;
+        if let Some(wait) = next.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+    }
+    let c = robot.counters();
+    assert_eq!((c.sent, c.replies), (CYCLES as u64, CYCLES as u64));
+    assert_eq!((c.timeouts, c.late, c.foreign, c.corrupt, c.wrong_length), (0, 0, 0, 0, 0));
+
+    let s = fake.status();
+    assert_eq!((s.packets, s.moves, s.last_c_count), (1000, 999, 999));
+    assert_eq!((s.packets_outside_program, s.limit_hits), (0, 0));
+    // The fake's filter (time constant 2 cycles) lags a ramp by 2 cycles in steady state.
+    for i in 0..DOF {
+        let slope = SLOPE * (i + 1) as f64 / DOF as f64;
+        assert!((s.commanded_rad[i] - q[i]).abs() < 1e-6, "joint {i} commanded");
+        let lag = s.commanded_rad[i] - s.actual_rad[i];
+        assert!((lag - 2.0 * slope).abs() < 0.01 * slope, "joint {i} lags {lag}, not 2 cycles");
+    }
+    robot.joint_position(&mut measured).unwrap();
+    for i in 0..DOF {
+        assert!((measured[i] - s.actual_rad[i]).abs() < 1e-6, "joint {i} measured");
+    }
+
+    robot.stop().unwrap();
+    let s = fake.status();
+    assert_eq!(s.ends, 1, "stop sends the end packet (command 255)");
+    assert_eq!(s.r3_log[expected_start_log(program).len()..], ["STOP", "DSTATE", "SRVOFF", "DSTATE"]);
+    assert!(!s.servo_on && !s.program_running);
+    assert_eq!(robot.state(), State::Open);
+    robot.close().unwrap();
+    assert_eq!(robot.state(), State::Closed);
+}
+
+#[test]
+fn calls_in_the_wrong_state_are_refused() {
+    let fake = fake();
+    let mut robot = device(&fake);
+    let kind = |r: Result<(), Error>| r.unwrap_err().kind();
+    assert_eq!(kind(robot.step()), ErrorKind::State);
+    assert_eq!(kind(robot.start()), ErrorKind::State);
+    assert_eq!(kind(robot.set_joint_position(&[0.0; DOF])), ErrorKind::State);
+    robot.open().unwrap();
+    assert_eq!(kind(robot.step()), ErrorKind::State);
+    assert_eq!(kind(robot.set_joint_position(&[0.0; 3])), ErrorKind::InvalidArgument);
+    robot.start().unwrap();
+    assert_eq!(kind(robot.close()), ErrorKind::State);
+    robot.stop().unwrap();
+    robot.close().unwrap();
+}
+
+/// Injects `fault` into exactly one reply and checks the step's error and the counters, then
+/// that the next steps succeed again.
+fn inject_once(fault: Fault, check: impl Fn(&Error, &rl_drivers::mitsubishi_h7::H7Counters)) {
+    let fake = fake();
+    let mut robot = running(&fake);
+    fake.set_fault(Some(FaultPlan { every: 1, fault }));
+    let e = robot.step().unwrap_err();
+    fake.set_fault(None);
+    // Leave time for a delayed reply to arrive before the next step.
+    std::thread::sleep(Duration::from_millis(150));
+    robot.step().unwrap();
+    check(&e, &robot.counters());
+    for _ in 0..5 {
+        robot.step().unwrap();
+    }
+    assert_eq!(robot.state(), State::Running);
+    assert_eq!(robot.counters().consecutive_failures, 0);
+    assert_eq!(fake.status().faults_injected, 1);
+    robot.stop().unwrap();
+}
+
+#[test]
+fn a_dropped_reply_is_a_counted_timeout() {
+    inject_once(Fault::Drop, |e, c| {
+        assert_eq!(e.kind(), ErrorKind::Timeout);
+        assert_eq!((c.timeouts, c.late), (1, 0));
+    });
+}
+
+#[test]
+fn a_delayed_reply_times_out_and_is_counted_late_at_the_next_step() {
+    inject_once(Fault::Delay(Duration::from_millis(90)), |e, c| {
+        assert_eq!(e.kind(), ErrorKind::Timeout);
+        assert_eq!((c.timeouts, c.late), (1, 1));
+    });
+}
+
+#[test]
+fn a_corrupted_reply_is_a_protocol_error() {
+    inject_once(Fault::Corrupt, |e, c| {
+        assert_eq!(e.kind(), ErrorKind::Protocol);
+        let Error::Protocol { error: ProtocolError::H7(d), .. } = e else { panic!("{e:?}") };
+        assert_eq!(*d, DecodeError::UnknownType { offset: 4, value: 0xFFFF });
+        assert_eq!((c.corrupt, c.timeouts), (1, 0));
+    });
+}
+
+#[test]
+fn a_truncated_reply_is_a_wrong_length() {
+    inject_once(Fault::Truncate, |e, c| {
+        let Error::Protocol { error: ProtocolError::H7(d), .. } = e else { panic!("{e:?}") };
+        assert_eq!(*d, DecodeError::Length { got: 100 });
+        assert_eq!((c.wrong_length, c.corrupt), (1, 0));
+    });
+}
+
+#[test]
+fn a_reply_from_another_port_is_dropped_and_counted() {
+    inject_once(Fault::ForeignPort, |e, c| {
+        assert_eq!(e.kind(), ErrorKind::Timeout);
+        assert_eq!((c.foreign, c.timeouts), (1, 1));
+    });
+}
+
+#[test]
+fn too_many_failures_in_a_row_fault_the_device() {
+    let fake = fake();
+    let mut robot = running(&fake);
+    fake.set_fault(Some(FaultPlan { every: 1, fault: Fault::Drop }));
+    for i in 0..9 {
+        assert_eq!(robot.step().unwrap_err().kind(), ErrorKind::Timeout, "step {i}");
+        assert_eq!(robot.state(), State::Running);
+    }
+    let last = robot.step().unwrap_err();
+    assert_eq!(robot.state(), State::Faulted);
+    assert_eq!(robot.fault(), Some(last));
+    assert_eq!(robot.counters().consecutive_failures, 10);
+    let e = robot.step().unwrap_err();
+    assert_eq!(e, Error::State { operation: rl_drivers::Operation::Step, state: State::Faulted });
+    robot.close().unwrap();
+    assert_eq!((robot.state(), robot.fault()), (State::Closed, None));
+}
+
+#[test]
+fn a_hung_controller_makes_start_and_step_time_out() {
+    let fake = fake();
+    let mut robot = device(&fake);
+    robot.open().unwrap();
+    fake.set_frozen(true);
+    let e = robot.start().unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Timeout, "{e}");
+    assert_eq!(robot.state(), State::Faulted);
+    robot.close().unwrap();
+
+    fake.set_frozen(false);
+    let mut robot = running(&fake);
+    fake.set_frozen(true);
+    let e = robot.step().unwrap_err();
+    assert_eq!(e, Error::Timeout { operation: rl_drivers::Operation::Step, waited: Duration::from_micros(6 * 7110) });
+}
+
+#[test]
+fn a_stopped_controller_makes_step_time_out_and_open_fail() {
+    let mut fake = fake();
+    let mut robot = running(&fake);
+    let (udp, r3) = (fake.udp_addr(), fake.r3_addr());
+    fake.shutdown();
+    assert_eq!(robot.step().unwrap_err().kind(), ErrorKind::Timeout);
+    assert_eq!(robot.counters().timeouts, 1);
+
+    let mut other = MitsubishiH7::new(MitsubishiH7Config::new(DOF, udp, r3)).unwrap();
+    let e = other.open().unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Io, "{e}");
+    assert_eq!(other.state(), State::Closed);
+}
+
+#[test]
+fn gripper_and_io_go_through_the_packet() {
+    let fake = fake();
+    let mut robot = running(&fake);
+    robot.shut().unwrap();
+    assert_eq!((robot.request().bit_top, robot.request().bit_mask, robot.request().io_data), (900, 0xFF, 0xA9));
+    robot.step().unwrap();
+    assert_eq!(fake.status().outputs.get(&900), Some(&0xA9));
+    robot.release().unwrap();
+    robot.step().unwrap();
+    assert_eq!(fake.status().outputs.get(&900), Some(&0xA6));
+    assert_eq!(robot.request().io_data, 0, "I/O fields are cleared after each send");
+    fake.set_input(16, 0x1234);
+    robot.request_input(16).unwrap();
+    robot.step().unwrap();
+    assert_eq!(robot.io_data().unwrap(), 0x1234);
+    robot.stop().unwrap();
+}
+
+#[test]
+fn rls_reply_types_work_and_pulses_follow_joints() {
+    let fake = fake();
+    let mut config = MitsubishiH7Config::new(DOF, fake.udp_addr(), fake.r3_addr());
+    config.feedback = MitsubishiH7Config::RL_FEEDBACK;
+    let mut robot = MitsubishiH7::new(config).unwrap();
+    robot.open().unwrap();
+    robot.start().unwrap();
+    let q = [0.1, -0.2, 0.3, 0.0, 0.5, -0.6];
+    robot.set_joint_position(&q).unwrap();
+    robot.step().unwrap();
+    let reply = robot.reply().unwrap();
+    assert_eq!(reply.recv_type, MxtType::Joint);
+    let mut got = [0.0; DOF];
+    robot.joint_position(&mut got).unwrap();
+    for i in 0..DOF {
+        assert!((got[i] - q[i]).abs() < 1e-6, "commanded joint {i} echoed as type 2");
+    }
+    let mut pulses = [0; DOF];
+    robot.motor_pulse(&mut pulses).unwrap();
+    let per_rad = 2f64.powi(20) / std::f64::consts::TAU;
+    for i in 0..DOF {
+        assert_eq!(pulses[i], (f64::from(q[i] as f32) * per_rad).round() as i32);
+    }
+    robot.stop().unwrap();
+}
