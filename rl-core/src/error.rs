@@ -27,8 +27,15 @@ pub enum Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Dimension { argument, expected, got } => {
-                write!(f, "`{argument}` has {got} elements, the model needs {expected}")
+            Error::Dimension {
+                argument,
+                expected,
+                got,
+            } => {
+                write!(
+                    f,
+                    "`{argument}` has {got} elements, the model needs {expected}"
+                )
             }
             Error::UnknownTool { tool } => write!(f, "tool {tool} does not exist"),
             Error::NotPositiveDefinite => f.write_str("matrix is not positive definite"),
@@ -44,6 +51,10 @@ pub(crate) fn check_len(argument: &'static str, x: &[f64], expected: usize) -> R
     if x.len() == expected {
         Ok(())
     } else {
-        Err(Error::Dimension { argument, expected, got: x.len() })
+        Err(Error::Dimension {
+            argument,
+            expected,
+            got: x.len(),
+        })
     }
 }

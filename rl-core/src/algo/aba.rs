@@ -65,7 +65,11 @@ fn run<const N: usize>(
             vj += model.subspace[k] * qd[k];
         }
         let p = model.parents[i];
-        let v = if p == ROOT { vj } else { data.parent_pose[i].inv_act_motion(&data.v[p]) + vj };
+        let v = if p == ROOT {
+            vj
+        } else {
+            data.parent_pose[i].inv_act_motion(&data.v[p]) + vj
+        };
         data.v[i] = v;
         data.c[i] = v.cross_motion(&vj);
         let inertia = &model.inertias[i];

@@ -37,5 +37,9 @@ pub fn tool_pose<const N: usize>(
     tool: usize,
 ) -> Result<PlueckerTransform, Error> {
     let t = model.tools().get(tool).ok_or(Error::UnknownTool { tool })?;
-    Ok(if t.body == ROOT { t.placement } else { data.world_pose[t.body] * t.placement })
+    Ok(if t.body == ROOT {
+        t.placement
+    } else {
+        data.world_pose[t.body] * t.placement
+    })
 }

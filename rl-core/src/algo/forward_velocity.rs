@@ -26,7 +26,11 @@ pub fn forward_velocity<const N: usize>(
             vj += model.subspace[k] * qd[k];
         }
         let p = model.parents[i];
-        data.v[i] = if p == ROOT { vj } else { data.parent_pose[i].inv_act_motion(&data.v[p]) + vj };
+        data.v[i] = if p == ROOT {
+            vj
+        } else {
+            data.parent_pose[i].inv_act_motion(&data.v[p]) + vj
+        };
     }
     Ok(())
 }

@@ -81,7 +81,11 @@ pub fn jacobians<const N: usize>(
 ) -> Result<(), Error> {
     check_len("q", q, model.nq)?;
     if out.len() < model.ntools {
-        return Err(Error::Dimension { argument: "out", expected: model.ntools, got: out.len() });
+        return Err(Error::Dimension {
+            argument: "out",
+            expected: model.ntools,
+            got: out.len(),
+        });
     }
     world_subspaces(model, data, q);
     for (t, j) in out.iter_mut().enumerate().take(model.ntools) {

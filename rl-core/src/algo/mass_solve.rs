@@ -8,7 +8,10 @@ use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
 
 /// Factors the mass matrix of the last [`super::crba`] call into `data` (kept beside it).
-pub fn factor_mass_matrix<const N: usize>(model: &Model<N>, data: &mut Data<N>) -> Result<(), Error> {
+pub fn factor_mass_matrix<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+) -> Result<(), Error> {
     let n = model.nv;
     let h = &mut data.factor;
     for (r, row) in h.iter_mut().enumerate().take(n) {

@@ -63,7 +63,11 @@ pub(crate) fn run<const N: usize>(
 ) {
     let base = MotionVector::new(
         glam::DVec3::ZERO,
-        if with_gravity { -model.gravity } else { glam::DVec3::ZERO },
+        if with_gravity {
+            -model.gravity
+        } else {
+            glam::DVec3::ZERO
+        },
     );
     for i in 0..model.nbodies {
         body_pose(model, data, q, i);
@@ -83,7 +87,11 @@ pub(crate) fn run<const N: usize>(
         }
         let p = model.parents[i];
         let x = &data.parent_pose[i];
-        let (vp, ap) = if p == ROOT { (MotionVector::ZERO, base) } else { (data.v[p], data.a[p]) };
+        let (vp, ap) = if p == ROOT {
+            (MotionVector::ZERO, base)
+        } else {
+            (data.v[p], data.a[p])
+        };
         let v = x.inv_act_motion(&vp) + vj;
         let a = x.inv_act_motion(&ap) + aj + v.cross_motion(&vj);
         let inertia = &model.inertias[i];
@@ -143,7 +151,11 @@ mod tests {
         assert!((tau - expected).abs() < 1e-12, "{tau} vs {expected}");
         assert_eq!(
             rnea(&model, &mut data, &[q, 0.0], &[qd], &[qdd]),
-            Err(Error::Dimension { argument: "q", expected: 1, got: 2 })
+            Err(Error::Dimension {
+                argument: "q",
+                expected: 1,
+                got: 2
+            })
         );
     }
 }

@@ -15,7 +15,9 @@ pub struct Cylindrical {
 impl Cylindrical {
     /// A cylindrical joint about `axis` (normalised here).
     pub fn new(axis: DVec3) -> Self {
-        Self { axis: axis.normalize() }
+        Self {
+            axis: axis.normalize(),
+        }
     }
 
     /// `X_J(q)`.

@@ -17,7 +17,10 @@ pub struct Helical {
 impl Helical {
     /// A helical joint about `axis` (normalised here) with `pitch` m/rad.
     pub fn new(axis: DVec3, pitch: f64) -> Self {
-        Self { axis: axis.normalize(), pitch }
+        Self {
+            axis: axis.normalize(),
+            pitch,
+        }
     }
 
     /// `X_J(q)`.

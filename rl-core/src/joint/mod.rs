@@ -251,7 +251,10 @@ mod tests {
         for k in 0..j.nv() {
             sv += s[k] * v[k];
         }
-        assert!((sv.angular - omega).length() < 1e-8, "{j:?}: {sv:?} vs {omega}");
+        assert!(
+            (sv.angular - omega).length() < 1e-8,
+            "{j:?}: {sv:?} vs {omega}"
+        );
         assert!((sv.linear - lin).length() < 1e-8, "{j:?}: {sv:?} vs {lin}");
     }
 
@@ -261,10 +264,18 @@ mod tests {
         check_subspace(Joint::Revolute(Revolute::new(axis)), &[0.7], &[1.3]);
         check_subspace(Joint::Prismatic(Prismatic::new(axis)), &[0.2], &[-0.4]);
         check_subspace(Joint::Helical(Helical::new(axis, 0.05)), &[0.9], &[2.0]);
-        check_subspace(Joint::Cylindrical(Cylindrical::new(axis)), &[0.4, 0.1], &[0.3, -0.2]);
+        check_subspace(
+            Joint::Cylindrical(Cylindrical::new(axis)),
+            &[0.4, 0.1],
+            &[0.3, -0.2],
+        );
         check_subspace(Joint::Planar(Planar), &[0.2, -0.3, 0.8], &[0.5, 0.1, -0.9]);
         let q = glam::DQuat::from_axis_angle(axis, 0.6);
-        check_subspace(Joint::Spherical(Spherical), &[q.x, q.y, q.z, q.w], &[0.2, -0.7, 0.4]);
+        check_subspace(
+            Joint::Spherical(Spherical),
+            &[q.x, q.y, q.z, q.w],
+            &[0.2, -0.7, 0.4],
+        );
         check_subspace(
             Joint::SixDof(SixDof),
             &[0.1, 0.2, 0.3, q.x, q.y, q.z, q.w],

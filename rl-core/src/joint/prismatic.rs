@@ -14,7 +14,9 @@ pub struct Prismatic {
 impl Prismatic {
     /// A prismatic joint along `axis` (normalised here).
     pub fn new(axis: DVec3) -> Self {
-        Self { axis: axis.normalize() }
+        Self {
+            axis: axis.normalize(),
+        }
     }
 
     /// `X_J(q)`.

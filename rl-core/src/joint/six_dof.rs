@@ -28,7 +28,10 @@ impl SixDof {
         let (b, c) = if th < 1e-6 {
             (0.5 - th2 / 24.0, 1.0 / 6.0 - th2 / 120.0)
         } else {
-            ((1.0 - libm::cos(th)) / th2, (th - libm::sin(th)) / (th2 * th))
+            (
+                (1.0 - libm::cos(th)) / th2,
+                (th - libm::sin(th)) / (th2 * th),
+            )
         };
         let wx = skew(w);
         let local = lin + wx * lin * b + wx * (wx * lin) * c;

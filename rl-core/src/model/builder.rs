@@ -37,13 +37,19 @@ fn check_inertia(i: &RigidBodyInertia, body: usize) -> Result<(), ModelError> {
         && a + b >= c - tol
         && b + c >= a - tol
         && a + c >= b - tol;
-    if finite && physical { Ok(()) } else { Err(ModelError::InvalidInertia { body }) }
+    if finite && physical {
+        Ok(())
+    } else {
+        Err(ModelError::InvalidInertia { body })
+    }
 }
 
 impl<const N: usize> ModelBuilder<N> {
     /// An empty model.
     pub fn new() -> Self {
-        Self { model: Model::new() }
+        Self {
+            model: Model::new(),
+        }
     }
 
     /// Sets the model's name.
@@ -83,12 +89,21 @@ impl<const N: usize> ModelBuilder<N> {
             return Err(ModelError::UnknownParent { parent });
         }
         if m.nv + joint.nv() > N {
-            return Err(ModelError::TooManyDofs { capacity: N, needed: m.nv + joint.nv() });
+            return Err(ModelError::TooManyDofs {
+                capacity: N,
+                needed: m.nv + joint.nv(),
+            });
         }
         if !placement.translation.is_finite()
-            || !placement.rotation.to_cols_array().iter().all(|x| x.is_finite())
+            || !placement
+                .rotation
+                .to_cols_array()
+                .iter()
+                .all(|x| x.is_finite())
         {
-            return Err(ModelError::NotFinite { what: "joint placement" });
+            return Err(ModelError::NotFinite {
+                what: "joint placement",
+            });
         }
         let axis_ok = match &joint {
             Joint::Revolute(j) => j.axis.is_finite() && j.axis.length() > 0.5,
@@ -183,7 +198,11 @@ impl<const N: usize> ModelBuilder<N> {
         if body != ROOT && body >= m.nbodies {
             return Err(ModelError::UnknownBody { body });
         }
-        m.tools[m.ntools] = Tool { name: name(tool_name)?, body, placement };
+        m.tools[m.ntools] = Tool {
+            name: name(tool_name)?,
+            body,
+            placement,
+        };
         m.ntools += 1;
         Ok(m.ntools - 1)
     }

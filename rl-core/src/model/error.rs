@@ -65,18 +65,30 @@ impl fmt::Display for ModelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ModelError::TooManyBodies { capacity } => {
-                write!(f, "more moving bodies than the model's capacity of {capacity}")
+                write!(
+                    f,
+                    "more moving bodies than the model's capacity of {capacity}"
+                )
             }
             ModelError::TooManyDofs { capacity, needed } => {
-                write!(f, "{needed} degrees of freedom exceed the model's capacity of {capacity}")
+                write!(
+                    f,
+                    "{needed} degrees of freedom exceed the model's capacity of {capacity}"
+                )
             }
             ModelError::TooManyTools { capacity } => {
                 write!(f, "more tools than the model's capacity of {capacity}")
             }
             ModelError::NameTooLong { len } => {
-                write!(f, "name of {len} bytes is longer than {}", super::name::NAME_CAPACITY)
+                write!(
+                    f,
+                    "name of {len} bytes is longer than {}",
+                    super::name::NAME_CAPACITY
+                )
             }
-            ModelError::UnknownParent { parent } => write!(f, "parent body {parent} does not exist"),
+            ModelError::UnknownParent { parent } => {
+                write!(f, "parent body {parent} does not exist")
+            }
             ModelError::UnknownBody { body } => write!(f, "body {body} does not exist"),
             ModelError::UnknownDof { body, dof } => {
                 write!(f, "body {body}'s joint has no degree of freedom {dof}")

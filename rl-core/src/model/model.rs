@@ -64,7 +64,11 @@ impl<const N: usize> Default for Model<N> {
 impl<const N: usize> Model<N> {
     /// An empty model (no bodies), gravity `(0, 0, -9.80665)`.
     pub fn new() -> Self {
-        let filler = Tool { name: Name::EMPTY, body: ROOT, placement: PlueckerTransform::IDENTITY };
+        let filler = Tool {
+            name: Name::EMPTY,
+            body: ROOT,
+            placement: PlueckerTransform::IDENTITY,
+        };
         Self {
             name: Name::EMPTY,
             nbodies: 0,
@@ -174,7 +178,9 @@ impl<const N: usize> Model<N> {
 
     /// The index of the body called `name`.
     pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.body_names[..self.nbodies].iter().position(|n| n.as_str() == name)
+        self.body_names[..self.nbodies]
+            .iter()
+            .position(|n| n.as_str() == name)
     }
 
     /// Physical gravitational acceleration in world coordinates, m/s² (e.g. `(0, 0, -9.81)`).

@@ -20,7 +20,10 @@ impl Default for Name {
 
 impl Name {
     /// The empty name.
-    pub const EMPTY: Self = Self { len: 0, bytes: [0; NAME_CAPACITY] };
+    pub const EMPTY: Self = Self {
+        len: 0,
+        bytes: [0; NAME_CAPACITY],
+    };
 
     /// A name from a string, or `None` if it is longer than [`NAME_CAPACITY`] bytes.
     pub fn try_new(s: &str) -> Option<Self> {
@@ -29,7 +32,10 @@ impl Name {
         }
         let mut bytes = [0; NAME_CAPACITY];
         bytes[..s.len()].copy_from_slice(s.as_bytes());
-        Some(Self { len: s.len() as u8, bytes })
+        Some(Self {
+            len: s.len() as u8,
+            bytes,
+        })
     }
 
     /// The name as a string slice.

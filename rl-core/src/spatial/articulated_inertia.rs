@@ -39,7 +39,11 @@ impl From<RigidBodyInertia> for ArticulatedBodyInertia {
 
 impl ArticulatedBodyInertia {
     /// The zero operator.
-    pub const ZERO: Self = Self { angular: DMat3::ZERO, coupling: DMat3::ZERO, linear: DMat3::ZERO };
+    pub const ZERO: Self = Self {
+        angular: DMat3::ZERO,
+        coupling: DMat3::ZERO,
+        linear: DMat3::ZERO,
+    };
 
     /// `I v`.
     #[inline]
@@ -80,7 +84,7 @@ impl ArticulatedBodyInertia {
         let pm = p * m;
         let hp = h * p;
         Self {
-            angular: i - hp + hp.transpose() - pm * p,
+            angular: i - hp - hp.transpose() - pm * p,
             coupling: h + pm,
             linear: m,
         }
@@ -132,7 +136,10 @@ mod tests {
         );
         let mut ab = ArticulatedBodyInertia::from(rb);
         // make it non-rigid
-        ab.sub_rank_one(&ForceVector::new(DVec3::new(0.1, 0.2, 0.0), DVec3::new(0.3, -0.1, 0.2)), 0.5);
+        ab.sub_rank_one(
+            &ForceVector::new(DVec3::new(0.1, 0.2, 0.0), DVec3::new(0.3, -0.1, 0.2)),
+            0.5,
+        );
         let v = MotionVector::new(DVec3::new(0.3, -0.2, 0.9), DVec3::new(1.0, 0.4, -0.6));
         let direct = ab.transform_to_parent(&x).mul_motion(&v);
         let via = x.act_force(&ab.mul_motion(&x.inv_act_motion(&v)));
@@ -140,6 +147,12 @@ mod tests {
         assert!((direct - via).force.length() < 1e-13);
         let rigid = ArticulatedBodyInertia::from(rb.transform_to_parent(&x));
         let conv = ArticulatedBodyInertia::from(rb).transform_to_parent(&x);
-        assert!((rigid.angular - conv.angular).abs().to_cols_array().iter().all(|e| *e < 1e-13));
+        assert!(
+            (rigid.angular - conv.angular)
+                .abs()
+                .to_cols_array()
+                .iter()
+                .all(|e| *e < 1e-13)
+        );
     }
 }

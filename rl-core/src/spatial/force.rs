@@ -18,7 +18,10 @@ pub struct ForceVector {
 
 impl ForceVector {
     /// The zero force.
-    pub const ZERO: Self = Self { moment: DVec3::ZERO, force: DVec3::ZERO };
+    pub const ZERO: Self = Self {
+        moment: DVec3::ZERO,
+        force: DVec3::ZERO,
+    };
 
     /// A force from its moment and force parts.
     #[inline]
@@ -38,7 +41,10 @@ impl Add for ForceVector {
     type Output = Self;
     #[inline]
     fn add(self, o: Self) -> Self {
-        Self { moment: self.moment + o.moment, force: self.force + o.force }
+        Self {
+            moment: self.moment + o.moment,
+            force: self.force + o.force,
+        }
     }
 }
 
@@ -54,7 +60,10 @@ impl Sub for ForceVector {
     type Output = Self;
     #[inline]
     fn sub(self, o: Self) -> Self {
-        Self { moment: self.moment - o.moment, force: self.force - o.force }
+        Self {
+            moment: self.moment - o.moment,
+            force: self.force - o.force,
+        }
     }
 }
 
@@ -70,7 +79,10 @@ impl Neg for ForceVector {
     type Output = Self;
     #[inline]
     fn neg(self) -> Self {
-        Self { moment: -self.moment, force: -self.force }
+        Self {
+            moment: -self.moment,
+            force: -self.force,
+        }
     }
 }
 
@@ -78,6 +90,9 @@ impl Mul<f64> for ForceVector {
     type Output = Self;
     #[inline]
     fn mul(self, s: f64) -> Self {
-        Self { moment: self.moment * s, force: self.force * s }
+        Self {
+            moment: self.moment * s,
+            force: self.force * s,
+        }
     }
 }

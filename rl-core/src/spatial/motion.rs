@@ -20,7 +20,10 @@ pub struct MotionVector {
 
 impl MotionVector {
     /// The zero motion.
-    pub const ZERO: Self = Self { angular: DVec3::ZERO, linear: DVec3::ZERO };
+    pub const ZERO: Self = Self {
+        angular: DVec3::ZERO,
+        linear: DVec3::ZERO,
+    };
 
     /// A motion from its angular and linear parts.
     #[inline]
@@ -65,7 +68,10 @@ impl Add for MotionVector {
     type Output = Self;
     #[inline]
     fn add(self, o: Self) -> Self {
-        Self { angular: self.angular + o.angular, linear: self.linear + o.linear }
+        Self {
+            angular: self.angular + o.angular,
+            linear: self.linear + o.linear,
+        }
     }
 }
 
@@ -81,7 +87,10 @@ impl Sub for MotionVector {
     type Output = Self;
     #[inline]
     fn sub(self, o: Self) -> Self {
-        Self { angular: self.angular - o.angular, linear: self.linear - o.linear }
+        Self {
+            angular: self.angular - o.angular,
+            linear: self.linear - o.linear,
+        }
     }
 }
 
@@ -97,7 +106,10 @@ impl Neg for MotionVector {
     type Output = Self;
     #[inline]
     fn neg(self) -> Self {
-        Self { angular: -self.angular, linear: -self.linear }
+        Self {
+            angular: -self.angular,
+            linear: -self.linear,
+        }
     }
 }
 
@@ -105,7 +117,10 @@ impl Mul<f64> for MotionVector {
     type Output = Self;
     #[inline]
     fn mul(self, s: f64) -> Self {
-        Self { angular: self.angular * s, linear: self.linear * s }
+        Self {
+            angular: self.angular * s,
+            linear: self.linear * s,
+        }
     }
 }
 

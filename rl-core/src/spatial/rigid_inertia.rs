@@ -30,7 +30,11 @@ impl Default for RigidBodyInertia {
 
 impl RigidBodyInertia {
     /// No mass at all.
-    pub const ZERO: Self = Self { mass: 0.0, first_moment: DVec3::ZERO, rotational: DMat3::ZERO };
+    pub const ZERO: Self = Self {
+        mass: 0.0,
+        first_moment: DVec3::ZERO,
+        rotational: DMat3::ZERO,
+    };
 
     /// The inertia of a body of mass `mass` with centre of mass `com` and rotational inertia
     /// `inertia_com` about the centre of mass (axes of the frame).
@@ -45,7 +49,11 @@ impl RigidBodyInertia {
 
     /// The centre of mass (the origin if there is no mass).
     pub fn com(&self) -> DVec3 {
-        if self.mass > 0.0 { self.first_moment / self.mass } else { DVec3::ZERO }
+        if self.mass > 0.0 {
+            self.first_moment / self.mass
+        } else {
+            DVec3::ZERO
+        }
     }
 
     /// The rotational inertia about the centre of mass.
@@ -123,7 +131,10 @@ mod tests {
         let v_a = MotionVector::new(DVec3::new(0.3, -0.2, 0.9), DVec3::new(1.0, 0.4, -0.6));
         let direct = i.transform_to_parent(&x).mul_motion(&v_a);
         let via = x.act_force(&i.mul_motion(&x.inv_act_motion(&v_a)));
-        assert!((direct - via).moment.length() < 1e-13, "{direct:?} vs {via:?}");
+        assert!(
+            (direct - via).moment.length() < 1e-13,
+            "{direct:?} vs {via:?}"
+        );
         assert!((direct - via).force.length() < 1e-13);
         assert!((i.com() - DVec3::new(0.1, -0.05, 0.2)).length() < 1e-15);
     }

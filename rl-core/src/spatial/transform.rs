@@ -31,30 +31,45 @@ impl Default for PlueckerTransform {
 
 impl PlueckerTransform {
     /// The identity transform.
-    pub const IDENTITY: Self = Self { rotation: DMat3::IDENTITY, translation: DVec3::ZERO };
+    pub const IDENTITY: Self = Self {
+        rotation: DMat3::IDENTITY,
+        translation: DVec3::ZERO,
+    };
 
     /// A transform from a rotation matrix and a translation.
     #[inline]
     pub const fn new(rotation: DMat3, translation: DVec3) -> Self {
-        Self { rotation, translation }
+        Self {
+            rotation,
+            translation,
+        }
     }
 
     /// A pure translation.
     #[inline]
     pub const fn from_translation(translation: DVec3) -> Self {
-        Self { rotation: DMat3::IDENTITY, translation }
+        Self {
+            rotation: DMat3::IDENTITY,
+            translation,
+        }
     }
 
     /// A pure rotation.
     #[inline]
     pub const fn from_rotation(rotation: DMat3) -> Self {
-        Self { rotation, translation: DVec3::ZERO }
+        Self {
+            rotation,
+            translation: DVec3::ZERO,
+        }
     }
 
     /// A transform from a unit quaternion and a translation.
     #[inline]
     pub fn from_quat_translation(q: DQuat, translation: DVec3) -> Self {
-        Self { rotation: DMat3::from_quat(q), translation }
+        Self {
+            rotation: DMat3::from_quat(q),
+            translation,
+        }
     }
 
     /// The rotation as a unit quaternion.
@@ -67,7 +82,10 @@ impl PlueckerTransform {
     #[inline]
     pub fn inverse(&self) -> Self {
         let rt = self.rotation.transpose();
-        Self { rotation: rt, translation: -(rt * self.translation) }
+        Self {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
     }
 
     /// A point given in B coordinates, in A coordinates.

@@ -1,0 +1,218 @@
+//! Identities of rigid-body dynamics over random states, for models with every joint type:
+//! RNEA = M q̈ + C + G, ABA inverts RNEA, the sparse solve inverts M, J q̇ = tool velocity,
+//! J q̈ + J̇ q̇ = tool acceleration, J and J̇ q̇ against finite differences, and the
+//! operational-space inverse inertia against its definition.
+
+mod support;
+
+use rl_core::algo;
+use rl_core::spatial::{ForceVector, MotionVector};
+use rl_core::{Data, Model};
+use support::{Rng, assert_close, every_joint_type, random_chain, random_state};
+
+const TOL: f64 = 1e-9;
+
+/// World position and rotation of tool `t` at `q`.
+fn tool_pose<const N: usize>(
+    m: &Model<N>,
+    d: &mut Data<N>,
+    q: &[f64],
+    t: usize,
+) -> (glam::DVec3, glam::DMat3) {
+    algo::forward_position(m, d, q).unwrap();
+    let x = algo::tool_pose(m, d, t).unwrap();
+    (x.translation, x.rotation)
+}
+
+/// Checks every identity on `states` random states of `model`.
+pub fn check_identities<const N: usize>(model: &Model<N>, seed: u64, states: usize) {
+    let mut r = Rng(seed);
+    let mut d = Box::new(Data::<N>::new());
+    let n = model.dof();
+    let mut jac = vec![[[0.0; N]; 6]; model.tools().len()];
+    for _ in 0..states {
+        let (q, qd, qdd) = random_state(model, &mut r);
+        let tau = algo::rnea(model, &mut d, &q, &qd, &qdd).unwrap().to_vec();
+        let g = algo::gravity(model, &mut d, &q).unwrap().to_vec();
+        let c = algo::coriolis(model, &mut d, &q, &qd).unwrap().to_vec();
+        let nle = algo::nonlinear_effects(model, &mut d, &q, &qd)
+            .unwrap()
+            .to_vec();
+        let zeros = vec![0.0; n];
+        let g2 = algo::rnea(model, &mut d, &q, &zeros, &zeros)
+            .unwrap()
+            .to_vec();
+        assert_close("G = RNEA(q,0,0)", &g, &g2, TOL);
+        let cg: Vec<f64> = c.iter().zip(&g).map(|(a, b)| a + b).collect();
+        assert_close("nle = C + G", &nle, &cg, TOL);
+
+        algo::crba(model, &mut d, &q).unwrap();
+        let mut mqdd = vec![0.0; n];
+        for (i, x) in mqdd.iter_mut().enumerate() {
+            for (j, a) in qdd.iter().enumerate() {
+                assert!(
+                    (d.mass_matrix(i, j) - d.mass_matrix(j, i)).abs() < 1e-12,
+                    "M not symmetric"
+                );
+                *x += d.mass_matrix(i, j) * a;
+            }
+        }
+        let rhs: Vec<f64> = mqdd.iter().zip(&nle).map(|(a, b)| a + b).collect();
+        assert_close("RNEA = M q̈ + C + G", &tau, &rhs, TOL);
+
+        // Sparse LᵀDL solve: M⁻¹ (τ − nle) = q̈
+        algo::factor_mass_matrix(model, &mut d).unwrap();
+        let mut x: Vec<f64> = tau.iter().zip(&nle).map(|(a, b)| a - b).collect();
+        algo::solve_mass_matrix(model, &d, &mut x).unwrap();
+        assert_close("M⁻¹ (τ − C − G) = q̈", &x, &qdd, 1e-8);
+
+        let back = algo::aba(model, &mut d, &q, &qd, &tau).unwrap().to_vec();
+        assert_close("ABA(RNEA(q̈)) = q̈", &back, &qdd, 1e-8);
+
+        // External forces: ABA inverts RNEA with the same forces.
+        let fext: Vec<ForceVector> = (0..model.body_count())
+            .map(|_| ForceVector::new(r.vec3(2.0), r.vec3(5.0)))
+            .collect();
+        let tau_f = algo::rnea_with_external_forces(model, &mut d, &q, &qd, &qdd, &fext)
+            .unwrap()
+            .to_vec();
+        let back_f = algo::aba_with_external_forces(model, &mut d, &q, &qd, &tau_f, &fext)
+            .unwrap()
+            .to_vec();
+        assert_close("ABA(RNEA(q̈, f), f) = q̈", &back_f, &qdd, 1e-8);
+
+        // Jacobians of all tools in one sweep, against one at a time, velocities and FD.
+        algo::jacobians(model, &mut d, &q, &mut jac).unwrap();
+        algo::forward_acceleration(model, &mut d, &q, &qd, &qdd).unwrap();
+        for t in 0..model.tools().len() {
+            let mut single = [[0.0; N]; 6];
+            algo::jacobian(model, &mut d, &q, t, &mut single).unwrap();
+            for row in 0..6 {
+                assert_close(
+                    "jacobians = jacobian",
+                    &jac[t][row][..n],
+                    &single[row][..n],
+                    0.0,
+                );
+            }
+            algo::forward_acceleration(model, &mut d, &q, &qd, &qdd).unwrap();
+            let vel = algo::tool_velocity(model, &d, t).unwrap();
+            let acc = algo::tool_acceleration(model, &d, t).unwrap();
+            let jqd: Vec<f64> = (0..6)
+                .map(|row| (0..n).map(|k| jac[t][row][k] * qd[k]).sum())
+                .collect();
+            assert_close("J q̇ = tool velocity", &jqd, &vel, TOL);
+            let jdqd = algo::jacobian_derivative_times_qd(model, &mut d, &q, &qd, t).unwrap();
+            let jqdd: Vec<f64> = (0..6)
+                .map(|row| (0..n).map(|k| jac[t][row][k] * qdd[k]).sum::<f64>() + jdqd[row])
+                .collect();
+            assert_close("J q̈ + J̇ q̇ = tool acceleration", &jqdd, &acc, TOL);
+
+            // Central differences of FK along each velocity direction.
+            let h = 1e-6;
+            let mut qp = vec![0.0; q.len()];
+            let mut qm = vec![0.0; q.len()];
+            for k in 0..n {
+                let mut e = vec![0.0; n];
+                e[k] = 1.0;
+                model.integrate(&q, &e, h, &mut qp);
+                model.integrate(&q, &e, -h, &mut qm);
+                let (pp, rp) = tool_pose(model, &mut d, &qp, t);
+                let (pm, rm) = tool_pose(model, &mut d, &qm, t);
+                let (_, r0) = tool_pose(model, &mut d, &q, t);
+                let lin = (pp - pm) / (2.0 * h);
+                let w = (rp - rm) * (1.0 / (2.0 * h)) * r0.transpose(); // [ω]× in world
+                let fd = [lin.x, lin.y, lin.z, w.col(1).z, w.col(2).x, w.col(0).y];
+                let col: Vec<f64> = (0..6).map(|row| jac[t][row][k]).collect();
+                assert_close("J column vs finite differences", &col, &fd, 1e-7);
+            }
+            // J̇ q̇ = d/dt (J(q(t)) q̇) along q(t) = q ⊕ q̇ t.
+            let mut jp = [[0.0; N]; 6];
+            let mut jm = [[0.0; N]; 6];
+            model.integrate(&q, &qd, h, &mut qp);
+            model.integrate(&q, &qd, -h, &mut qm);
+            algo::jacobian(model, &mut d, &qp, t, &mut jp).unwrap();
+            algo::jacobian(model, &mut d, &qm, t, &mut jm).unwrap();
+            let fd: Vec<f64> = (0..6)
+                .map(|row| {
+                    (0..n)
+                        .map(|k| (jp[row][k] - jm[row][k]) * qd[k])
+                        .sum::<f64>()
+                        / (2.0 * h)
+                })
+                .collect();
+            assert_close("J̇ q̇ vs finite differences", &jdqd, &fd, 1e-6);
+
+            // Λ⁻¹ = J M⁻¹ Jᵀ, with M⁻¹ columns from ABA with zero gravity and velocity.
+            let mut jt = [[0.0; N]; 6];
+            let lambda_inv =
+                algo::operational_inverse_inertia(model, &mut d, &q, t, &mut jt).unwrap();
+            algo::crba(model, &mut d, &q).unwrap();
+            algo::factor_mass_matrix(model, &mut d).unwrap();
+            for a in 0..6 {
+                let mut x = jt[a][..n].to_vec();
+                algo::solve_mass_matrix(model, &d, &mut x).unwrap();
+                for b in 0..6 {
+                    let v: f64 = (0..n).map(|k| jt[b][k] * x[k]).sum();
+                    assert!((v - lambda_inv[b][a]).abs() < 1e-9 * v.abs().max(1.0));
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn every_joint_type_tree() {
+    let model = every_joint_type::<32>(7);
+    assert_eq!(model.dof(), 6 + 1 + 1 + 1 + 1 + 1 + 2 + 3 + 3 + 1);
+    assert_eq!(model.nq(), model.dof() + 2); // two quaternions
+    check_identities(&model, 11, 100);
+}
+
+#[test]
+fn random_serial_chains() {
+    for (n, seed) in [(1, 1), (2, 2), (6, 3), (7, 4), (12, 5)] {
+        let model = random_chain::<16>(n, seed);
+        check_identities(&model, seed + 100, 100);
+    }
+}
+
+#[test]
+fn motion_vectors_of_bodies_are_consistent_with_world_twists() {
+    // The velocity of a body's origin in world coordinates from the body's twist equals the
+    // tool velocity of a tool placed at the body's origin.
+    let model = every_joint_type::<32>(3);
+    let mut d = Data::<32>::new();
+    let mut r = Rng(5);
+    let (q, qd, _) = random_state(&model, &mut r);
+    algo::forward_velocity(&model, &mut d, &q, &qd).unwrap();
+    let t = model.tool_index("tool_a").unwrap();
+    let body = model.tools()[t].body;
+    let x = algo::tool_pose(&model, &d, t).unwrap();
+    let tool_in_body = model.tools()[t].placement;
+    let v_tool: MotionVector = tool_in_body.inv_act_motion(d.velocity(body));
+    let w = x.rotation * v_tool.angular;
+    let v = algo::tool_velocity(&model, &d, t).unwrap();
+    assert_close("angular", &v[3..], &[w.x, w.y, w.z], 1e-12);
+}
+
+#[test]
+fn wrong_lengths_are_named() {
+    let model = random_chain::<8>(3, 1);
+    let mut d = Data::<8>::new();
+    let err = algo::aba(&model, &mut d, &[0.0; 3], &[0.0; 2], &[0.0; 3]).unwrap_err();
+    assert_eq!(
+        err,
+        rl_core::Error::Dimension {
+            argument: "qd",
+            expected: 3,
+            got: 2
+        }
+    );
+    assert!(err.to_string().contains("`qd`"));
+    let mut j = [[0.0; 8]; 6];
+    assert_eq!(
+        algo::jacobian(&model, &mut d, &[0.0; 3], 5, &mut j),
+        Err(rl_core::Error::UnknownTool { tool: 5 })
+    );
+}
