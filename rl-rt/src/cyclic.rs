@@ -83,6 +83,33 @@ impl StopFlag {
     pub fn is_stop_requested(&self) -> bool {
         self.0.load(Ordering::Acquire)
     }
+
+    /// Raises this flag on SIGINT or SIGTERM (Ctrl-C, `kill`, systemd stop), so a loop ends
+    /// cleanly and reports instead of dying mid-cycle.
+    ///
+    /// Blocks both signals in the calling thread, and so in every thread it spawns afterwards
+    /// (call it early in `main`, before starting the real-time thread); a small watcher thread
+    /// takes them with `sigwait`. No signal handler runs, so nothing is interrupted.
+    pub fn raise_on_termination_signals(&self) -> Result<std::thread::JoinHandle<()>, Errno> {
+        use nix::sys::signal::{SigSet, Signal};
+        let mut set = SigSet::empty();
+        set.add(Signal::SIGINT);
+        set.add(Signal::SIGTERM);
+        set.thread_block()?;
+        let flag = self.clone();
+        std::thread::Builder::new()
+            .name("rl-rt-signals".into())
+            .stack_size(64 << 10)
+            .spawn(move || {
+                if set.wait().is_ok() {
+                    flag.request_stop();
+                }
+            })
+            .map_err(|e| {
+                e.raw_os_error()
+                    .map_or(Errno::UnknownErrno, Errno::from_raw)
+            })
+    }
 }
 
 /// What the step is told about the cycle it runs in.

@@ -10,6 +10,7 @@
 //! - [`stats`]: 1 µs-bin [`Histogram`]s (text, JSON, cyclictest's `-h` format), mergeable.
 //! - [`exchange`]: wait-free SPSC [`queue`](exchange::queue) and latest-value
 //!   [`mailbox`](exchange::mailbox), drops counted.
+//! - [`cpu_latency`]: hold `/dev/cpu_dma_latency` (no deep C-states) while measuring.
 //! - [`preflight`]: what stands between this machine and hard real time, with fixes.
 //!
 //! Linux only (std). All `unsafe` lives in one private module (`sys`), each block with its
@@ -39,6 +40,7 @@
 #![deny(clippy::undocumented_unsafe_blocks, clippy::missing_safety_doc)]
 
 pub mod clock;
+pub mod cpu_latency;
 pub mod cyclic;
 pub mod exchange;
 pub mod memory;

@@ -1,23 +1,296 @@
-//! `rl jitter` and `rl preflight` (issue 5; not built yet).
+//! `rl jitter` (a cyclictest-equivalent measurement with rl-rt's own loop and an empty step)
+//! and `rl preflight` (what stands between this machine and hard real time).
 
-use clap::Args;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+use rl_rt::preflight::{self, Status};
+use rl_rt::{CyclicLoop, LoopEnd, LoopError, OverrunPolicy, Policy, RtThreadBuilder, StopFlag};
 
 use super::{CliError, CliResult};
 
+/// Scheduling policy of the measuring thread.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PolicyArg {
+    /// SCHED_FIFO.
+    Fifo,
+    /// SCHED_RR.
+    Rr,
+    /// SCHED_OTHER (priority 0).
+    Other,
+}
+
+/// What the loop does when a cycle overruns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OverrunArg {
+    /// Skip the deadlines already past (as cyclictest does).
+    Skip,
+    /// Run every missed cycle late, back to back.
+    CatchUp,
+    /// End with an error.
+    Stop,
+}
+
 /// Arguments of `rl jitter`.
 #[derive(Args, Debug)]
-pub struct JitterArgs {}
+pub struct JitterArgs {
+    /// Loop period in microseconds (cyclictest -i).
+    #[arg(long, default_value_t = 1000)]
+    pub interval_us: u64,
+    /// How long to measure: a number with unit us, ms, s, m or h (e.g. 500ms, 30s, 2m).
+    #[arg(long, default_value = "30s", value_parser = parse_duration)]
+    pub duration: Duration,
+    /// Run exactly this many cycles instead of --duration (cyclictest -l).
+    #[arg(long)]
+    pub cycles: Option<u64>,
+    /// Real-time priority (cyclictest -p); default 90 for fifo/rr, 0 for other.
+    #[arg(long)]
+    pub priority: Option<i32>,
+    /// Pin the measuring thread to this CPU (cyclictest -a).
+    #[arg(long)]
+    pub cpu: Option<usize>,
+    /// Scheduling policy (cyclictest --policy).
+    #[arg(long, value_enum, default_value_t = PolicyArg::Fifo)]
+    pub policy: PolicyArg,
+    /// Write the wake-up latency histogram to FILE in cyclictest's -h format.
+    #[arg(long, value_name = "FILE")]
+    pub histogram: Option<PathBuf>,
+    /// Histogram range in µs (1 µs bins; cyclictest -h N).
+    #[arg(long, default_value_t = 10_000)]
+    pub histogram_range_us: usize,
+    /// Overrun policy of the loop.
+    #[arg(long, value_enum, default_value_t = OverrunArg::Skip)]
+    pub overrun: OverrunArg,
+    /// Do not lock memory (mlockall; cyclictest -m is the default here).
+    #[arg(long)]
+    pub no_mlock: bool,
+    /// Do not hold /dev/cpu_dma_latency at 0 µs while measuring (cyclictest --laptop).
+    #[arg(long)]
+    pub no_cpu_latency_hint: bool,
+    /// Print one JSON object instead of the text report.
+    #[arg(long)]
+    pub json: bool,
+}
 
 /// Arguments of `rl preflight`.
 #[derive(Args, Debug)]
-pub struct PreflightArgs {}
+pub struct PreflightArgs {
+    /// Print the findings as a JSON array.
+    #[arg(long)]
+    pub json: bool,
+    /// Exit with code 1 if any finding is a warning or a failure (for scripts and CI).
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.
+fn parse_duration(text: &str) -> Result<Duration, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a duration: expected e.g. 500ms, 30s, 2m"))?;
+    let seconds = match unit.trim() {
+        "" | "s" => value,
+        "us" | "µs" => value / 1e6,
+        "ms" => value / 1e3,
+        "m" | "min" => value * 60.0,
+        "h" => value * 3600.0,
+        other => {
+            return Err(format!(
+                "unknown unit `{other}` in `{text}`: use us, ms, s, m or h"
+            ));
+        }
+    };
+    Duration::try_from_secs_f64(seconds).map_err(|e| format!("`{text}`: {e}"))
+}
 
 /// Runs `rl jitter`.
-pub fn run_jitter(_args: JitterArgs) -> CliResult {
-    Err(CliError::failed("`rl jitter` is not built yet (issue 5)"))
+pub fn run_jitter(args: JitterArgs) -> CliResult {
+    if args.interval_us == 0 {
+        return Err(CliError::usage("--interval-us must be at least 1"));
+    }
+    let period = Duration::from_micros(args.interval_us);
+    let cycles = match args.cycles {
+        Some(n) => n,
+        None => (args.duration.as_nanos() / period.as_nanos()) as u64,
+    };
+    if cycles == 0 {
+        return Err(CliError::usage(
+            "nothing to measure: --duration is shorter than one interval",
+        ));
+    }
+    let policy = match args.policy {
+        PolicyArg::Fifo => Policy::Fifo,
+        PolicyArg::Rr => Policy::RoundRobin,
+        PolicyArg::Other => Policy::Other,
+    };
+    let priority = args
+        .priority
+        .unwrap_or(if policy.is_realtime() { 90 } else { 0 });
+    let overrun = match args.overrun {
+        OverrunArg::Skip => OverrunPolicy::Skip,
+        OverrunArg::CatchUp => OverrunPolicy::CatchUp,
+        OverrunArg::Stop => OverrunPolicy::Stop,
+    };
+
+    let stop = StopFlag::new();
+    stop.raise_on_termination_signals()
+        .map_err(|e| CliError::failed(format!("cannot watch SIGINT/SIGTERM: {e}")))?;
+    if !args.no_mlock {
+        rl_rt::memory::lock_memory()
+            .map_err(|e| CliError::failed(format!("{e}; or measure without it: --no-mlock")))?;
+    }
+
+    // Like cyclictest: keep CPUs out of deep idle states for the run (released on drop).
+    let latency_hint = if args.no_cpu_latency_hint {
+        None
+    } else {
+        match rl_rt::cpu_latency::CpuLatencyHint::hold(0) {
+            Ok(hint) => Some(hint),
+            Err(e) => {
+                eprintln!(
+                    "rl jitter: note: cannot hold {} at 0 µs ({e}); deep idle states may add latency",
+                    rl_rt::cpu_latency::CPU_DMA_LATENCY
+                );
+                None
+            }
+        }
+    };
+
+    let looped = CyclicLoop::new(period)
+        .map_err(|e| CliError::usage(e.to_string()))?
+        .overrun_policy(overrun)
+        .max_cycles(cycles)
+        .stop_flag(&stop)
+        .histogram_range(Duration::from_micros(args.histogram_range_us as u64));
+    let mut builder = RtThreadBuilder::new("rl-jitter")
+        .policy(policy)
+        .priority(priority);
+    if let Some(cpu) = args.cpu {
+        builder = builder.cpus([cpu]);
+    }
+    let thread = builder
+        .spawn(move || looped.run(|_cycle| ControlFlow::Continue(())))
+        .map_err(|e| match e {
+            rl_rt::ThreadError::InvalidPriority { .. } | rl_rt::ThreadError::InvalidCpu { .. } => {
+                CliError::usage(e.to_string())
+            }
+            e => CliError::failed(e.to_string()),
+        })?;
+    let granted = thread.granted().clone();
+    let cpu_dma_latency_us = latency_hint.as_ref().map(|h| h.max_latency_us());
+    let report = match thread.join() {
+        Ok(Ok(report)) => report,
+        Ok(Err(e @ LoopError::Overrun { .. })) => return Err(CliError::failed(e.to_string())),
+        Ok(Err(e)) => return Err(CliError::failed(e.to_string())),
+        Err(_) => return Err(CliError::failed("the measuring thread panicked")),
+    };
+    drop(latency_hint);
+
+    if let Some(path) = &args.histogram {
+        let file = File::create(path)
+            .map_err(|e| CliError::usage(format!("cannot create {}: {e}", path.display())))?;
+        let mut w = BufWriter::new(file);
+        report
+            .stats
+            .wakeup
+            .write_cyclictest(&mut w)
+            .and_then(|()| w.flush())
+            .map_err(|e| CliError::failed(format!("cannot write {}: {e}", path.display())))?;
+    }
+
+    let stats = &report.stats;
+    let w = stats.wakeup.summary();
+    let us = |ns: u64| ns as f64 / 1_000.0;
+    let interrupted = report.end == LoopEnd::StopRequested;
+    if args.json {
+        let value = serde_json::json!({
+            "cycles": stats.cycles(),
+            "overruns": stats.overruns,
+            "min_us": us(w.min_ns),
+            "mean_us": us(w.mean_ns),
+            "p50_us": us(w.p50_ns),
+            "p99_us": us(w.p99_ns),
+            "p999_us": us(w.p999_ns),
+            "p9999_us": us(w.p9999_ns),
+            "max_us": us(w.max_ns),
+            "missed_deadlines": stats.missed_deadlines,
+            "histogram_overflows": w.overflow,
+            "histogram_range_us": stats.wakeup.range_us(),
+            "interval_us": args.interval_us,
+            "overrun_policy": overrun.to_string(),
+            "policy": granted.policy.map(|p| p.to_string()),
+            "priority": granted.priority,
+            "cpus": granted.cpus,
+            "mlockall": !args.no_mlock,
+            "cpu_dma_latency_us": cpu_dma_latency_us,
+            "interrupted": interrupted,
+            "step": {
+                "mean_us": us(stats.step.summary().mean_ns),
+                "max_us": us(stats.step.summary().max_ns),
+            },
+        });
+        println!("{value}");
+    } else {
+        println!(
+            "rl jitter: {} cycles of {} µs, {}, mlockall {}, cpu_dma_latency {}, overrun policy {}{}",
+            stats.cycles(),
+            args.interval_us,
+            granted,
+            if args.no_mlock { "no" } else { "yes" },
+            cpu_dma_latency_us.map_or("not held".to_owned(), |us| format!("{us} µs")),
+            overrun,
+            if interrupted { " (interrupted)" } else { "" }
+        );
+        println!("{stats}");
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Runs `rl preflight`.
-pub fn run_preflight(_args: PreflightArgs) -> CliResult {
-    Err(CliError::failed("`rl preflight` is not built yet (issue 5)"))
+pub fn run_preflight(args: PreflightArgs) -> CliResult {
+    let report = preflight::check();
+    if args.json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{report}");
+        let worst = report.worst();
+        println!(
+            "\nverdict: {}",
+            match worst {
+                Status::Ok | Status::Info => "ready for hard real time",
+                Status::Warn => "runs, but latency is not bounded as on a tuned PREEMPT_RT machine",
+                Status::Fail => "real-time scheduling is not possible as configured",
+            }
+        );
+    }
+    if args.strict && report.worst() >= Status::Warn {
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_parse_with_units() {
+        assert_eq!(parse_duration("30s"), Ok(Duration::from_secs(30)));
+        assert_eq!(parse_duration("500ms"), Ok(Duration::from_millis(500)));
+        assert_eq!(parse_duration("2m"), Ok(Duration::from_secs(120)));
+        assert_eq!(parse_duration("250us"), Ok(Duration::from_micros(250)));
+        assert_eq!(parse_duration("1.5"), Ok(Duration::from_millis(1500)));
+        assert!(parse_duration("10 parsecs").is_err());
+        assert!(parse_duration("fast").is_err());
+    }
 }

@@ -1,0 +1,116 @@
+//! Real-time scheduling as the kernel grants it. Needs CAP_SYS_NICE (or RLIMIT_RTPRIO) and
+//! CAP_IPC_LOCK: without them each test prints why and skips; as root (CI) they all run and
+//! check the read-back policy, priority and affinity.
+
+use std::ops::ControlFlow;
+use std::time::Duration;
+
+use rl_rt::thread::current_scheduling;
+use rl_rt::{CyclicLoop, LoopEnd, Policy, RtThreadBuilder};
+
+/// `true` if SCHED_FIFO is permitted; otherwise prints the reason to skip.
+fn privileged(test: &str) -> bool {
+    match rl_rt::preflight::probe_fifo() {
+        Ok(()) => true,
+        Err(e) => {
+            eprintln!("SKIP {test}: SCHED_FIFO not permitted here: {e}");
+            false
+        }
+    }
+}
+
+#[test]
+fn fifo_thread_reads_back_policy_and_priority() {
+    if !privileged("fifo_thread_reads_back_policy_and_priority") {
+        return;
+    }
+    let t = RtThreadBuilder::new("fifo-42")
+        .policy(Policy::Fifo)
+        .priority(42)
+        .spawn(|| current_scheduling().expect("read back inside"))
+        .expect("SCHED_FIFO 42");
+    assert_eq!(t.granted().policy, Some(Policy::Fifo));
+    assert_eq!(t.granted().priority, 42);
+    assert!(t.matches_request());
+    assert_eq!(t.thread().name(), Some("fifo-42"));
+    let inside = t.join().expect("no panic");
+    assert_eq!(
+        (inside.policy, inside.priority),
+        (Some(Policy::Fifo), 42),
+        "still so while running"
+    );
+}
+
+#[test]
+fn round_robin_thread_reads_back_policy_and_priority() {
+    if !privileged("round_robin_thread_reads_back_policy_and_priority") {
+        return;
+    }
+    let t = RtThreadBuilder::new("rr-7")
+        .policy(Policy::RoundRobin)
+        .priority(7)
+        .spawn(|| ())
+        .expect("SCHED_RR 7");
+    assert_eq!(
+        (t.granted().policy, t.granted().priority),
+        (Some(Policy::RoundRobin), 7)
+    );
+    t.join().expect("no panic");
+}
+
+#[test]
+fn affinity_is_applied_and_read_back() {
+    if !privileged("affinity_is_applied_and_read_back") {
+        return;
+    }
+    let allowed = current_scheduling().expect("read back").cpus;
+    let cpu = *allowed.last().expect("at least one CPU");
+    let t = RtThreadBuilder::new("pinned")
+        .policy(Policy::Fifo)
+        .priority(10)
+        .cpus([cpu])
+        .spawn(move || current_scheduling().expect("read back inside").cpus)
+        .expect("pinned thread");
+    assert_eq!(t.granted().cpus, vec![cpu]);
+    assert_eq!(t.join().expect("no panic"), vec![cpu]);
+}
+
+#[test]
+fn memory_locks_and_a_fifo_loop_returns_its_report_through_join() {
+    if !privileged("memory_locks_and_a_fifo_loop_returns_its_report_through_join") {
+        return;
+    }
+    let looped = CyclicLoop::new(Duration::from_millis(1))
+        .expect("valid")
+        .max_cycles(200);
+    let t = RtThreadBuilder::new("rt-loop")
+        .policy(Policy::Fifo)
+        .priority(60)
+        .lock_memory(true)
+        .spawn(move || looped.run(|_| ControlFlow::Continue(())))
+        .expect("locked SCHED_FIFO thread");
+    let report = t.join().expect("no panic").expect("loop ran");
+    assert_eq!(report.end, LoopEnd::CycleLimit);
+    assert_eq!(report.stats.cycles(), 200);
+    let locked = std::fs::read_to_string("/proc/self/status")
+        .expect("status")
+        .lines()
+        .find_map(|l| l.strip_prefix("VmLck:").map(|v| v.trim().to_owned()))
+        .expect("VmLck line");
+    assert_ne!(locked, "0 kB", "mlockall locked nothing");
+    nix::sys::mman::munlockall().expect("unlock again for the other tests");
+    eprintln!("SCHED_FIFO 60 loop: {}", report.stats);
+}
+
+#[test]
+fn other_policy_refuses_a_priority_before_any_syscall() {
+    // Needs no privilege: validation happens before the kernel is asked.
+    let e = RtThreadBuilder::new("bad")
+        .policy(Policy::Other)
+        .priority(10)
+        .spawn(|| ());
+    assert!(
+        matches!(e, Err(rl_rt::ThreadError::InvalidPriority { .. })),
+        "{e:?}"
+    );
+}
