@@ -40,8 +40,6 @@ pub struct Data<const N: usize> {
     pub(crate) qdd: [f64; N],
     /// Joint-space mass matrix (CRBA), full and symmetric.
     pub(crate) mass_matrix: [[f64; N]; N],
-    /// Scratch vector.
-    pub(crate) tmp: [f64; N],
     /// Scratch matrix for factorisations.
     pub(crate) factor: [[f64; N]; N],
 }
@@ -71,7 +69,6 @@ impl<const N: usize> Data<N> {
             tau: [0.0; N],
             qdd: [0.0; N],
             mass_matrix: [[0.0; N]; N],
-            tmp: [0.0; N],
             factor: [[0.0; N]; N],
         }
     }
