@@ -147,6 +147,12 @@ impl<const D: usize> JerkLimited<D> {
         Ok(Self { axes, duration })
     }
 
+    /// End time of each of the seven phases of `axis` (velocity and acceleration peak at
+    /// these boundaries; zero-length phases repeat a time). `None` for an axis out of range.
+    pub fn phase_ends(&self, axis: usize) -> Option<[f64; 7]> {
+        self.axes.get(axis).map(|p| p.end)
+    }
+
     /// The duration each axis would need alone (its time-optimal duration).
     pub fn axis_durations(start: [f64; D], goal: [f64; D], limits: &Limits<D>) -> [f64; D] {
         core::array::from_fn(|axis| {

@@ -19,6 +19,9 @@
 //! never panic: bad input is a [`TrajectoryError`]. Times outside `[0, duration]` are clamped
 //! to the interval, so a finished trajectory holds its end state.
 
+// Index loops over axes read as the math does; `!(x > 0.0)` is how NaN is rejected.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 mod blend;
 mod cartesian;
 mod circular;
