@@ -7,9 +7,9 @@
 //! `v`), so `exp(v)` rotates by the angle `2|v|` about `v` — as RL's `Quaternion::exp`. Nothing
 //! here allocates or panics.
 
-mod quaternion;
-mod slerp;
-mod squad;
+pub mod quaternion;
+pub mod slerp;
+pub mod squad;
 
 pub use quaternion::{
     angular_acceleration, angular_acceleration_body, angular_velocity, angular_velocity_body, exp,
