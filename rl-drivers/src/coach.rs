@@ -96,7 +96,11 @@ impl Coach {
     /// A closed device; checks the configuration.
     pub fn new(config: CoachConfig) -> Result<Self, Error> {
         if config.dof == 0 || config.dof > MAX_VALUES {
-            return Err(Error::InvalidArgument { what: "dof (1..=32)", expected: MAX_VALUES, got: config.dof });
+            return Err(Error::InvalidArgument {
+                what: "dof (1..=32)",
+                expected: MAX_VALUES,
+                got: config.dof,
+            });
         }
         Ok(Self {
             config,
@@ -123,13 +127,22 @@ impl Coach {
 
     /// Buffers a scene body's frame (`0 <model> <body> x y z a b c`).
     pub fn set_body_pose(&mut self, body: u32, pose: &Pose) -> Result<(), Error> {
-        let m = Message::BodyPose { model: self.config.model, body, pose: flat(pose) };
+        let m = Message::BodyPose {
+            model: self.config.model,
+            body,
+            pose: flat(pose),
+        };
         self.push(&m)
     }
 
     /// Buffers a shape's transform relative to its body (`1 <model> <body> <shape> ...`).
     pub fn set_shape_pose(&mut self, body: u32, shape: u32, pose: &Pose) -> Result<(), Error> {
-        let m = Message::ShapePose { model: self.config.model, body, shape, pose: flat(pose) };
+        let m = Message::ShapePose {
+            model: self.config.model,
+            body,
+            shape,
+            pose: flat(pose),
+        };
         self.push(&m)
     }
 
@@ -145,17 +158,22 @@ impl Coach {
 
     fn push(&mut self, m: &Message) -> Result<(), Error> {
         self.lifecycle.check(Operation::Set)?;
-        let n = m.encode(&mut self.out[self.out_len..]).map_err(|_| Error::InvalidArgument {
-            what: "commands buffered in one step (bytes)",
-            expected: OUTPUT_CAPACITY,
-            got: OUTPUT_CAPACITY + 1,
-        })?;
+        let n = m
+            .encode(&mut self.out[self.out_len..])
+            .map_err(|_| Error::InvalidArgument {
+                what: "commands buffered in one step (bytes)",
+                expected: OUTPUT_CAPACITY,
+                got: OUTPUT_CAPACITY + 1,
+            })?;
         self.out_len += n;
         Ok(())
     }
 
     fn bad_line(e: CoachError) -> Error {
-        Error::Protocol { operation: Operation::Step, error: ProtocolError::Coach(e) }
+        Error::Protocol {
+            operation: Operation::Step,
+            error: ProtocolError::Coach(e),
+        }
     }
 
     /// Takes buffered lines; returns whether a joint reply for our model was among them.
@@ -176,7 +194,9 @@ impl Coach {
                         self.counters.bad_lines += 1;
                         failure = Some(Error::Protocol {
                             operation: Operation::Step,
-                            error: ProtocolError::Unexpected("reply has another number of joints than dof"),
+                            error: ProtocolError::Unexpected(
+                                "reply has another number of joints than dof",
+                            ),
                         });
                     }
                 }
@@ -204,14 +224,22 @@ impl Coach {
     fn exchange(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Step;
         if self.config.request_joints {
-            self.push(&Message::Request { model: self.config.model })?;
+            self.push(&Message::Request {
+                model: self.config.model,
+            })?;
         }
         let timeout = self.config.reply_timeout;
         let deadline = Instant::now() + timeout;
-        let link = self.link.as_mut().ok_or(Error::State { operation: OP, state: State::Closed })?;
+        let link = self.link.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
         let io = |e: std::io::Error| {
             if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout { operation: OP, waited: timeout }
+                Error::Timeout {
+                    operation: OP,
+                    waited: timeout,
+                }
             } else {
                 Error::io(OP, &e)
             }
@@ -219,7 +247,9 @@ impl Coach {
         // Replies already here answer requests of earlier, timed-out steps.
         loop {
             match link.try_recv(self.lines.spare()).map_err(io)? {
-                Some(0) => return Err(Error::io(OP, &std::io::ErrorKind::ConnectionAborted.into())),
+                Some(0) => {
+                    return Err(Error::io(OP, &std::io::ErrorKind::ConnectionAborted.into()));
+                }
                 Some(n) => self.lines.commit(n),
                 None => break,
             }
@@ -227,21 +257,31 @@ impl Coach {
         if self.lines.pending() > 0 && self.take_lines().unwrap_or(false) {
             self.counters.late += 1;
         }
-        let link = self.link.as_mut().ok_or(Error::State { operation: OP, state: State::Closed })?;
-        link.send_all(&self.out[..self.out_len], deadline).map_err(io)?;
+        let link = self.link.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
+        link.send_all(&self.out[..self.out_len], deadline)
+            .map_err(io)?;
         self.out_len = 0;
         self.counters.sent += 1;
         if !self.config.request_joints {
             return Ok(());
         }
         loop {
-            let link = self.link.as_mut().ok_or(Error::State { operation: OP, state: State::Closed })?;
+            let link = self.link.as_mut().ok_or(Error::State {
+                operation: OP,
+                state: State::Closed,
+            })?;
             let n = match link.recv(self.lines.spare(), deadline) {
                 Ok(0) => return Err(Error::io(OP, &std::io::ErrorKind::ConnectionAborted.into())),
                 Ok(n) => n,
                 Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
                     self.counters.timeouts += 1;
-                    return Err(Error::Timeout { operation: OP, waited: timeout });
+                    return Err(Error::Timeout {
+                        operation: OP,
+                        waited: timeout,
+                    });
                 }
                 Err(e) => return Err(Error::io(OP, &e)),
             };
@@ -266,13 +306,17 @@ impl Device for Coach {
     fn open(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Open;
         self.lifecycle.check(OP)?;
-        let link = TcpLink::connect(self.config.server, self.config.connect_timeout).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout { operation: OP, waited: self.config.connect_timeout }
-            } else {
-                Error::io(OP, &e)
-            }
-        })?;
+        let link =
+            TcpLink::connect(self.config.server, self.config.connect_timeout).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::TimedOut {
+                    Error::Timeout {
+                        operation: OP,
+                        waited: self.config.connect_timeout,
+                    }
+                } else {
+                    Error::io(OP, &e)
+                }
+            })?;
         self.link = Some(link);
         self.lines.clear();
         self.lifecycle.complete(OP);
@@ -331,21 +375,30 @@ impl JointDevice for Coach {
 impl JointPositionActuator for Coach {
     fn set_joint_position(&mut self, q: &[f64]) -> Result<(), Error> {
         let values = self.values(q)?;
-        self.push(&Message::JointPosition { model: self.config.model, values })
+        self.push(&Message::JointPosition {
+            model: self.config.model,
+            values,
+        })
     }
 }
 
 impl JointVelocityActuator for Coach {
     fn set_joint_velocity(&mut self, qd: &[f64]) -> Result<(), Error> {
         let values = self.values(qd)?;
-        self.push(&Message::JointVelocity { model: self.config.model, values })
+        self.push(&Message::JointVelocity {
+            model: self.config.model,
+            values,
+        })
     }
 }
 
 impl JointTorqueActuator for Coach {
     fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Error> {
         let values = self.values(tau)?;
-        self.push(&Message::JointTorque { model: self.config.model, values })
+        self.push(&Message::JointTorque {
+            model: self.config.model,
+            values,
+        })
     }
 }
 

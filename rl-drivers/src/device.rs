@@ -63,7 +63,10 @@ impl Operation {
                 | (Operation::Step, State::Running)
                 | (Operation::Stop, State::Running)
                 | (Operation::Close, State::Open | State::Faulted)
-                | (Operation::Get | Operation::Set, State::Open | State::Running)
+                | (
+                    Operation::Get | Operation::Set,
+                    State::Open | State::Running
+                )
         )
     }
 
@@ -182,12 +185,24 @@ impl Error {
     /// Wraps an I/O error raised during `operation`.
     #[cfg(feature = "std")]
     pub fn io(operation: Operation, e: &std::io::Error) -> Self {
-        Error::Io { operation, kind: e.kind(), os_code: e.raw_os_error() }
+        Error::Io {
+            operation,
+            kind: e.kind(),
+            os_code: e.raw_os_error(),
+        }
     }
 
     /// Checks that a caller's slice has exactly `expected` elements.
     pub fn check_len(what: &'static str, expected: usize, got: usize) -> Result<(), Error> {
-        if expected == got { Ok(()) } else { Err(Error::InvalidArgument { what, expected, got }) }
+        if expected == got {
+            Ok(())
+        } else {
+            Err(Error::InvalidArgument {
+                what,
+                expected,
+                got,
+            })
+        }
     }
 }
 
@@ -212,14 +227,22 @@ impl fmt::Display for Error {
             }
             Error::Protocol { operation, error } => write!(f, "{operation}: {error}"),
             #[cfg(feature = "std")]
-            Error::Io { operation, kind, os_code } => match os_code {
+            Error::Io {
+                operation,
+                kind,
+                os_code,
+            } => match os_code {
                 Some(code) => write!(f, "{operation}: I/O error {kind} (os error {code})"),
                 None => write!(f, "{operation}: I/O error {kind}"),
             },
             Error::State { operation, state } => {
                 write!(f, "{operation} is not allowed while the device is {state}")
             }
-            Error::InvalidArgument { what, expected, got } => {
+            Error::InvalidArgument {
+                what,
+                expected,
+                got,
+            } => {
                 write!(f, "{what}: expected {expected}, got {got}")
             }
         }
@@ -273,7 +296,10 @@ impl Default for Lifecycle {
 impl Lifecycle {
     /// A closed device.
     pub const fn new() -> Self {
-        Self { state: State::Closed, fault: None }
+        Self {
+            state: State::Closed,
+            fault: None,
+        }
     }
 
     /// The current state.
@@ -291,7 +317,10 @@ impl Lifecycle {
         if operation.allowed_in(self.state) {
             Ok(())
         } else {
-            Err(Error::State { operation, state: self.state })
+            Err(Error::State {
+                operation,
+                state: self.state,
+            })
         }
     }
 
@@ -325,7 +354,10 @@ mod tests {
         let mut l = Lifecycle::new();
         assert_eq!(
             l.check(Operation::Step),
-            Err(Error::State { operation: Operation::Step, state: State::Closed })
+            Err(Error::State {
+                operation: Operation::Step,
+                state: State::Closed
+            })
         );
         assert!(l.check(Operation::Start).is_err(), "start before open");
         l.check(Operation::Open).unwrap();
@@ -345,10 +377,19 @@ mod tests {
         let mut l = Lifecycle::new();
         l.complete(Operation::Open);
         l.complete(Operation::Start);
-        let cause = Error::Timeout { operation: Operation::Step, waited: Duration::from_millis(5) };
+        let cause = Error::Timeout {
+            operation: Operation::Step,
+            waited: Duration::from_millis(5),
+        };
         l.fail(cause);
         assert_eq!(l.fault(), Some(cause));
-        for op in [Operation::Open, Operation::Start, Operation::Step, Operation::Stop, Operation::Get] {
+        for op in [
+            Operation::Open,
+            Operation::Start,
+            Operation::Step,
+            Operation::Stop,
+            Operation::Get,
+        ] {
             let e = l.check(op).unwrap_err();
             assert_eq!(e.kind(), ErrorKind::State);
         }

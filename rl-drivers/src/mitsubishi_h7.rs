@@ -57,7 +57,13 @@ pub struct GripperIo {
 
 impl Default for GripperIo {
     fn default() -> Self {
-        Self { bit_top: 900, mask: 0x00FF, halt: 0x00AA, release: 0x00A6, shut: 0x00A9 }
+        Self {
+            bit_top: 900,
+            mask: 0x00FF,
+            halt: 0x00AA,
+            release: 0x00A6,
+            shut: 0x00A9,
+        }
     }
 }
 
@@ -96,8 +102,12 @@ pub struct MitsubishiH7Config {
 
 impl MitsubishiH7Config {
     /// RL's reply types: joint, pose, pulse (commanded values) and current feedback.
-    pub const RL_FEEDBACK: [MxtType; 4] =
-        [MxtType::Joint, MxtType::Pose, MxtType::Pulse, MxtType::CurrentFeedback];
+    pub const RL_FEEDBACK: [MxtType; 4] = [
+        MxtType::Joint,
+        MxtType::Pose,
+        MxtType::Pulse,
+        MxtType::CurrentFeedback,
+    ];
 
     /// Joint mode, filter 0, RL's gripper I/O, 10 failures to fault, 2 s R3 and 5 s servo bounds.
     pub fn new(dof: usize, server: SocketAddr, r3: SocketAddr) -> Self {
@@ -171,7 +181,11 @@ impl MitsubishiH7 {
     /// A closed device; checks the configuration.
     pub fn new(config: MitsubishiH7Config) -> Result<Self, Error> {
         if config.dof == 0 || config.dof > MAX_AXES {
-            return Err(Error::InvalidArgument { what: "dof (1..=8)", expected: MAX_AXES, got: config.dof });
+            return Err(Error::InvalidArgument {
+                what: "dof (1..=8)",
+                expected: MAX_AXES,
+                got: config.dof,
+            });
         }
         Ok(Self {
             config,
@@ -236,7 +250,11 @@ impl MitsubishiH7 {
 
     /// The last received current feedback in % (from the first reply block of current shape).
     pub fn current_feedback(&self, currents: &mut [i32]) -> Result<(), Error> {
-        self.read_i32s(DataShape::Current, "no current data in the last reply", currents)
+        self.read_i32s(
+            DataShape::Current,
+            "no current data in the last reply",
+            currents,
+        )
     }
 
     /// Writes `data` under `mask` to the output word at `bit_top` with the next step.
@@ -290,36 +308,63 @@ impl MitsubishiH7 {
             .iter()
             .find(|(t, _)| t.shape() == shape)
             .map(|(t, d)| d.view(*t))
-            .ok_or(Error::Protocol { operation: Operation::Get, error: ProtocolError::Unexpected(missing) })
+            .ok_or(Error::Protocol {
+                operation: Operation::Get,
+                error: ProtocolError::Unexpected(missing),
+            })
     }
 
-    fn read_i32s(&self, shape: DataShape, missing: &'static str, out: &mut [i32]) -> Result<(), Error> {
+    fn read_i32s(
+        &self,
+        shape: DataShape,
+        missing: &'static str,
+        out: &mut [i32],
+    ) -> Result<(), Error> {
         Error::check_len("output length", self.config.dof, out.len())?;
         match self.find_shape(shape, missing)? {
             DataView::Pulse(v) | DataView::Current(v) => {
                 out.copy_from_slice(&v[..self.config.dof]);
                 Ok(())
             }
-            _ => Err(Error::Protocol { operation: Operation::Get, error: ProtocolError::Unexpected(missing) }),
+            _ => Err(Error::Protocol {
+                operation: Operation::Get,
+                error: ProtocolError::Unexpected(missing),
+            }),
         }
     }
 
     fn udp(&mut self, operation: Operation) -> Result<&mut UdpLink, Error> {
-        self.udp.as_mut().ok_or(Error::State { operation, state: State::Closed })
+        self.udp.as_mut().ok_or(Error::State {
+            operation,
+            state: State::Closed,
+        })
     }
 
     /// Sends one R3 request and returns the reply payload's length in `r3_rx` (after `QoK`).
     fn r3_exchange(&mut self, operation: Operation, slot: u8, body: &str) -> Result<&str, Error> {
-        let request = Request { robot: self.config.robot, slot, body };
+        let request = Request {
+            robot: self.config.robot,
+            slot,
+            body,
+        };
         let n = request
             .encode(&mut self.r3_tx)
-            .map_err(|e| Error::Protocol { operation, error: ProtocolError::R3(e) })?;
+            .map_err(|e| Error::Protocol {
+                operation,
+                error: ProtocolError::R3(e),
+            })?;
         let timeout = self.config.r3_timeout;
         let deadline = Instant::now() + timeout;
-        let link = self.r3.as_mut().ok_or(Error::State { operation, state: State::Closed })?;
+        let link = self.r3.as_mut().ok_or(Error::State {
+            operation,
+            state: State::Closed,
+        })?;
         let map = |e: std::io::Error| {
             if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout { operation, waited: timeout }
+                Error::Timeout {
+                    operation,
+                    waited: timeout,
+                }
             } else {
                 Error::io(operation, &e)
             }
@@ -328,9 +373,15 @@ impl MitsubishiH7 {
         // RL reads a reply with one receive; we do the same but bounded by the deadline.
         let got = link.recv(&mut self.r3_rx, deadline).map_err(map)?;
         if got == 0 {
-            return Err(Error::io(operation, &std::io::ErrorKind::ConnectionAborted.into()));
+            return Err(Error::io(
+                operation,
+                &std::io::ErrorKind::ConnectionAborted.into(),
+            ));
         }
-        let r3_err = |error| Error::Protocol { operation, error: ProtocolError::R3(error) };
+        let r3_err = |error| Error::Protocol {
+            operation,
+            error: ProtocolError::R3(error),
+        };
         match Reply::parse(&self.r3_rx[..got]).map_err(r3_err)? {
             Reply::Ok(payload) => Ok(payload),
             Reply::Error(code) => Err(r3_err(R3Error::Controller { code })),
@@ -343,7 +394,10 @@ impl MitsubishiH7 {
 
     fn dstate(&mut self, operation: Operation) -> Result<DState, Error> {
         let payload = self.r3_exchange(operation, 1, "DSTATE")?;
-        DState::parse(payload).map_err(|e| Error::Protocol { operation, error: ProtocolError::R3(e) })
+        DState::parse(payload).map_err(|e| Error::Protocol {
+            operation,
+            error: ProtocolError::R3(e),
+        })
     }
 
     /// Polls DSTATE until the servo is `on` (or off), bounded by `servo_timeout`.
@@ -354,7 +408,10 @@ impl MitsubishiH7 {
                 return Ok(());
             }
             if start.elapsed() > self.config.servo_timeout {
-                return Err(Error::Timeout { operation, waited: self.config.servo_timeout });
+                return Err(Error::Timeout {
+                    operation,
+                    waited: self.config.servo_timeout,
+                });
             }
             std::thread::sleep(Duration::from_millis(10));
         }
@@ -364,18 +421,30 @@ impl MitsubishiH7 {
         const OP: Operation = Operation::Start;
         let client = match self.config.client_ip {
             Some(ip) => ip,
-            None => self.udp(OP)?.local_addr().map_err(|e| Error::io(OP, &e))?.ip(),
+            None => self
+                .udp(OP)?
+                .local_addr()
+                .map_err(|e| Error::io(OP, &e))?
+                .ip(),
         };
         let mut program = [0u8; 256];
         let n = r3::write_program(&mut program, client, self.config.mode, self.config.filter)
-            .map_err(|e| Error::Protocol { operation: OP, error: ProtocolError::R3(e) })?;
-        let program = core::str::from_utf8(&program[..n]).unwrap_or_default().to_owned();
+            .map_err(|e| Error::Protocol {
+                operation: OP,
+                error: ProtocolError::R3(e),
+            })?;
+        let program = core::str::from_utf8(&program[..n])
+            .unwrap_or_default()
+            .to_owned();
         self.r3_command(OP, 1, "STOP")?;
         self.r3_command(OP, 1, "NEW")?;
         self.r3_command(OP, 1, &format!("LOAD={}", r3::PROGRAM_NAME))?;
         self.r3_command(OP, 9, "ECLR")?;
         for chunk in EmdatChunks::new(&program) {
-            let chunk = chunk.map_err(|e| Error::Protocol { operation: OP, error: ProtocolError::R3(e) })?;
+            let chunk = chunk.map_err(|e| Error::Protocol {
+                operation: OP,
+                error: ProtocolError::R3(e),
+            })?;
             self.r3_command(OP, 9, &format!("EMDAT{chunk}"))?;
         }
         self.r3_command(OP, 1, "SAVE")?;
@@ -392,7 +461,11 @@ impl MitsubishiH7 {
 
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
-        let end = Packet { command: Command::End, c_count: self.c_count, ..Packet::default() };
+        let end = Packet {
+            command: Command::End,
+            c_count: self.c_count,
+            ..Packet::default()
+        };
         end.encode(&mut self.tx);
         let tx = self.tx;
         self.udp(OP)?.send(&tx).map_err(|e| Error::io(OP, &e))?;
@@ -424,9 +497,16 @@ impl MitsubishiH7 {
         self.request.c_count = self.c_count;
         self.request.encode(&mut self.tx);
         let timeout = self.config.reply_timeout();
-        let udp = self.udp.as_mut().ok_or(Error::State { operation: OP, state: State::Closed })?;
+        let udp = self.udp.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
         // Anything from the controller still queued answers an earlier step that timed out.
-        while udp.try_recv(&mut self.rx).map_err(|e| Error::io(OP, &e))?.is_some() {
+        while udp
+            .try_recv(&mut self.rx)
+            .map_err(|e| Error::io(OP, &e))?
+            .is_some()
+        {
             self.counters.late += 1;
         }
         udp.send(&self.tx).map_err(|e| Error::io(OP, &e))?;
@@ -441,11 +521,20 @@ impl MitsubishiH7 {
         self.request.bit_mask = 0;
         self.request.io_data = 0;
         let deadline = Instant::now() + timeout;
-        let Some(n) = udp.recv_until(&mut self.rx, deadline).map_err(|e| Error::io(OP, &e))? else {
+        let Some(n) = udp
+            .recv_until(&mut self.rx, deadline)
+            .map_err(|e| Error::io(OP, &e))?
+        else {
             self.counters.timeouts += 1;
-            return Err(Error::Timeout { operation: OP, waited: timeout });
+            return Err(Error::Timeout {
+                operation: OP,
+                waited: timeout,
+            });
         };
-        let protocol = |error| Error::Protocol { operation: OP, error };
+        let protocol = |error| Error::Protocol {
+            operation: OP,
+            error,
+        };
         let reply = match Packet::decode(&self.rx[..n]) {
             Ok(p) => p,
             Err(e @ DecodeError::Length { .. }) => {
@@ -457,9 +546,17 @@ impl MitsubishiH7 {
                 return Err(protocol(ProtocolError::H7(e)));
             }
         };
-        if [reply.recv_type, reply.recv_type1, reply.recv_type2, reply.recv_type3] != self.config.feedback {
+        if [
+            reply.recv_type,
+            reply.recv_type1,
+            reply.recv_type2,
+            reply.recv_type3,
+        ] != self.config.feedback
+        {
             self.counters.corrupt += 1;
-            return Err(protocol(ProtocolError::Unexpected("reply holds other data types than requested")));
+            return Err(protocol(ProtocolError::Unexpected(
+                "reply holds other data types than requested",
+            )));
         }
         self.reply = Some(reply);
         self.counters.replies += 1;
@@ -476,12 +573,16 @@ impl Device for MitsubishiH7 {
         self.lifecycle.check(OP)?;
         let r3 = TcpLink::connect(self.config.r3, self.config.r3_timeout).map_err(|e| {
             if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout { operation: OP, waited: self.config.r3_timeout }
+                Error::Timeout {
+                    operation: OP,
+                    waited: self.config.r3_timeout,
+                }
             } else {
                 Error::io(OP, &e)
             }
         })?;
-        let udp = UdpLink::bind(self.config.local, self.config.server).map_err(|e| Error::io(OP, &e))?;
+        let udp =
+            UdpLink::bind(self.config.local, self.config.server).map_err(|e| Error::io(OP, &e))?;
         self.r3 = Some(r3);
         self.udp = Some(udp);
         self.lifecycle.complete(OP);

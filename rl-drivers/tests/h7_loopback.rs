@@ -1,8 +1,9 @@
 //! The H7 driver against the fake controller on loopback (random ports, bounded waits).
+#![allow(clippy::needless_range_loop)]
 
 use std::time::{Duration, Instant};
 
-use rl_drivers::fake::h7_controller::{Fault, FaultPlan, FakeH7, FakeH7Config};
+use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, Fault, FaultPlan};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::h7::{DecodeError, MxtType};
 use rl_drivers::{
@@ -67,7 +68,10 @@ fn a_thousand_cycles_at_the_real_period_follow_a_ramp() {
     let program = "10 OPEN \"ENET:127.0.0.1\" AS #1\u{b}20 MXT 1,1,0\u{b}30 HLT\u{b}40 END";
     let s = fake.status();
     assert_eq!(s.r3_log, expected_start_log(program));
-    assert_eq!((s.program.as_str(), s.program_name.as_str()), (program, "1432"));
+    assert_eq!(
+        (s.program.as_str(), s.program_name.as_str()),
+        (program, "1432")
+    );
     assert!(s.servo_on && s.program_running);
 
     const CYCLES: usize = 1000;
@@ -92,7 +96,10 @@ fn a_thousand_cycles_at_the_real_period_follow_a_ramp() {
     }
     let c = robot.counters();
     assert_eq!((c.sent, c.replies), (CYCLES as u64, CYCLES as u64));
-    assert_eq!((c.timeouts, c.late, c.foreign, c.corrupt, c.wrong_length), (0, 0, 0, 0, 0));
+    assert_eq!(
+        (c.timeouts, c.late, c.foreign, c.corrupt, c.wrong_length),
+        (0, 0, 0, 0, 0)
+    );
 
     let s = fake.status();
     assert_eq!((s.packets, s.moves, s.last_c_count), (1000, 999, 999));
@@ -100,19 +107,31 @@ fn a_thousand_cycles_at_the_real_period_follow_a_ramp() {
     // The fake's filter (time constant 2 cycles) lags a ramp by 2 cycles in steady state.
     for i in 0..DOF {
         let slope = SLOPE * (i + 1) as f64 / DOF as f64;
-        assert!((s.commanded_rad[i] - q[i]).abs() < 1e-6, "joint {i} commanded");
+        assert!(
+            (s.commanded_rad[i] - q[i]).abs() < 1e-6,
+            "joint {i} commanded"
+        );
         let lag = s.commanded_rad[i] - s.actual_rad[i];
-        assert!((lag - 2.0 * slope).abs() < 0.01 * slope, "joint {i} lags {lag}, not 2 cycles");
+        assert!(
+            (lag - 2.0 * slope).abs() < 0.01 * slope,
+            "joint {i} lags {lag}, not 2 cycles"
+        );
     }
     robot.joint_position(&mut measured).unwrap();
     for i in 0..DOF {
-        assert!((measured[i] - s.actual_rad[i]).abs() < 1e-6, "joint {i} measured");
+        assert!(
+            (measured[i] - s.actual_rad[i]).abs() < 1e-6,
+            "joint {i} measured"
+        );
     }
 
     robot.stop().unwrap();
     let s = fake.status();
     assert_eq!(s.ends, 1, "stop sends the end packet (command 255)");
-    assert_eq!(s.r3_log[expected_start_log(program).len()..], ["STOP", "DSTATE", "SRVOFF", "DSTATE"]);
+    assert_eq!(
+        s.r3_log[expected_start_log(program).len()..],
+        ["STOP", "DSTATE", "SRVOFF", "DSTATE"]
+    );
     assert!(!s.servo_on && !s.program_running);
     assert_eq!(robot.state(), State::Open);
     robot.close().unwrap();
@@ -126,10 +145,16 @@ fn calls_in_the_wrong_state_are_refused() {
     let kind = |r: Result<(), Error>| r.unwrap_err().kind();
     assert_eq!(kind(robot.step()), ErrorKind::State);
     assert_eq!(kind(robot.start()), ErrorKind::State);
-    assert_eq!(kind(robot.set_joint_position(&[0.0; DOF])), ErrorKind::State);
+    assert_eq!(
+        kind(robot.set_joint_position(&[0.0; DOF])),
+        ErrorKind::State
+    );
     robot.open().unwrap();
     assert_eq!(kind(robot.step()), ErrorKind::State);
-    assert_eq!(kind(robot.set_joint_position(&[0.0; 3])), ErrorKind::InvalidArgument);
+    assert_eq!(
+        kind(robot.set_joint_position(&[0.0; 3])),
+        ErrorKind::InvalidArgument
+    );
     robot.start().unwrap();
     assert_eq!(kind(robot.close()), ErrorKind::State);
     robot.stop().unwrap();
@@ -177,8 +202,20 @@ fn a_delayed_reply_times_out_and_is_counted_late_at_the_next_step() {
 fn a_corrupted_reply_is_a_protocol_error() {
     inject_once(Fault::Corrupt, |e, c| {
         assert_eq!(e.kind(), ErrorKind::Protocol);
-        let Error::Protocol { error: ProtocolError::H7(d), .. } = e else { panic!("{e:?}") };
-        assert_eq!(*d, DecodeError::UnknownType { offset: 4, value: 0xFFFF });
+        let Error::Protocol {
+            error: ProtocolError::H7(d),
+            ..
+        } = e
+        else {
+            panic!("{e:?}")
+        };
+        assert_eq!(
+            *d,
+            DecodeError::UnknownType {
+                offset: 4,
+                value: 0xFFFF
+            }
+        );
         assert_eq!((c.corrupt, c.timeouts), (1, 0));
     });
 }
@@ -186,7 +223,13 @@ fn a_corrupted_reply_is_a_protocol_error() {
 #[test]
 fn a_truncated_reply_is_a_wrong_length() {
     inject_once(Fault::Truncate, |e, c| {
-        let Error::Protocol { error: ProtocolError::H7(d), .. } = e else { panic!("{e:?}") };
+        let Error::Protocol {
+            error: ProtocolError::H7(d),
+            ..
+        } = e
+        else {
+            panic!("{e:?}")
+        };
         assert_eq!(*d, DecodeError::Length { got: 100 });
         assert_eq!((c.wrong_length, c.corrupt), (1, 0));
     });
@@ -204,9 +247,16 @@ fn a_reply_from_another_port_is_dropped_and_counted() {
 fn too_many_failures_in_a_row_fault_the_device() {
     let fake = fake();
     let mut robot = running(&fake);
-    fake.set_fault(Some(FaultPlan { every: 1, fault: Fault::Drop }));
+    fake.set_fault(Some(FaultPlan {
+        every: 1,
+        fault: Fault::Drop,
+    }));
     for i in 0..9 {
-        assert_eq!(robot.step().unwrap_err().kind(), ErrorKind::Timeout, "step {i}");
+        assert_eq!(
+            robot.step().unwrap_err().kind(),
+            ErrorKind::Timeout,
+            "step {i}"
+        );
         assert_eq!(robot.state(), State::Running);
     }
     let last = robot.step().unwrap_err();
@@ -214,7 +264,13 @@ fn too_many_failures_in_a_row_fault_the_device() {
     assert_eq!(robot.fault(), Some(last));
     assert_eq!(robot.counters().consecutive_failures, 10);
     let e = robot.step().unwrap_err();
-    assert_eq!(e, Error::State { operation: rl_drivers::Operation::Step, state: State::Faulted });
+    assert_eq!(
+        e,
+        Error::State {
+            operation: rl_drivers::Operation::Step,
+            state: State::Faulted
+        }
+    );
     robot.close().unwrap();
     assert_eq!((robot.state(), robot.fault()), (State::Closed, None));
 }
@@ -234,7 +290,13 @@ fn a_hung_controller_makes_start_and_step_time_out() {
     let mut robot = running(&fake);
     fake.set_frozen(true);
     let e = robot.step().unwrap_err();
-    assert_eq!(e, Error::Timeout { operation: rl_drivers::Operation::Step, waited: Duration::from_micros(6 * 7110) });
+    assert_eq!(
+        e,
+        Error::Timeout {
+            operation: rl_drivers::Operation::Step,
+            waited: Duration::from_micros(6 * 7110)
+        }
+    );
 }
 
 #[test]
@@ -257,13 +319,24 @@ fn gripper_and_io_go_through_the_packet() {
     let fake = fake();
     let mut robot = running(&fake);
     robot.shut().unwrap();
-    assert_eq!((robot.request().bit_top, robot.request().bit_mask, robot.request().io_data), (900, 0xFF, 0xA9));
+    assert_eq!(
+        (
+            robot.request().bit_top,
+            robot.request().bit_mask,
+            robot.request().io_data
+        ),
+        (900, 0xFF, 0xA9)
+    );
     robot.step().unwrap();
     assert_eq!(fake.status().outputs.get(&900), Some(&0xA9));
     robot.release().unwrap();
     robot.step().unwrap();
     assert_eq!(fake.status().outputs.get(&900), Some(&0xA6));
-    assert_eq!(robot.request().io_data, 0, "I/O fields are cleared after each send");
+    assert_eq!(
+        robot.request().io_data,
+        0,
+        "I/O fields are cleared after each send"
+    );
     fake.set_input(16, 0x1234);
     robot.request_input(16).unwrap();
     robot.step().unwrap();
@@ -287,7 +360,10 @@ fn rls_reply_types_work_and_pulses_follow_joints() {
     let mut got = [0.0; DOF];
     robot.joint_position(&mut got).unwrap();
     for i in 0..DOF {
-        assert!((got[i] - q[i]).abs() < 1e-6, "commanded joint {i} echoed as type 2");
+        assert!(
+            (got[i] - q[i]).abs() < 1e-6,
+            "commanded joint {i} echoed as type 2"
+        );
     }
     let mut pulses = [0; DOF];
     robot.motor_pulse(&mut pulses).unwrap();

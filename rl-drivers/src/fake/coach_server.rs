@@ -114,7 +114,12 @@ impl CoachServer {
         let accept = std::thread::Builder::new()
             .name("coach-accept".into())
             .spawn(move || accept_loop(&listener, &s, &st))?;
-        Ok(CoachServer { shared, stop, addr, accept: Some(accept) })
+        Ok(CoachServer {
+            shared,
+            stop,
+            addr,
+            accept: Some(accept),
+        })
     }
 
     /// The listening address.
@@ -185,7 +190,12 @@ fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool
         match stream.read(lines.spare()) {
             Ok(0) => return,
             Ok(n) => lines.commit(n),
-            Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                ) =>
+            {
                 continue;
             }
             Err(_) => return,
@@ -226,7 +236,12 @@ impl Shared {
             Message::BodyPose { model, body, pose } => {
                 st.bodies.insert((model, body), pose);
             }
-            Message::ShapePose { model, body, shape, pose } => {
+            Message::ShapePose {
+                model,
+                body,
+                shape,
+                pose,
+            } => {
                 st.shapes.insert((model, body, shape), pose);
             }
             Message::JointPosition { model, values } => match st.joints.get_mut(&model) {

@@ -104,7 +104,9 @@ impl FakeH7Config {
         }
         for (i, (lo, hi)) in lower_rad.iter().zip(upper_rad).enumerate() {
             if lo > hi || lo.is_nan() || hi.is_nan() {
-                return Err(invalid(format!("joint {i}: lower limit {lo} above upper {hi}")));
+                return Err(invalid(format!(
+                    "joint {i}: lower limit {lo} above upper {hi}"
+                )));
             }
         }
         self.lower_rad[..self.dof].copy_from_slice(lower_rad);
@@ -184,14 +186,19 @@ pub struct FakeH7 {
 }
 
 fn lock(shared: &Mutex<Shared>) -> MutexGuard<'_, Shared> {
-    shared.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    shared
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 impl FakeH7 {
     /// Binds the sockets and starts the server threads.
     pub fn spawn(config: FakeH7Config) -> io::Result<FakeH7> {
         if config.dof == 0 || config.dof > MAX_AXES {
-            return Err(invalid(format!("dof {} outside 1..={MAX_AXES}", config.dof)));
+            return Err(invalid(format!(
+                "dof {} outside 1..={MAX_AXES}",
+                config.dof
+            )));
         }
         let udp = UdpSocket::bind(config.udp_bind)?;
         udp.set_read_timeout(Some(POLL))?;
@@ -200,7 +207,10 @@ impl FakeH7 {
         let foreign = UdpSocket::bind(SocketAddr::new(udp_addr.ip(), 0))?;
         let listener = config.r3_bind.map(TcpListener::bind).transpose()?;
         let r3_addr = listener.as_ref().map(TcpListener::local_addr).transpose()?;
-        let mut status = FakeH7Status { dof: config.dof, ..FakeH7Status::default() };
+        let mut status = FakeH7Status {
+            dof: config.dof,
+            ..FakeH7Status::default()
+        };
         status.actual_rad = config.initial_rad;
         status.commanded_rad = config.initial_rad;
         let shared = Arc::new(Mutex::new(Shared {
@@ -231,7 +241,13 @@ impl FakeH7 {
                     .spawn(move || serve_r3(&listener, &s, &st))?,
             );
         }
-        Ok(FakeH7 { shared, stop, udp_addr, r3_addr, threads })
+        Ok(FakeH7 {
+            shared,
+            stop,
+            udp_addr,
+            r3_addr,
+            threads,
+        })
     }
 
     /// Where real-time packets go.
@@ -242,7 +258,8 @@ impl FakeH7 {
     /// Where the R3 responder listens (`None` if disabled); defaults to the UDP address's IP
     /// with port 0 when disabled, so callers can still build a client configuration.
     pub fn r3_addr(&self) -> SocketAddr {
-        self.r3_addr.unwrap_or(SocketAddr::new(self.udp_addr.ip(), 0))
+        self.r3_addr
+            .unwrap_or(SocketAddr::new(self.udp_addr.ip(), 0))
     }
 
     /// A snapshot of what the fake has seen.
@@ -299,7 +316,10 @@ fn serve_udp(udp: &UdpSocket, foreign: &UdpSocket, shared: &Mutex<Shared>, stop:
                 Ok(p) => {
                     let reply = s.handle(&p);
                     let count = s.status.packets;
-                    let fault = s.config.fault.filter(|f| f.every > 0 && count % u64::from(f.every) == 0);
+                    let fault = s
+                        .config
+                        .fault
+                        .filter(|f| f.every > 0 && count % u64::from(f.every) == 0);
                     if fault.is_some() {
                         s.status.faults_injected += 1;
                     }
@@ -347,15 +367,14 @@ impl Shared {
                 self.status.moves += 1;
                 match p.send_type.shape() {
                     DataShape::Joint => {
-                        let j = p.dat.joints();
-                        for i in 0..dof {
-                            self.command_joint(i, f64::from(j[i]));
+                        for (i, j) in p.dat.joints().into_iter().enumerate().take(dof) {
+                            self.command_joint(i, f64::from(j));
                         }
                     }
                     DataShape::Pulse => {
-                        let pl = p.dat.i32s();
-                        for i in 0..dof {
-                            self.command_joint(i, f64::from(pl[i]) / self.config.pulses_per_rad);
+                        let per_rad = self.config.pulses_per_rad;
+                        for (i, pl) in p.dat.i32s().into_iter().enumerate().take(dof) {
+                            self.command_joint(i, f64::from(pl) / per_rad);
                         }
                     }
                     DataShape::Pose => self.target_pose = p.dat.pose(),
@@ -397,7 +416,11 @@ impl Shared {
         if !(lo..=hi).contains(&q) {
             self.status.limit_hits += 1;
         }
-        self.target_rad[i] = if q.is_nan() { self.target_rad[i] } else { q.clamp(lo, hi) };
+        self.target_rad[i] = if q.is_nan() {
+            self.target_rad[i]
+        } else {
+            q.clamp(lo, hi)
+        };
     }
 
     fn advance(&mut self) {
@@ -426,7 +449,11 @@ impl Shared {
         };
         let pulses = |v: &[f64; MAX_AXES]| -> [i32; MAX_AXES] {
             core::array::from_fn(|i| {
-                if i < dof { (v[i] * self.config.pulses_per_rad).round() as i32 } else { 0 }
+                if i < dof {
+                    (v[i] * self.config.pulses_per_rad).round() as i32
+                } else {
+                    0
+                }
             })
         };
         match ty {
@@ -522,7 +549,13 @@ impl Shared {
                 if self.status.program_running {
                     run |= run_bits::RUN;
                 }
-                let state = DState { run, stop: 0, error_no: 0, step_no: 0, mech_no: 1 };
+                let state = DState {
+                    run,
+                    stop: 0,
+                    error_no: 0,
+                    step_no: 0,
+                    mech_no: 1,
+                };
                 let mut buf = [0u8; 64];
                 match state.encode(&mut buf) {
                     Ok(n) => format!("QoK{}", String::from_utf8_lossy(&buf[..n])),
@@ -557,7 +590,12 @@ fn serve_r3_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicB
         let n = match stream.read(&mut buf) {
             Ok(0) => return,
             Ok(n) => n,
-            Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut) => {
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                ) =>
+            {
                 continue;
             }
             Err(_) => return,

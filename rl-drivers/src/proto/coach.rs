@@ -164,12 +164,21 @@ pub fn write_g6<W: Write>(w: &mut W, v: f64) -> fmt::Result {
         w.write_str(trim_zeros(&fixed))
     } else {
         w.write_str(trim_zeros(mantissa))?;
-        write!(w, "e{}{:02}", if exp < 0 { '-' } else { '+' }, exp.unsigned_abs())
+        write!(
+            w,
+            "e{}{:02}",
+            if exp < 0 { '-' } else { '+' },
+            exp.unsigned_abs()
+        )
     }
 }
 
 fn trim_zeros(s: &str) -> &str {
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { s }
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s
+    }
 }
 
 struct Cursor<'a> {
@@ -180,7 +189,10 @@ struct Cursor<'a> {
 impl Write for Cursor<'_> {
     fn write_str(&mut self, s: &str) -> fmt::Result {
         let end = self.len + s.len();
-        self.out.get_mut(self.len..end).ok_or(fmt::Error)?.copy_from_slice(s.as_bytes());
+        self.out
+            .get_mut(self.len..end)
+            .ok_or(fmt::Error)?
+            .copy_from_slice(s.as_bytes());
         self.len = end;
         Ok(())
     }
@@ -210,9 +222,12 @@ impl Message {
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, CoachError> {
         match self {
             Message::BodyPose { model, body, pose } => write_line(out, 0, &[*model, *body], pose),
-            Message::ShapePose { model, body, shape, pose } => {
-                write_line(out, 1, &[*model, *body, *shape], pose)
-            }
+            Message::ShapePose {
+                model,
+                body,
+                shape,
+                pose,
+            } => write_line(out, 1, &[*model, *body, *shape], pose),
             Message::JointPosition { model, values } => write_line(out, 2, &[*model], values),
             Message::JointVelocity { model, values } => write_line(out, 3, &[*model], values),
             Message::JointTorque { model, values } => write_line(out, 5, &[*model], values),
@@ -230,24 +245,38 @@ impl Message {
 
     /// Parses one line (without or with its `\n`; a trailing `\r` is accepted). Never panics.
     pub fn parse(line: &[u8]) -> Result<Message, CoachError> {
-        let text = core::str::from_utf8(line).map_err(|e| CoachError::NotText { at: e.valid_up_to() })?;
+        let text = core::str::from_utf8(line).map_err(|e| CoachError::NotText {
+            at: e.valid_up_to(),
+        })?;
         let mut tokens = text.split_ascii_whitespace();
-        let Some(code) = tokens.next() else { return Ok(Message::Empty) };
+        let Some(code) = tokens.next() else {
+            return Ok(Message::Empty);
+        };
         let mut field = 0;
         let mut next_id = |tokens: &mut core::str::SplitAsciiWhitespace<'_>| {
             field += 1;
             let t = tokens.next().ok_or(CoachError::MissingField { field })?;
-            t.parse::<u32>().map_err(|_| CoachError::BadNumber { field })
+            t.parse::<u32>()
+                .map_err(|_| CoachError::BadNumber { field })
         };
         let msg = match code {
             "0" => {
                 let (model, body) = (next_id(&mut tokens)?, next_id(&mut tokens)?);
-                Message::BodyPose { model, body, pose: pose(&mut tokens, 3)? }
+                Message::BodyPose {
+                    model,
+                    body,
+                    pose: pose(&mut tokens, 3)?,
+                }
             }
             "1" => {
                 let (model, body) = (next_id(&mut tokens)?, next_id(&mut tokens)?);
                 let shape = next_id(&mut tokens)?;
-                Message::ShapePose { model, body, shape, pose: pose(&mut tokens, 4)? }
+                Message::ShapePose {
+                    model,
+                    body,
+                    shape,
+                    pose: pose(&mut tokens, 4)?,
+                }
             }
             "2" | "3" | "5" | "6" => {
                 let model = next_id(&mut tokens)?;
@@ -281,14 +310,21 @@ impl Message {
 }
 
 fn number(t: &str, field: usize) -> Result<f64, CoachError> {
-    t.parse::<f64>().map_err(|_| CoachError::BadNumber { field })
+    t.parse::<f64>()
+        .map_err(|_| CoachError::BadNumber { field })
 }
 
-fn pose(tokens: &mut core::str::SplitAsciiWhitespace<'_>, first: usize) -> Result<[f64; 6], CoachError> {
+fn pose(
+    tokens: &mut core::str::SplitAsciiWhitespace<'_>,
+    first: usize,
+) -> Result<[f64; 6], CoachError> {
     let mut p = [0.0; 6];
     for (i, v) in p.iter_mut().enumerate() {
         let field = first + i;
-        *v = number(tokens.next().ok_or(CoachError::MissingField { field })?, field)?;
+        *v = number(
+            tokens.next().ok_or(CoachError::MissingField { field })?,
+            field,
+        )?;
     }
     match tokens.next() {
         Some(_) => Err(CoachError::ExtraField { field: first + 6 }),
@@ -296,10 +332,14 @@ fn pose(tokens: &mut core::str::SplitAsciiWhitespace<'_>, first: usize) -> Resul
     }
 }
 
-fn values(tokens: &mut core::str::SplitAsciiWhitespace<'_>, first: usize) -> Result<Values, CoachError> {
+fn values(
+    tokens: &mut core::str::SplitAsciiWhitespace<'_>,
+    first: usize,
+) -> Result<Values, CoachError> {
     let mut v = Values::new();
     for (i, t) in tokens.enumerate() {
-        v.push(number(t, first + i)?).map_err(|_| CoachError::TooManyValues)?;
+        v.push(number(t, first + i)?)
+            .map_err(|_| CoachError::TooManyValues)?;
     }
     Ok(v)
 }
@@ -326,7 +366,12 @@ impl<const CAPACITY: usize> Default for LineBuffer<CAPACITY> {
 impl<const CAPACITY: usize> LineBuffer<CAPACITY> {
     /// An empty buffer.
     pub const fn new() -> Self {
-        Self { buf: [0; CAPACITY], start: 0, end: 0, discarding: false }
+        Self {
+            buf: [0; CAPACITY],
+            start: 0,
+            end: 0,
+            discarding: false,
+        }
     }
 
     /// Drops all buffered bytes.
@@ -380,7 +425,9 @@ impl<const CAPACITY: usize> LineBuffer<CAPACITY> {
                     }
                     return Some(Ok(&self.buf[line_start..line_start + i]));
                 }
-                None if self.end - self.start == CAPACITY || (self.discarding && self.start < self.end) => {
+                None if self.end - self.start == CAPACITY
+                    || (self.discarding && self.start < self.end) =>
+                {
                     self.start = 0;
                     self.end = 0;
                     if self.discarding {
@@ -412,7 +459,7 @@ mod tests {
             (0.0, "0"),
             (1.0, "1"),
             (-0.5, "-0.5"),
-            (3.14159265, "3.14159"),
+            (1.23456789, "1.23457"),
             (123456.7, "123457"),
             (999999.5, "1e+06"),
             (1234567.0, "1.23457e+06"),
@@ -437,19 +484,44 @@ mod tests {
         assert_eq!(Message::parse(&buf[..n]), Ok(m));
         assert_eq!(Message::parse(b"6 3"), Ok(Message::Request { model: 3 }));
         assert_eq!(Message::parse(b"\r"), Ok(Message::Empty));
-        let body = Message::parse(b"0 1 2 0.5 0 0 0 0 1.5708").unwrap();
-        assert_eq!(body, Message::BodyPose { model: 1, body: 2, pose: [0.5, 0.0, 0.0, 0.0, 0.0, 1.5708] });
+        let body = Message::parse(b"0 1 2 0.5 0 0 0 0 1.25").unwrap();
+        assert_eq!(
+            body,
+            Message::BodyPose {
+                model: 1,
+                body: 2,
+                pose: [0.5, 0.0, 0.0, 0.0, 0.0, 1.25]
+            }
+        );
     }
 
     #[test]
     fn bad_lines_say_which_field() {
         assert_eq!(Message::parse(b"4 0"), Err(CoachError::UnknownCommand));
-        assert_eq!(Message::parse(b"0 1 2 0 0 0 0 0"), Err(CoachError::MissingField { field: 8 }));
-        assert_eq!(Message::parse(b"0 1 2 0 0 0 0 0 0 9"), Err(CoachError::ExtraField { field: 9 }));
-        assert_eq!(Message::parse(b"2 x 1"), Err(CoachError::BadNumber { field: 1 }));
-        assert_eq!(Message::parse(b"2 0 1 y"), Err(CoachError::BadNumber { field: 3 }));
-        assert_eq!(Message::parse(b"6 -1"), Err(CoachError::BadNumber { field: 1 }));
-        assert_eq!(Message::parse(&[b'2', b' ', 0xFF]), Err(CoachError::NotText { at: 2 }));
+        assert_eq!(
+            Message::parse(b"0 1 2 0 0 0 0 0"),
+            Err(CoachError::MissingField { field: 8 })
+        );
+        assert_eq!(
+            Message::parse(b"0 1 2 0 0 0 0 0 0 9"),
+            Err(CoachError::ExtraField { field: 9 })
+        );
+        assert_eq!(
+            Message::parse(b"2 x 1"),
+            Err(CoachError::BadNumber { field: 1 })
+        );
+        assert_eq!(
+            Message::parse(b"2 0 1 y"),
+            Err(CoachError::BadNumber { field: 3 })
+        );
+        assert_eq!(
+            Message::parse(b"6 -1"),
+            Err(CoachError::BadNumber { field: 1 })
+        );
+        assert_eq!(
+            Message::parse(&[b'2', b' ', 0xFF]),
+            Err(CoachError::NotText { at: 2 })
+        );
     }
 
     #[test]
@@ -471,7 +543,10 @@ mod tests {
     fn an_overlong_line_is_reported_once_and_skipped() {
         let mut b = LineBuffer::<8>::new();
         assert_eq!(b.extend(b"123456789"), 8);
-        assert_eq!(b.next_line(), Some(Err(CoachError::LineTooLong { capacity: 8 })));
+        assert_eq!(
+            b.next_line(),
+            Some(Err(CoachError::LineTooLong { capacity: 8 }))
+        );
         b.extend(b"9999\nok\n");
         assert_eq!(b.next_line(), Some(Ok(&b"ok"[..])));
         assert!(b.next_line().is_none());

@@ -174,7 +174,11 @@ impl MxtType {
 
     /// The type for a wire code.
     pub const fn from_code(code: u16) -> Option<Self> {
-        if (code as usize) < Self::ALL.len() { Some(Self::ALL[code as usize]) } else { None }
+        if (code as usize) < Self::ALL.len() {
+            Some(Self::ALL[code as usize])
+        } else {
+            None
+        }
     }
 
     /// How the data block is laid out for this type.
@@ -400,13 +404,22 @@ impl fmt::Display for DecodeError {
                 write!(f, "length {got} bytes, expected {PACKET_LEN}")
             }
             DecodeError::UnknownCommand { value } => {
-                write!(f, "unknown command {value} at offset 0 (expected 0, 1 or 255)")
+                write!(
+                    f,
+                    "unknown command {value} at offset 0 (expected 0, 1 or 255)"
+                )
             }
             DecodeError::UnknownType { offset, value } => {
-                write!(f, "unknown data type {value} at offset {offset} (expected 0..=11)")
+                write!(
+                    f,
+                    "unknown data type {value} at offset {offset} (expected 0..=11)"
+                )
             }
             DecodeError::UnknownIoType { offset, value } => {
-                write!(f, "unknown I/O type {value} at offset {offset} (expected 0, 1 or 2)")
+                write!(
+                    f,
+                    "unknown I/O type {value} at offset {offset} (expected 0, 1 or 2)"
+                )
             }
         }
     }
@@ -507,7 +520,10 @@ impl Packet {
 
     /// The first data block holding `ty`, read in its shape.
     pub fn find(&self, ty: MxtType) -> Option<DataView> {
-        self.blocks().iter().find(|(t, _)| *t == ty && ty != MxtType::Null).map(|(t, d)| d.view(*t))
+        self.blocks()
+            .iter()
+            .find(|(t, _)| *t == ty && ty != MxtType::Null)
+            .map(|(t, d)| d.view(*t))
     }
 
     /// Writes the packet into `out`.
@@ -531,7 +547,12 @@ impl Packet {
         put16(RECV_TYPE3, self.recv_type3.code());
         put16(RESERVE3, self.reserve3);
         out[C_COUNT..C_COUNT + 4].copy_from_slice(&self.c_count.to_le_bytes());
-        for (o, d) in [(DAT, &self.dat), (DAT1, &self.dat1), (DAT2, &self.dat2), (DAT3, &self.dat3)] {
+        for (o, d) in [
+            (DAT, &self.dat),
+            (DAT1, &self.dat1),
+            (DAT2, &self.dat2),
+            (DAT3, &self.dat3),
+        ] {
             out[o..o + DATA_LEN].copy_from_slice(&d.0);
         }
     }
@@ -546,8 +567,9 @@ impl Packet {
     /// Decodes a datagram. Any input gives a packet or a [`DecodeError`]; it never panics.
     pub fn decode(bytes: &[u8]) -> Result<Packet, DecodeError> {
         use offset::*;
-        let b: &[u8; PACKET_LEN] =
-            bytes.try_into().map_err(|_| DecodeError::Length { got: bytes.len() })?;
+        let b: &[u8; PACKET_LEN] = bytes
+            .try_into()
+            .map_err(|_| DecodeError::Length { got: bytes.len() })?;
         let value = get_u16(b, COMMAND);
         let command = Command::from_code(value).ok_or(DecodeError::UnknownCommand { value })?;
         Ok(Packet {
@@ -604,7 +626,10 @@ mod tests {
         assert_eq!(&b[0..8], &[1, 0, 2, 0, 2, 0, 0, 0]);
         assert_eq!(&b[8..12], &1.0f32.to_le_bytes());
         assert_eq!(&b[36..40], &(-2.0f32).to_le_bytes());
-        assert_eq!(&b[48..60], &[1, 0, 2, 0, 0x84, 0x03, 0xFF, 0, 0xAA, 0, 0, 0]);
+        assert_eq!(
+            &b[48..60],
+            &[1, 0, 2, 0, 0x84, 0x03, 0xFF, 0, 0xAA, 0, 0, 0]
+        );
         assert_eq!(&b[60..64], &[7, 0, 0, 0]);
         assert_eq!(&b[64..66], &[1, 0]);
         assert_eq!(&b[108..110], &[3, 0]);
@@ -614,23 +639,45 @@ mod tests {
 
     #[test]
     fn an_end_packet_is_code_255() {
-        let b = Packet { command: Command::End, ..Packet::default() }.to_bytes();
+        let b = Packet {
+            command: Command::End,
+            ..Packet::default()
+        }
+        .to_bytes();
         assert_eq!(&b[0..2], &[255, 0]);
         assert!(b[2..].iter().all(|&x| x == 0));
     }
 
     #[test]
     fn bad_input_names_what_and_where() {
-        assert_eq!(Packet::decode(&[0; 195]), Err(DecodeError::Length { got: 195 }));
+        assert_eq!(
+            Packet::decode(&[0; 195]),
+            Err(DecodeError::Length { got: 195 })
+        );
         let mut b = Packet::default().to_bytes();
         b[0] = 2;
-        assert_eq!(Packet::decode(&b), Err(DecodeError::UnknownCommand { value: 2 }));
+        assert_eq!(
+            Packet::decode(&b),
+            Err(DecodeError::UnknownCommand { value: 2 })
+        );
         let mut b = Packet::default().to_bytes();
         b[108] = 12;
-        assert_eq!(Packet::decode(&b), Err(DecodeError::UnknownType { offset: 108, value: 12 }));
+        assert_eq!(
+            Packet::decode(&b),
+            Err(DecodeError::UnknownType {
+                offset: 108,
+                value: 12
+            })
+        );
         let mut b = Packet::default().to_bytes();
         b[50] = 3;
-        assert_eq!(Packet::decode(&b), Err(DecodeError::UnknownIoType { offset: 50, value: 3 }));
+        assert_eq!(
+            Packet::decode(&b),
+            Err(DecodeError::UnknownIoType {
+                offset: 50,
+                value: 3
+            })
+        );
     }
 
     #[test]
@@ -643,12 +690,24 @@ mod tests {
             sflg2: 0x00F0_0000,
         };
         assert_eq!(Data::from_pose(&pose).pose(), pose);
-        assert_eq!(Data::from_pose(&pose).view(MxtType::PoseFeedback), DataView::Pose(pose));
+        assert_eq!(
+            Data::from_pose(&pose).view(MxtType::PoseFeedback),
+            DataView::Pose(pose)
+        );
         let pulses = [1, -2, 3, i32::MAX, i32::MIN, 0, 5, 6];
-        assert_eq!(Data::from_i32s(&pulses).view(MxtType::Pulse), DataView::Pulse(pulses));
-        assert_eq!(Data::from_i32s(&pulses).view(MxtType::CurrentFeedback), DataView::Current(pulses));
+        assert_eq!(
+            Data::from_i32s(&pulses).view(MxtType::Pulse),
+            DataView::Pulse(pulses)
+        );
+        assert_eq!(
+            Data::from_i32s(&pulses).view(MxtType::CurrentFeedback),
+            DataView::Current(pulses)
+        );
         let j = [0.5; 8];
         assert_eq!(&Data::from_joints(&j).0[32..], &[0; 8]);
-        assert_eq!(Data::from_joints(&j).view(MxtType::JointFiltered), DataView::Joint(j));
+        assert_eq!(
+            Data::from_joints(&j).view(MxtType::JointFiltered),
+            DataView::Joint(j)
+        );
     }
 }

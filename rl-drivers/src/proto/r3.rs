@@ -135,10 +135,17 @@ impl Write for SliceWriter<'_> {
 /// Formats into `out` and returns the number of bytes written.
 pub fn format_into(out: &mut [u8], args: fmt::Arguments<'_>) -> Result<usize, R3Error> {
     let capacity = out.len();
-    let mut w = SliceWriter { out, len: 0, needed: 0 };
+    let mut w = SliceWriter {
+        out,
+        len: 0,
+        needed: 0,
+    };
     match w.write_fmt(args) {
         Ok(()) => Ok(w.len),
-        Err(_) => Err(R3Error::TooLong { needed: w.needed, capacity }),
+        Err(_) => Err(R3Error::TooLong {
+            needed: w.needed,
+            capacity,
+        }),
     }
 }
 
@@ -157,12 +164,19 @@ pub struct Request<'a> {
 impl<'a> Request<'a> {
     /// Writes the request into `out`, returning its length.
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, R3Error> {
-        format_into(out, format_args!("{};{};{}", self.robot, self.slot, self.body))
+        format_into(
+            out,
+            format_args!("{};{};{}", self.robot, self.slot, self.body),
+        )
     }
 
     /// The command name: the leading capital letters of the body.
     pub fn name(&self) -> &'a str {
-        let end = self.body.bytes().position(|b| !b.is_ascii_uppercase()).unwrap_or(self.body.len());
+        let end = self
+            .body
+            .bytes()
+            .position(|b| !b.is_ascii_uppercase())
+            .unwrap_or(self.body.len());
         &self.body[..end]
     }
 
@@ -173,8 +187,9 @@ impl<'a> Request<'a> {
 
     /// Parses a request (the controller's side).
     pub fn parse(bytes: &'a [u8]) -> Result<Self, R3Error> {
-        let text =
-            core::str::from_utf8(bytes).map_err(|e| R3Error::NotText { at: e.valid_up_to() })?;
+        let text = core::str::from_utf8(bytes).map_err(|e| R3Error::NotText {
+            at: e.valid_up_to(),
+        })?;
         let (robot, rest, at) = number_field(text, 0)?;
         let (slot, body, _) = number_field(rest, at)?;
         Ok(Request { robot, slot, body })
@@ -183,8 +198,12 @@ impl<'a> Request<'a> {
 
 /// Parses `<u8>;` at the start of `text`, returning the number, the rest and its offset.
 fn number_field(text: &str, base: usize) -> Result<(u8, &str, usize), R3Error> {
-    let semi = text.find(';').ok_or(R3Error::BadRequest { at: base + text.len() })?;
-    let n = text[..semi].parse().map_err(|_| R3Error::BadRequest { at: base })?;
+    let semi = text.find(';').ok_or(R3Error::BadRequest {
+        at: base + text.len(),
+    })?;
+    let n = text[..semi]
+        .parse()
+        .map_err(|_| R3Error::BadRequest { at: base })?;
     Ok((n, &text[semi + 1..], base + semi + 1))
 }
 
@@ -200,8 +219,9 @@ pub enum Reply<'a> {
 impl<'a> Reply<'a> {
     /// Parses a reply. Trailing NUL, CR and LF are ignored.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, R3Error> {
-        let text =
-            core::str::from_utf8(bytes).map_err(|e| R3Error::NotText { at: e.valid_up_to() })?;
+        let text = core::str::from_utf8(bytes).map_err(|e| R3Error::NotText {
+            at: e.valid_up_to(),
+        })?;
         let text = text.trim_end_matches(['\0', '\r', '\n']);
         if let Some(payload) = text.strip_prefix("QoK") {
             Ok(Reply::Ok(payload))
@@ -272,7 +292,13 @@ impl DState {
         if parts.next().is_some() {
             return Err(R3Error::BadState { at });
         }
-        Ok(DState { run, stop, error_no: fields[0], step_no: fields[1], mech_no: fields[2] })
+        Ok(DState {
+            run,
+            stop,
+            error_no: fields[0],
+            step_no: fields[1],
+            mech_no: fields[2],
+        })
     }
 
     /// Writes the payload (without `QoK`), as a controller would.
@@ -326,7 +352,11 @@ impl<'a> Iterator for EmdatChunks<'a> {
             return None;
         }
         let mut end = 0;
-        for (i, _) in self.rest.match_indices(LINE_SEPARATOR).chain([(self.rest.len(), "")]) {
+        for (i, _) in self
+            .rest
+            .match_indices(LINE_SEPARATOR)
+            .chain([(self.rest.len(), "")])
+        {
             if i <= EMDAT_CHUNK_LEN {
                 end = i;
             } else {
@@ -351,16 +381,36 @@ mod tests {
     #[test]
     fn requests_are_robot_slot_body() {
         let mut buf = [0u8; 32];
-        let n = Request { robot: 1, slot: 1, body: "RUN1432;1" }.encode(&mut buf).unwrap();
+        let n = Request {
+            robot: 1,
+            slot: 1,
+            body: "RUN1432;1",
+        }
+        .encode(&mut buf)
+        .unwrap();
         assert_eq!(&buf[..n], b"1;1;RUN1432;1");
         let r = Request::parse(&buf[..n]).unwrap();
-        assert_eq!((r.robot, r.slot, r.name(), r.args()), (1, 1, "RUN", "1432;1"));
+        assert_eq!(
+            (r.robot, r.slot, r.name(), r.args()),
+            (1, 1, "RUN", "1432;1")
+        );
         assert_eq!(Request::parse(b"1;9;LOAD=1432").unwrap().args(), "=1432");
-        assert_eq!(Request::parse(b"x;1;STOP"), Err(R3Error::BadRequest { at: 0 }));
+        assert_eq!(
+            Request::parse(b"x;1;STOP"),
+            Err(R3Error::BadRequest { at: 0 })
+        );
         assert_eq!(Request::parse(b"1;1"), Err(R3Error::BadRequest { at: 3 }));
         assert_eq!(
-            Request { robot: 1, slot: 1, body: "STOP" }.encode(&mut [0; 4]),
-            Err(R3Error::TooLong { needed: 8, capacity: 4 })
+            Request {
+                robot: 1,
+                slot: 1,
+                body: "STOP"
+            }
+            .encode(&mut [0; 4]),
+            Err(R3Error::TooLong {
+                needed: 8,
+                capacity: 4
+            })
         );
     }
 
@@ -373,12 +423,18 @@ mod tests {
         assert!(s.servo_on() && !s.running());
         assert_eq!((s.stop, s.error_no, s.step_no, s.mech_no), (0, 0, 0, 1));
         let s = DState::parse("E3021234;10;1\r\n").unwrap();
-        assert_eq!((s.run, s.stop, s.error_no, s.step_no), (0xE3, 0x02, 1234, 10));
+        assert_eq!(
+            (s.run, s.stop, s.error_no, s.step_no),
+            (0xE3, 0x02, 1234, 10)
+        );
         assert_eq!(DState::parse("2"), Err(R3Error::BadState { at: 0 }));
         assert_eq!(DState::parse("2000x;0;1"), Err(R3Error::BadState { at: 4 }));
         let mut buf = [0; 32];
         let n = s.encode(&mut buf).unwrap();
-        assert_eq!(DState::parse(core::str::from_utf8(&buf[..n]).unwrap()), Ok(s));
+        assert_eq!(
+            DState::parse(core::str::from_utf8(&buf[..n]).unwrap()),
+            Ok(s)
+        );
     }
 
     #[test]
@@ -386,7 +442,10 @@ mod tests {
         let mut buf = [0u8; 128];
         let n = write_program(&mut buf, "127.0.0.1".parse().unwrap(), Mode::Joint, 2).unwrap();
         let p = core::str::from_utf8(&buf[..n]).unwrap();
-        assert_eq!(p, "10 OPEN \"ENET:127.0.0.1\" AS #1\u{b}20 MXT 1,1,2\u{b}30 HLT\u{b}40 END");
+        assert_eq!(
+            p,
+            "10 OPEN \"ENET:127.0.0.1\" AS #1\u{b}20 MXT 1,1,2\u{b}30 HLT\u{b}40 END"
+        );
         let mut chunks = EmdatChunks::new(p);
         assert_eq!(chunks.next(), Some(Ok(p)));
         assert_eq!(chunks.next(), None);
@@ -401,6 +460,9 @@ mod tests {
         assert!(chunks.iter().all(|c| c.len() <= EMDAT_CHUNK_LEN));
         assert_eq!(chunks.join("\u{b}"), program);
         let long = "Y".repeat(300);
-        assert_eq!(EmdatChunks::new(&long).next(), Some(Err(R3Error::LineTooLong { len: 300 })));
+        assert_eq!(
+            EmdatChunks::new(&long).next(),
+            Some(Err(R3Error::LineTooLong { len: 300 }))
+        );
     }
 }

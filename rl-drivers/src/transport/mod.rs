@@ -22,7 +22,11 @@ pub(crate) enum Readiness {
 
 /// Waits until `fd` is ready or `deadline` passes; `Ok(false)` means the deadline passed.
 /// Uses `ppoll` for a nanosecond-resolution timeout; allocates nothing.
-pub(crate) fn wait(fd: BorrowedFd<'_>, readiness: Readiness, deadline: Instant) -> io::Result<bool> {
+pub(crate) fn wait(
+    fd: BorrowedFd<'_>,
+    readiness: Readiness,
+    deadline: Instant,
+) -> io::Result<bool> {
     let events = match readiness {
         Readiness::Readable => PollFlags::POLLIN,
         Readiness::Writable => PollFlags::POLLOUT,

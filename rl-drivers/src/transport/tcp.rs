@@ -28,7 +28,10 @@ impl TcpLink {
         socket.connect_timeout(&peer.into(), timeout)?;
         socket.set_nonblocking(true)?;
         socket.set_tcp_nodelay(true)?;
-        Ok(Self { stream: socket.into(), peer })
+        Ok(Self {
+            stream: socket.into(),
+            peer,
+        })
     }
 
     /// Wraps an accepted stream (used by the fakes).

@@ -36,7 +36,11 @@ impl UdpLink {
         let socket = Socket::new(Domain::for_address(local), Type::DGRAM, Some(Protocol::UDP))?;
         socket.set_nonblocking(true)?;
         socket.bind(&local.into())?;
-        Ok(Self { socket: socket.into(), peer, counters: UdpCounters::default() })
+        Ok(Self {
+            socket: socket.into(),
+            peer,
+            counters: UdpCounters::default(),
+        })
     }
 
     /// The local address (with the port the system chose).
@@ -58,7 +62,10 @@ impl UdpLink {
     pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         let n = self.socket.send_to(bytes, self.peer)?;
         if n != bytes.len() {
-            return Err(io::Error::new(io::ErrorKind::WriteZero, "datagram sent partially"));
+            return Err(io::Error::new(
+                io::ErrorKind::WriteZero,
+                "datagram sent partially",
+            ));
         }
         self.counters.sent += 1;
         Ok(())

@@ -1,0 +1,170 @@
+//! The Coach client against the Coach server on loopback (random ports, bounded waits).
+#![allow(clippy::needless_range_loop)]
+
+use std::time::Duration;
+
+use rl_drivers::coach::{Coach, CoachConfig};
+use rl_drivers::fake::coach_server::{CoachServer, CoachServerConfig, Delivery};
+use rl_drivers::{
+    CyclicDevice, Device, DeviceError, ErrorKind, JointPositionActuator, JointPositionSensor,
+    JointTorqueActuator, JointVelocityActuator, Pose, ProtocolError,
+};
+
+const DOF: usize = 6;
+
+fn server(delivery: Delivery) -> CoachServer {
+    let config = CoachServerConfig {
+        models: vec![(0, DOF)],
+        delivery,
+        ..CoachServerConfig::loopback()
+    };
+    CoachServer::spawn(config).expect("server starts")
+}
+
+fn client(server: &CoachServer) -> Coach {
+    let mut config = CoachConfig::new(DOF);
+    config.server = server.addr();
+    config.reply_timeout = Duration::from_secs(1);
+    let mut coach = Coach::new(config).unwrap();
+    coach.open().unwrap();
+    coach.start().unwrap();
+    coach
+}
+
+fn ramp(k: usize) -> [f64; DOF] {
+    core::array::from_fn(|i| 0.001 * k as f64 * (i as f64 - 2.5) + 1e-7 * i as f64)
+}
+
+/// Sends `cycles` joint vectors and checks each reply equals the vector to 6 significant digits.
+fn exchange(coach: &mut Coach, cycles: usize) {
+    let mut got = [0.0; DOF];
+    for k in 0..cycles {
+        let q = ramp(k);
+        coach.set_joint_position(&q).unwrap();
+        coach.step().unwrap_or_else(|e| panic!("cycle {k}: {e}"));
+        coach.joint_position(&mut got).unwrap();
+        for i in 0..DOF {
+            let tol = 1e-5 * q[i].abs().max(1e-300);
+            assert!(
+                (got[i] - q[i]).abs() <= tol,
+                "cycle {k} joint {i}: {} vs {}",
+                got[i],
+                q[i]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_thousand_cycles_of_joint_positions() {
+    let server = server(Delivery::default());
+    let mut coach = client(&server);
+    exchange(&mut coach, 1000);
+    let c = coach.counters();
+    assert_eq!(
+        (c.sent, c.replies, c.timeouts, c.late, c.bad_lines),
+        (1000, 1000, 0, 0, 0)
+    );
+    let s = server.status();
+    assert_eq!(
+        (s.requests, s.lines, s.bad_lines, s.ignored_lines),
+        (1000, 2000, 0, 0)
+    );
+    let last = ramp(999);
+    for (a, b) in s.joints[&0].iter().zip(last) {
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1e-300));
+    }
+    coach.stop().unwrap();
+    coach.close().unwrap();
+}
+
+#[test]
+fn replies_split_into_pieces_are_reassembled() {
+    let server = server(Delivery {
+        chunk_bytes: Some(3),
+        chunk_pause: Duration::from_micros(300),
+        extra_lines: 0,
+    });
+    let mut coach = client(&server);
+    exchange(&mut coach, 50);
+    assert_eq!(coach.counters().replies, 50);
+}
+
+#[test]
+fn several_lines_in_one_read_are_separated() {
+    let server = server(Delivery {
+        extra_lines: 3,
+        ..Delivery::default()
+    });
+    let mut coach = client(&server);
+    exchange(&mut coach, 50);
+    let c = coach.counters();
+    assert_eq!((c.replies, c.other_lines, c.bad_lines), (50, 150, 0));
+}
+
+#[test]
+fn every_command_reaches_the_server() {
+    let server = server(Delivery::default());
+    let mut coach = client(&server);
+    let pose = Pose {
+        position_m: [0.5, -0.25, 1.0],
+        abc_rad: [0.0, 0.1, 3.25],
+    };
+    coach.set_body_pose(2, &pose).unwrap();
+    coach.set_shape_pose(2, 1, &pose).unwrap();
+    coach.set_joint_velocity(&[0.5; DOF]).unwrap();
+    coach.set_joint_torque(&[-2.0; DOF]).unwrap();
+    coach.step().unwrap();
+    let s = server.status();
+    assert_eq!(s.bodies[&(0, 2)], [0.5, -0.25, 1.0, 0.0, 0.1, 3.25]);
+    assert_eq!(s.shapes[&(0, 2, 1)], [0.5, -0.25, 1.0, 0.0, 0.1, 3.25]);
+    assert_eq!(s.velocities[&0], vec![0.5; DOF]);
+    assert_eq!(s.torques[&0], vec![-2.0; DOF]);
+}
+
+#[test]
+fn an_unknown_model_is_a_protocol_error() {
+    let server = CoachServer::spawn(CoachServerConfig {
+        learn_models: false,
+        ..CoachServerConfig::loopback()
+    })
+    .unwrap();
+    let mut coach = client(&server);
+    let e = coach.step().unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Protocol);
+    assert!(matches!(
+        e,
+        rl_drivers::Error::Protocol {
+            error: ProtocolError::Unexpected(_),
+            ..
+        }
+    ));
+    assert_eq!(
+        coach.joint_position(&mut [0.0; DOF]).unwrap_err().kind(),
+        ErrorKind::Protocol
+    );
+}
+
+#[test]
+fn a_slow_reply_times_out_and_is_counted_late() {
+    let server = server(Delivery::default());
+    let mut config = CoachConfig::new(DOF);
+    config.server = server.addr();
+    config.reply_timeout = Duration::from_millis(30);
+    let mut coach = Coach::new(config).unwrap();
+    coach.open().unwrap();
+    coach.start().unwrap();
+    exchange(&mut coach, 3);
+    // The reply comes in 2-byte pieces 5 ms apart: longer than the 30 ms bound.
+    server.set_delivery(Delivery {
+        chunk_bytes: Some(2),
+        chunk_pause: Duration::from_millis(5),
+        extra_lines: 0,
+    });
+    assert_eq!(coach.step().unwrap_err().kind(), ErrorKind::Timeout);
+    server.set_delivery(Delivery::default());
+    std::thread::sleep(Duration::from_millis(300));
+    coach.step().unwrap();
+    let c = coach.counters();
+    assert_eq!((c.timeouts, c.late), (1, 1));
+}
