@@ -12,7 +12,11 @@ use rl_core::rotation::{
 use traj_support::Rng;
 
 fn random_quat(rng: &mut Rng) -> DQuat {
-    let v = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+    let v = DVec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+    );
     exp(v * 1.5)
 }
 
@@ -32,7 +36,10 @@ fn exp_log_pow_identities() {
         assert!(close(pow(q, 0.0), DQuat::IDENTITY, 0.0));
         // Agrees with glam's axis-angle: exp(v) rotates by 2|v|.
         let v = log(q);
-        assert!(close(DQuat::from_scaled_axis(v * 2.0), q, 1e-14) || close(DQuat::from_scaled_axis(v * 2.0), -q, 1e-14));
+        assert!(
+            close(DQuat::from_scaled_axis(v * 2.0), q, 1e-14)
+                || close(DQuat::from_scaled_axis(v * 2.0), -q, 1e-14)
+        );
     }
 }
 
@@ -42,9 +49,21 @@ fn angular_velocity_and_acceleration_round_trip_and_match_finite_differences() {
     let mut rng = Rng(11);
     for _ in 0..100 {
         let q0 = random_quat(&mut rng);
-        let a = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-        let b = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-        let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        let a = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let b = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let c = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
         let q = |t: f64| exp(a * t + b * t * t) * exp(c * t) * q0;
         let t = rng.range(-0.5, 0.5);
         let h = 1e-4;
@@ -76,7 +95,10 @@ fn angular_velocity_and_acceleration_round_trip_and_match_finite_differences() {
             angular_velocity(q(t), qd)
         };
         let alpha_fd = (w(t + h) - w(t - h)) / (2.0 * h);
-        assert!((alpha_fd - alpha).length() < 1e-5 * (1.0 + alpha.length()), "{alpha_fd} vs {alpha}");
+        assert!(
+            (alpha_fd - alpha).length() < 1e-5 * (1.0 + alpha.length()),
+            "{alpha_fd} vs {alpha}"
+        );
     }
 }
 
@@ -98,7 +120,10 @@ fn slerp_endpoints_derivatives_and_unit_norm() {
             assert!(close(s.derivative(u), d_fd, 1e-9));
             assert!(close(s.second_derivative(u), dd_fd, 1e-9));
             // Constant world angular velocity along the arc.
-            assert!((angular_velocity(s.value(u), s.derivative(u)) - s.angular_velocity()).length() < 1e-13);
+            assert!(
+                (angular_velocity(s.value(u), s.derivative(u)) - s.angular_velocity()).length()
+                    < 1e-13
+            );
         }
         assert!(s.angle() <= core::f64::consts::PI + 1e-15);
     }

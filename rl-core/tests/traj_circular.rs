@@ -7,8 +7,8 @@ use core::f64::consts::{PI, TAU};
 
 use glam::{DQuat, DVec3};
 use rl_core::traj::{
-    Circular, Limits, Polynomial, PoseTrajectory, RotationTrajectory, SlerpTrajectory,
-    Trajectory, TrajectoryError,
+    Circular, Limits, Polynomial, PoseTrajectory, RotationTrajectory, SlerpTrajectory, Trajectory,
+    TrajectoryError,
 };
 use traj_support::{assert_close, check_finite_differences, check_sample_matches};
 
@@ -45,9 +45,17 @@ fn arc_3d_through_three_points_and_full_circle() {
     assert_close("end", c.position(3.0), p2, 1e-14);
     for k in 0..=20 {
         let p = c.position(3.0 * k as f64 / 20.0);
-        let r: f64 = p.iter().zip(c.center()).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+        let r: f64 = p
+            .iter()
+            .zip(c.center())
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
         assert!((r - c.radius()).abs() < 1e-14);
-        assert!((p.iter().sum::<f64>() - 1.0).abs() < 1e-14, "leaves the plane");
+        assert!(
+            (p.iter().sum::<f64>() - 1.0).abs() < 1e-14,
+            "leaves the plane"
+        );
     }
     check_finite_differences(&c, 6, 41, &[]);
     let full = Circular::<3>::through_with_angle(p0, p1, p2, TAU, 1.0).unwrap();
@@ -56,18 +64,33 @@ fn arc_3d_through_three_points_and_full_circle() {
     // Derivative n: ωⁿ r for every n.
     for n in 0..8 {
         let d = full.derivative(0.123, n);
-        let norm = d.iter().zip(if n == 0 { full.center() } else { [0.0; 3] }).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+        let norm = d
+            .iter()
+            .zip(if n == 0 { full.center() } else { [0.0; 3] })
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
         assert!((norm - TAU.powi(n as i32) * full.radius()).abs() < 1e-10 * TAU.powi(n as i32));
     }
 }
 
 #[test]
 fn arc_errors() {
-    assert_eq!(Circular::<2>::through([0.0, 0.0], [1.0, 1.0], [2.0, 2.0], 1.0).unwrap_err(), TrajectoryError::Degenerate);
-    assert_eq!(Circular::<3>::through([0.0; 3], [0.0; 3], [1.0, 0.0, 0.0], 1.0).unwrap_err(), TrajectoryError::Degenerate);
-    assert_eq!(Circular::<2>::through([2.0, 1.0], [1.0, 2.0], [0.0, 1.0], 0.0).unwrap_err(), TrajectoryError::BadDuration);
     assert_eq!(
-        Circular::<2>::through_with_angle([2.0, 1.0], [1.0, 2.0], [0.0, 1.0], 7.0, 1.0).unwrap_err(),
+        Circular::<2>::through([0.0, 0.0], [1.0, 1.0], [2.0, 2.0], 1.0).unwrap_err(),
+        TrajectoryError::Degenerate
+    );
+    assert_eq!(
+        Circular::<3>::through([0.0; 3], [0.0; 3], [1.0, 0.0, 0.0], 1.0).unwrap_err(),
+        TrajectoryError::Degenerate
+    );
+    assert_eq!(
+        Circular::<2>::through([2.0, 1.0], [1.0, 2.0], [0.0, 1.0], 0.0).unwrap_err(),
+        TrajectoryError::BadDuration
+    );
+    assert_eq!(
+        Circular::<2>::through_with_angle([2.0, 1.0], [1.0, 2.0], [0.0, 1.0], 7.0, 1.0)
+            .unwrap_err(),
         TrajectoryError::Degenerate
     );
     assert!(matches!(
@@ -88,11 +111,26 @@ fn pose_trajectory_joins_position_and_rotation() {
     let s = pose.sample(t);
     assert_close("position", s.position.to_array(), pos.position(t), 1e-14);
     let tw = s.twist();
-    assert_close("linear velocity", [tw[0], tw[1], tw[2]], pos.derivative(t, 1), 1e-14);
-    assert!((DVec3::from_slice(&s.twist()[3..]) - rot.rotation(t).angular_velocity).length() == 0.0);
+    assert_close(
+        "linear velocity",
+        [tw[0], tw[1], tw[2]],
+        pos.derivative(t, 1),
+        1e-14,
+    );
+    assert!(
+        (DVec3::from_slice(&s.twist()[3..]) - rot.rotation(t).angular_velocity).length() == 0.0
+    );
     let acc = s.acceleration();
-    assert_close("linear acceleration", [acc[0], acc[1], acc[2]], pos.derivative(t, 2), 1e-14);
+    assert_close(
+        "linear acceleration",
+        [acc[0], acc[1], acc[2]],
+        pos.derivative(t, 2),
+        1e-14,
+    );
     assert!(s.orientation.abs_diff_eq(rot.rotation(t).orientation, 0.0));
     let short = SlerpTrajectory::new(q0, q1, 0.5 * pos.duration()).unwrap();
-    assert_eq!(PoseTrajectory::new(pos, short).unwrap_err(), TrajectoryError::DurationMismatch);
+    assert_eq!(
+        PoseTrajectory::new(pos, short).unwrap_err(),
+        TrajectoryError::DurationMismatch
+    );
 }

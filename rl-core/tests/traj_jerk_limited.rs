@@ -9,7 +9,12 @@ use traj_support::{Rng, assert_close, check_finite_differences, check_sample_mat
 
 /// Checks limits at every phase boundary of every axis (where |v| and |a| peak for this
 /// profile) and on a dense grid, and the goal at rest.
-fn check_profile<const D: usize>(p: &JerkLimited<D>, start: [f64; D], goal: [f64; D], limits: &Limits<D>) {
+fn check_profile<const D: usize>(
+    p: &JerkLimited<D>,
+    start: [f64; D],
+    goal: [f64; D],
+    limits: &Limits<D>,
+) {
     let t_end = p.duration();
     assert_close("start", p.position(0.0), start, 1e-12);
     assert_close("goal", p.position(t_end), goal, 1e-9);
@@ -24,12 +29,27 @@ fn check_profile<const D: usize>(p: &JerkLimited<D>, start: [f64; D], goal: [f64
     for t in times {
         let s = p.sample(t);
         for i in 0..D {
-            assert!(s.velocity[i].abs() <= limits.velocity[i] * (1.0 + 1e-9), "v{i} {} at {t}", s.velocity[i]);
-            assert!(s.acceleration[i].abs() <= limits.acceleration[i] * (1.0 + 1e-9), "a{i} {} at {t}", s.acceleration[i]);
-            assert!(s.jerk[i].abs() <= limits.jerk[i] * (1.0 + 1e-9), "j{i} {} at {t}", s.jerk[i]);
+            assert!(
+                s.velocity[i].abs() <= limits.velocity[i] * (1.0 + 1e-9),
+                "v{i} {} at {t}",
+                s.velocity[i]
+            );
+            assert!(
+                s.acceleration[i].abs() <= limits.acceleration[i] * (1.0 + 1e-9),
+                "a{i} {} at {t}",
+                s.acceleration[i]
+            );
+            assert!(
+                s.jerk[i].abs() <= limits.jerk[i] * (1.0 + 1e-9),
+                "j{i} {} at {t}",
+                s.jerk[i]
+            );
             // Never overshoots the goal (monotonic motion).
             let (lo, hi) = (start[i].min(goal[i]), start[i].max(goal[i]));
-            assert!(s.position[i] >= lo - 1e-9 && s.position[i] <= hi + 1e-9, "overshoot axis {i}");
+            assert!(
+                s.position[i] >= lo - 1e-9 && s.position[i] <= hi + 1e-9,
+                "overshoot axis {i}"
+            );
         }
     }
 }
@@ -41,7 +61,11 @@ fn hand_computed_cases() {
     let p = JerkLimited::new([0.0], [10.0], &l).unwrap();
     let (tj, ta) = (1.0 / 3.0, 1.0 / 3.0 + 0.5);
     let tv = 2.0 - ta;
-    assert!((p.duration() - (2.0 * ta + tv)).abs() < 1e-14, "{}", p.duration());
+    assert!(
+        (p.duration() - (2.0 * ta + tv)).abs() < 1e-14,
+        "{}",
+        p.duration()
+    );
     let ends = p.phase_ends(0).unwrap();
     assert!((ends[0] - tj).abs() < 1e-14 && (ends[2] - ta).abs() < 1e-14);
     // Velocity limit reached in the cruise, acceleration limit in phase 2, jerk in phase 1.
@@ -66,7 +90,11 @@ fn hand_computed_cases() {
 
 #[test]
 fn axes_synchronise_to_the_slowest_and_keep_their_limits() {
-    let l = Limits { velocity: [1.0, 3.0, 0.5, 2.0], acceleration: [2.0, 1.0, 5.0, 2.0], jerk: [10.0, 4.0, 50.0, 1.0] };
+    let l = Limits {
+        velocity: [1.0, 3.0, 0.5, 2.0],
+        acceleration: [2.0, 1.0, 5.0, 2.0],
+        jerk: [10.0, 4.0, 50.0, 1.0],
+    };
     let (a, b) = ([0.0, 1.0, -2.0, 0.3], [2.0, -1.0, -1.0, 0.3]);
     let p = JerkLimited::new(a, b, &l).unwrap();
     let alone = JerkLimited::axis_durations(a, b, &l);
@@ -115,11 +143,27 @@ fn through_waypoints_is_continuous_in_acceleration() {
 fn bad_limits_are_typed_errors() {
     let mut l = Limits::uniform(1.0, 1.0, 1.0);
     l.jerk[1] = f64::INFINITY;
-    assert!(matches!(JerkLimited::new([0.0; 2], [1.0; 2], &l), Err(TrajectoryError::BadLimit { axis: 1, .. })));
+    assert!(matches!(
+        JerkLimited::new([0.0; 2], [1.0; 2], &l),
+        Err(TrajectoryError::BadLimit { axis: 1, .. })
+    ));
     l = Limits::uniform(1.0, -1.0, 1.0);
-    assert!(matches!(JerkLimited::new([0.0; 2], [1.0; 2], &l), Err(TrajectoryError::BadLimit { axis: 0, .. })));
+    assert!(matches!(
+        JerkLimited::new([0.0; 2], [1.0; 2], &l),
+        Err(TrajectoryError::BadLimit { axis: 0, .. })
+    ));
     l = Limits::uniform(1.0, 1.0, 1.0);
-    assert!(matches!(JerkLimited::new([0.0; 2], [1.0, f64::NAN], &l), Err(TrajectoryError::NotFinite { .. })));
-    let r: Result<Piecewise<JerkLimited<2>, 1>, _> = spline::jerk_limited_through(&[[0.0; 2], [1.0; 2], [2.0; 2]], &l);
-    assert_eq!(r.unwrap_err(), TrajectoryError::Capacity { capacity: 1, requested: 2 });
+    assert!(matches!(
+        JerkLimited::new([0.0; 2], [1.0, f64::NAN], &l),
+        Err(TrajectoryError::NotFinite { .. })
+    ));
+    let r: Result<Piecewise<JerkLimited<2>, 1>, _> =
+        spline::jerk_limited_through(&[[0.0; 2], [1.0; 2], [2.0; 2]], &l);
+    assert_eq!(
+        r.unwrap_err(),
+        TrajectoryError::Capacity {
+            capacity: 1,
+            requested: 2
+        }
+    );
 }

@@ -17,7 +17,11 @@ const J1: [f64; 3] = [-2.0, 0.5, 4.0];
 const T: f64 = 1.7;
 const TOL: f64 = 1e-12;
 
-fn check<const C: usize>(p: &Polynomial<3, C>, start: &[(usize, [f64; 3])], end: &[(usize, [f64; 3])]) {
+fn check<const C: usize>(
+    p: &Polynomial<3, C>,
+    start: &[(usize, [f64; 3])],
+    end: &[(usize, [f64; 3])],
+) {
     for &(order, value) in start {
         assert_close("start", p.derivative(0.0, order), value, TOL);
     }
@@ -41,11 +45,23 @@ fn boundary_conditions_of_every_constructor() {
     let p = Polynomial::quartic(X0, X1, V0, V1, A0, T).unwrap();
     check(&p, &[(0, X0), (1, V0), (2, A0)], &[(0, X1), (1, V1)]);
     let p = Polynomial::quintic(X0, X1, V0, V1, A0, A1, T).unwrap();
-    check(&p, &[(0, X0), (1, V0), (2, A0)], &[(0, X1), (1, V1), (2, A1)]);
+    check(
+        &p,
+        &[(0, X0), (1, V0), (2, A0)],
+        &[(0, X1), (1, V1), (2, A1)],
+    );
     let p = Polynomial::sextic(X0, X1, V0, V1, A0, A1, J0, T).unwrap();
-    check(&p, &[(0, X0), (1, V0), (2, A0), (3, J0)], &[(0, X1), (1, V1), (2, A1)]);
+    check(
+        &p,
+        &[(0, X0), (1, V0), (2, A0), (3, J0)],
+        &[(0, X1), (1, V1), (2, A1)],
+    );
     let p = Polynomial::septic(X0, X1, V0, V1, A0, A1, J0, J1, T).unwrap();
-    check(&p, &[(0, X0), (1, V0), (2, A0), (3, J0)], &[(0, X1), (1, V1), (2, A1), (3, J1)]);
+    check(
+        &p,
+        &[(0, X0), (1, V0), (2, A0), (3, J0)],
+        &[(0, X1), (1, V1), (2, A1), (3, J1)],
+    );
 }
 
 #[test]
@@ -68,7 +84,12 @@ fn derivative_and_integral_are_exact_inverses() {
 fn extrema_of_a_known_polynomial() {
     // p(t) = (t - 1)² on [0, 3]: min 0 at 1, max 4 at 3.  q(t) = -(t-2)^3 + 3t: critical t = 1, 3.
     let p = Polynomial::<2, 4>::new(
-        [[1.0, -8.0 + 0.0], [-2.0, 12.0 + 3.0], [1.0, -6.0], [0.0, 1.0]],
+        [
+            [1.0, -8.0 + 0.0],
+            [-2.0, 12.0 + 3.0],
+            [1.0, -6.0],
+            [0.0, 1.0],
+        ],
         3.0,
     )
     .unwrap();
@@ -87,27 +108,62 @@ fn extrema_of_a_known_polynomial() {
 
 #[test]
 fn at_rest_constructors_reach_the_goal_at_rest_within_limits() {
-    let limits = Limits { velocity: [1.0, 2.0, 0.5], acceleration: [3.0, 1.0, 4.0], jerk: [20.0, 5.0, 9.0] };
-    let check = |d: f64, p1: [f64; 3], pos: [f64; 3], vel: [f64; 3], acc: [f64; 3], jerk: [f64; 3]| {
-        assert_close("goal", pos, p1, TOL);
-        for (what, peak, lim) in [("velocity", vel, limits.velocity), ("acceleration", acc, limits.acceleration), ("jerk", jerk, limits.jerk)] {
-            for i in 0..3 {
-                assert!(peak[i] <= lim[i] * (1.0 + 1e-9), "{what} axis {i}: {} > {}", peak[i], lim[i]);
-            }
-        }
-        assert!(d > 0.0);
+    let limits = Limits {
+        velocity: [1.0, 2.0, 0.5],
+        acceleration: [3.0, 1.0, 4.0],
+        jerk: [20.0, 5.0, 9.0],
     };
+    let check =
+        |d: f64, p1: [f64; 3], pos: [f64; 3], vel: [f64; 3], acc: [f64; 3], jerk: [f64; 3]| {
+            assert_close("goal", pos, p1, TOL);
+            for (what, peak, lim) in [
+                ("velocity", vel, limits.velocity),
+                ("acceleration", acc, limits.acceleration),
+                ("jerk", jerk, limits.jerk),
+            ] {
+                for i in 0..3 {
+                    assert!(
+                        peak[i] <= lim[i] * (1.0 + 1e-9),
+                        "{what} axis {i}: {} > {}",
+                        peak[i],
+                        lim[i]
+                    );
+                }
+            }
+            assert!(d > 0.0);
+        };
     let p = Polynomial::cubic_at_rest(X0, X1, &limits).unwrap();
-    check(p.duration(), X1, p.position(p.duration()), p.max_abs_derivative(1), p.max_abs_derivative(2), p.max_abs_derivative(3));
+    check(
+        p.duration(),
+        X1,
+        p.position(p.duration()),
+        p.max_abs_derivative(1),
+        p.max_abs_derivative(2),
+        p.max_abs_derivative(3),
+    );
     assert_close("rest", p.derivative(p.duration(), 1), [0.0; 3], TOL);
     let p = Polynomial::quintic_at_rest(X0, X1, &limits).unwrap();
-    check(p.duration(), X1, p.position(p.duration()), p.max_abs_derivative(1), p.max_abs_derivative(2), p.max_abs_derivative(3));
+    check(
+        p.duration(),
+        X1,
+        p.position(p.duration()),
+        p.max_abs_derivative(1),
+        p.max_abs_derivative(2),
+        p.max_abs_derivative(3),
+    );
     for order in 1..=2 {
         assert_close("rest start", p.derivative(0.0, order), [0.0; 3], TOL);
         assert_close("rest end", p.derivative(p.duration(), order), [0.0; 3], TOL);
     }
     let p = Polynomial::septic_at_rest(X0, X1, &limits).unwrap();
-    check(p.duration(), X1, p.position(p.duration()), p.max_abs_derivative(1), p.max_abs_derivative(2), p.max_abs_derivative(3));
+    check(
+        p.duration(),
+        X1,
+        p.position(p.duration()),
+        p.max_abs_derivative(1),
+        p.max_abs_derivative(2),
+        p.max_abs_derivative(3),
+    );
     for order in 1..=3 {
         assert_close("rest start", p.derivative(0.0, order), [0.0; 3], TOL);
         assert_close("rest end", p.derivative(p.duration(), order), [0.0; 3], TOL);
@@ -117,18 +173,43 @@ fn at_rest_constructors_reach_the_goal_at_rest_within_limits() {
 #[test]
 fn at_rest_duration_is_the_shortest_one_limit_is_reached() {
     // Shortest means some axis touches some limit exactly.
-    let limits = Limits { velocity: [1.0, 2.0, 0.5], acceleration: [3.0, 1.0, 4.0], jerk: [20.0, 5.0, 9.0] };
+    let limits = Limits {
+        velocity: [1.0, 2.0, 0.5],
+        acceleration: [3.0, 1.0, 4.0],
+        jerk: [20.0, 5.0, 9.0],
+    };
     let p = Polynomial::quintic_at_rest(X0, X1, &limits).unwrap();
     let ratios = [
-        p.max_abs_derivative(1).iter().zip(limits.velocity).map(|(a, b)| a / b).fold(0.0f64, f64::max),
-        p.max_abs_derivative(2).iter().zip(limits.acceleration).map(|(a, b)| a / b).fold(0.0f64, f64::max),
-        p.max_abs_derivative(3).iter().zip(limits.jerk).map(|(a, b)| a / b).fold(0.0f64, f64::max),
+        p.max_abs_derivative(1)
+            .iter()
+            .zip(limits.velocity)
+            .map(|(a, b)| a / b)
+            .fold(0.0f64, f64::max),
+        p.max_abs_derivative(2)
+            .iter()
+            .zip(limits.acceleration)
+            .map(|(a, b)| a / b)
+            .fold(0.0f64, f64::max),
+        p.max_abs_derivative(3)
+            .iter()
+            .zip(limits.jerk)
+            .map(|(a, b)| a / b)
+            .fold(0.0f64, f64::max),
     ];
     let max = ratios.iter().copied().fold(0.0f64, f64::max);
     assert!((max - 1.0).abs() < 1e-9, "peak usage {ratios:?}");
     // Unlimited jerk and acceleration: velocity alone decides, T = 1.875 h / v.
     let inf = f64::INFINITY;
-    let p = Polynomial::<1, 6>::quintic_at_rest([0.0], [2.0], &Limits { velocity: [1.0], acceleration: [inf], jerk: [inf] }).unwrap();
+    let p = Polynomial::<1, 6>::quintic_at_rest(
+        [0.0],
+        [2.0],
+        &Limits {
+            velocity: [1.0],
+            acceleration: [inf],
+            jerk: [inf],
+        },
+    )
+    .unwrap();
     assert!((p.duration() - 3.75).abs() < 1e-15);
 }
 
@@ -142,25 +223,49 @@ fn no_motion_gives_a_constant_of_zero_duration() {
 
 #[test]
 fn bad_inputs_are_typed_errors() {
-    assert_eq!(Polynomial::linear(X0, X1, 0.0), Err(TrajectoryError::BadDuration));
-    assert_eq!(Polynomial::linear(X0, X1, f64::NAN), Err(TrajectoryError::BadDuration));
-    assert_eq!(Polynomial::linear(X0, X1, -1.0), Err(TrajectoryError::BadDuration));
+    assert_eq!(
+        Polynomial::linear(X0, X1, 0.0),
+        Err(TrajectoryError::BadDuration)
+    );
+    assert_eq!(
+        Polynomial::linear(X0, X1, f64::NAN),
+        Err(TrajectoryError::BadDuration)
+    );
+    assert_eq!(
+        Polynomial::linear(X0, X1, -1.0),
+        Err(TrajectoryError::BadDuration)
+    );
     assert!(matches!(
         Polynomial::cubic([f64::NAN, 0.0, 0.0], X1, V0, V1, 1.0),
-        Err(TrajectoryError::NotFinite { what: "boundary condition", index: 0 })
+        Err(TrajectoryError::NotFinite {
+            what: "boundary condition",
+            index: 0
+        })
     ));
     let mut bad = Limits::uniform(1.0, 1.0, 1.0);
     bad.acceleration[2] = 0.0;
     assert_eq!(
         Polynomial::quintic_at_rest(X0, X1, &bad),
-        Err(TrajectoryError::BadLimit { axis: 2, kind: rl_core::traj::LimitKind::Acceleration })
+        Err(TrajectoryError::BadLimit {
+            axis: 2,
+            kind: rl_core::traj::LimitKind::Acceleration
+        })
     );
     bad.acceleration[2] = f64::NAN;
-    assert!(matches!(Polynomial::quintic_at_rest(X0, X1, &bad), Err(TrajectoryError::BadLimit { axis: 2, .. })));
+    assert!(matches!(
+        Polynomial::quintic_at_rest(X0, X1, &bad),
+        Err(TrajectoryError::BadLimit { axis: 2, .. })
+    ));
     bad = Limits::uniform(1.0, -2.0, 1.0);
-    assert!(matches!(Polynomial::cubic_at_rest(X0, X1, &bad), Err(TrajectoryError::BadLimit { axis: 0, .. })));
+    assert!(matches!(
+        Polynomial::cubic_at_rest(X0, X1, &bad),
+        Err(TrajectoryError::BadLimit { axis: 0, .. })
+    ));
     let inf = f64::INFINITY;
-    assert_eq!(Polynomial::quintic_at_rest(X0, X1, &Limits::uniform(inf, inf, inf)), Err(TrajectoryError::Unreachable));
+    assert_eq!(
+        Polynomial::quintic_at_rest(X0, X1, &Limits::uniform(inf, inf, inf)),
+        Err(TrajectoryError::Unreachable)
+    );
     assert!(matches!(
         Polynomial::quintic_at_rest(X0, [0.0, inf, 0.0], &Limits::uniform(1.0, 1.0, 1.0)),
         Err(TrajectoryError::NotFinite { index: 1, .. })

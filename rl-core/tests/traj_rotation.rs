@@ -14,7 +14,11 @@ use rl_core::{
 use traj_support::Rng;
 
 fn random_quat(rng: &mut Rng) -> DQuat {
-    exp(DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * 1.4)
+    exp(DVec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+    ) * 1.4)
 }
 
 fn same_rotation(a: DQuat, b: DQuat, tol: f64) -> bool {
@@ -32,7 +36,10 @@ fn check_rates<R: RotationTrajectory>(r: &R, avoid: &[f64]) {
             continue;
         }
         let s = r.rotation(t);
-        assert!((s.orientation.length() - 1.0).abs() < 1e-13, "not unit at {t}");
+        assert!(
+            (s.orientation.length() - 1.0).abs() < 1e-13,
+            "not unit at {t}"
+        );
         let rel = r.rotation(t + h).orientation * r.rotation(t - h).orientation.conjugate();
         let rel = if rel.w < 0.0 { -rel } else { rel };
         let omega_fd = log(rel) * (1.0 / h);
@@ -41,9 +48,11 @@ fn check_rates<R: RotationTrajectory>(r: &R, avoid: &[f64]) {
             "ω at {t}: {} vs fd {omega_fd}",
             s.angular_velocity
         );
-        let alpha_fd = (r.rotation(t + h).angular_velocity - r.rotation(t - h).angular_velocity) / (2.0 * h);
+        let alpha_fd =
+            (r.rotation(t + h).angular_velocity - r.rotation(t - h).angular_velocity) / (2.0 * h);
         assert!(
-            (alpha_fd - s.angular_acceleration).length() < 1e-5 * (1.0 + s.angular_acceleration.length()),
+            (alpha_fd - s.angular_acceleration).length()
+                < 1e-5 * (1.0 + s.angular_acceleration.length()),
             "α at {t}: {} vs fd {alpha_fd}",
             s.angular_acceleration
         );
@@ -58,7 +67,10 @@ fn slerp_trajectory_has_constant_angular_velocity() {
     assert!(same_rotation(r.rotation(2.0).orientation, q1, 1e-14));
     assert!((r.rotation(0.7).angular_velocity - DVec3::X * 0.5).length() < 1e-14);
     check_rates(&r, &[]);
-    assert_eq!(SlerpTrajectory::new(q0, q1, 0.0).unwrap_err(), TrajectoryError::BadDuration);
+    assert_eq!(
+        SlerpTrajectory::new(q0, q1, 0.0).unwrap_err(),
+        TrajectoryError::BadDuration
+    );
 }
 
 #[test]
@@ -66,7 +78,11 @@ fn jerk_limited_rotation_reaches_the_goal_at_rest_within_limits() {
     let mut rng = Rng(23);
     for _ in 0..50 {
         let (q0, q1) = (random_quat(&mut rng), random_quat(&mut rng));
-        let (v, a, j) = (rng.range(0.2, 3.0), rng.range(0.5, 10.0), rng.range(1.0, 100.0));
+        let (v, a, j) = (
+            rng.range(0.2, 3.0),
+            rng.range(0.5, 10.0),
+            rng.range(1.0, 100.0),
+        );
         let r = JerkLimitedRotation::new(q0, q1, v, a, j).unwrap();
         let d = r.duration();
         assert!(same_rotation(r.rotation(0.0).orientation, q0, 1e-14));
@@ -93,7 +109,10 @@ fn cubic_quaternion_spline_meets_orientations_and_end_angular_velocities() {
         let s: CubicQuaternionSpline<4> = CubicQuaternionSpline::new(&times, &q, w0, w1).unwrap();
         assert!((s.duration() - 3.0).abs() < 1e-15);
         for (t, qi) in times.iter().zip(&q) {
-            assert!(same_rotation(s.rotation(*t).orientation, *qi, 1e-13), "waypoint at {t}");
+            assert!(
+                same_rotation(s.rotation(*t).orientation, *qi, 1e-13),
+                "waypoint at {t}"
+            );
         }
         assert!((s.rotation(0.0).angular_velocity - w0).length() < 1e-13);
         assert!((s.rotation(3.0).angular_velocity - w1).length() < 1e-13);
@@ -101,9 +120,15 @@ fn cubic_quaternion_spline_meets_orientations_and_end_angular_velocities() {
         for &t in &times[1..4] {
             let left = s.rotation(t - 1e-9).angular_velocity;
             let right = s.rotation(t).angular_velocity;
-            assert!((left - right).length() < 1e-6 * (1.0 + right.length()), "ω jumps at {t}");
+            assert!(
+                (left - right).length() < 1e-6 * (1.0 + right.length()),
+                "ω jumps at {t}"
+            );
             let ql = s.rotation(t - 1e-12).orientation;
-            assert!((ql - s.rotation(t).orientation).length() < 1e-9, "q jumps (sign) at {t}");
+            assert!(
+                (ql - s.rotation(t).orientation).length() < 1e-9,
+                "q jumps (sign) at {t}"
+            );
         }
         check_rates(&s, &times);
     }
@@ -112,11 +137,26 @@ fn cubic_quaternion_spline_meets_orientations_and_end_angular_velocities() {
 #[test]
 fn quaternion_spline_errors() {
     let q = [DQuat::IDENTITY; 3];
-    let r: Result<CubicQuaternionSpline<1>, _> = CubicQuaternionSpline::new(&[0.0, 1.0, 2.0], &q, DVec3::ZERO, DVec3::ZERO);
-    assert_eq!(r.unwrap_err(), TrajectoryError::Capacity { capacity: 1, requested: 2 });
-    let r: Result<CubicQuaternionSpline<4>, _> = CubicQuaternionSpline::new(&[0.0, 1.0, 1.0], &q, DVec3::ZERO, DVec3::ZERO);
-    assert_eq!(r.unwrap_err(), TrajectoryError::NonIncreasingTime { index: 2 });
+    let r: Result<CubicQuaternionSpline<1>, _> =
+        CubicQuaternionSpline::new(&[0.0, 1.0, 2.0], &q, DVec3::ZERO, DVec3::ZERO);
+    assert_eq!(
+        r.unwrap_err(),
+        TrajectoryError::Capacity {
+            capacity: 1,
+            requested: 2
+        }
+    );
+    let r: Result<CubicQuaternionSpline<4>, _> =
+        CubicQuaternionSpline::new(&[0.0, 1.0, 1.0], &q, DVec3::ZERO, DVec3::ZERO);
+    assert_eq!(
+        r.unwrap_err(),
+        TrajectoryError::NonIncreasingTime { index: 2 }
+    );
     let bad = [DQuat::IDENTITY, DQuat::from_xyzw(0.0, f64::NAN, 0.0, 1.0)];
-    let r: Result<CubicQuaternionSpline<4>, _> = CubicQuaternionSpline::new(&[0.0, 1.0], &bad, DVec3::ZERO, DVec3::ZERO);
-    assert!(matches!(r, Err(TrajectoryError::NotFinite { index: 1, .. })));
+    let r: Result<CubicQuaternionSpline<4>, _> =
+        CubicQuaternionSpline::new(&[0.0, 1.0], &bad, DVec3::ZERO, DVec3::ZERO);
+    assert!(matches!(
+        r,
+        Err(TrajectoryError::NotFinite { index: 1, .. })
+    ));
 }

@@ -48,7 +48,10 @@ impl BlendShape {
 pub enum BlendTime {
     /// The same blend duration in seconds at every waypoint.
     Seconds(f64),
-    /// A fraction (0, 1] of the shorter segment next to each waypoint.
+    /// A fraction `f ∈ (0, 1]` of the segments next to each waypoint: an interior blend lasts
+    /// `f` times the shorter neighbouring segment (half on each side), an end blend `f/2` times
+    /// its segment, so no segment gives more than the fraction `f` to blends and any `f ≤ 1`
+    /// fits.
     Fraction(f64),
 }
 
@@ -141,7 +144,9 @@ pub fn linear_with_blends<const D: usize, const MAX: usize>(
                 } else {
                     f64::INFINITY
                 };
-                f * left.min(right)
+                // End blends lie wholly inside their segment: half as long, same share.
+                let share = if i == 0 || i == n - 1 { 0.5 * f } else { f };
+                share * left.min(right)
             }
         }
     };

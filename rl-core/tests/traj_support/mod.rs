@@ -37,7 +37,10 @@ pub fn check_finite_differences<const D: usize, T: Trajectory<D>>(
             let up = traj.derivative(t + h, order - 1);
             let down = traj.derivative(t - h, order - 1);
             let exact = traj.derivative(t, order);
-            let scale = up.iter().chain(down.iter()).fold(1.0f64, |m, x| m.max(x.abs()));
+            let scale = up
+                .iter()
+                .chain(down.iter())
+                .fold(1.0f64, |m, x| m.max(x.abs()));
             for i in 0..D {
                 let fd = (up[i] - down[i]) / (2.0 * h);
                 assert!(
@@ -56,8 +59,16 @@ pub fn check_sample_matches<const D: usize, T: Trajectory<D>>(traj: &T, n: usize
     for k in 0..=n {
         let t = traj.duration() * k as f64 / n as f64;
         let s = traj.sample(t);
-        for (order, got) in [s.position, s.velocity, s.acceleration, s.jerk].into_iter().enumerate() {
-            assert_close("sample vs derivative", got, traj.derivative(t, order), 1e-12);
+        for (order, got) in [s.position, s.velocity, s.acceleration, s.jerk]
+            .into_iter()
+            .enumerate()
+        {
+            assert_close(
+                "sample vs derivative",
+                got,
+                traj.derivative(t, order),
+                1e-12,
+            );
         }
     }
 }
