@@ -1,1 +1,274 @@
-//! Model loading: RL XML and URDF (being built).
+//! Model loading (feature `std`): RL's XML model format (`rlmdl`) and URDF, into a
+//! fixed-capacity [`Model`].
+//!
+//! Both formats describe a tree of frames joined by transforms. Loading walks it depth-first
+//! from the root, adds one body per moving joint (so joints are numbered as RL and Pinocchio
+//! number them) and merges everything reached through fixed transforms into its moving
+//! ancestor: placements are composed, inertias added. Tools are the leaves of the frame tree
+//! (RL's operational frames), in depth-first order, named after the leaf frame or link.
+//!
+//! ```no_run
+//! let loaded = rl_core::loader::load_file::<64>("unimation-puma560.xml")?;
+//! assert_eq!(loaded.model.dof(), 6);
+//! # Ok::<(), rl_core::loader::LoadError>(())
+//! ```
+//!
+//! Errors are a [`LoadError`]: the file, the element (tag, id or name, line:column) and what is
+//! wrong with it. Nothing here panics on bad input.
+
+mod error;
+mod rlmdl;
+mod tree;
+mod urdf;
+mod xml;
+
+use std::path::{Path, PathBuf};
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+pub use error::{ElementRef, LoadError, LoadErrorKind};
+
+use crate::model::{Model, ROOT};
+use crate::spatial::PlueckerTransform;
+
+/// The format a model was read from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// RL's XML model format (`<rlmdl>` or `<rl><mdl>`).
+    Rlmdl,
+    /// URDF (`<robot>`).
+    Urdf,
+}
+
+/// The order in which the joints below one URDF link are numbered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum JointOrder {
+    /// Pinocchio's: ascending byte order of the joint names (urdfdom keeps joints in a sorted
+    /// map). This makes `q` line up with Pinocchio's.
+    #[default]
+    Pinocchio,
+    /// The order of the `<joint>` elements in the file.
+    File,
+}
+
+/// What to do with a moving URDF joint that has a `<mimic>` tag.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MimicJoints {
+    /// Refuse the file: the model has no coupled joints.
+    #[default]
+    Reject,
+    /// Load the joint as an independent joint (what Pinocchio does by default).
+    Independent,
+}
+
+/// Options for URDF (RL XML files carry all they need).
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfOptions {
+    /// Add a six-DOF joint `root_joint` between the world and the root link, as Pinocchio's
+    /// free-flyer: `q = [x y z qx qy qz qw]`, `v = [linear; angular]` in the root link's frame.
+    pub floating_base: bool,
+    /// The joint order.
+    pub joint_order: JointOrder,
+    /// Moving joints with `<mimic>`.
+    pub mimic: MimicJoints,
+    /// Joints to freeze at the given position (rad or m), treated as fixed: e.g. panda's
+    /// fingers, as Pinocchio's `buildReducedModel`.
+    pub locked_joints: Vec<(String, f64)>,
+    /// Make the leaf links tools (on by default).
+    pub leaf_tools: bool,
+    /// More tools, by link name, after the leaves (e.g. `panda_hand`).
+    pub extra_tools: Vec<String>,
+}
+
+impl Default for UrdfOptions {
+    fn default() -> Self {
+        Self {
+            floating_base: false,
+            joint_order: JointOrder::Pinocchio,
+            mimic: MimicJoints::Reject,
+            locked_joints: Vec::new(),
+            leaf_tools: true,
+            extra_tools: Vec::new(),
+        }
+    }
+}
+
+/// Where a frame of the file (RL frame or body, URDF link) ended up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameInfo {
+    /// Its id or name in the file.
+    pub name: String,
+    /// The moving body it is part of, or [`ROOT`] for the world.
+    pub body: usize,
+    /// Its pose in that body's frame (in the world's for [`ROOT`]).
+    pub placement: PlueckerTransform,
+}
+
+/// A transform of the file (RL transform, URDF joint), in depth-first order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransformInfo {
+    /// Its id or name.
+    pub name: String,
+    /// Its type as written (`revolute`, `continuous`, `fixed`, `sixDof`, `revolute (locked)`,
+    /// `floating base` for the added free-flyer).
+    pub source_type: String,
+    /// The body it created (moving) or whose body its child was merged into ([`ROOT`] for the
+    /// world).
+    pub body: usize,
+    /// Whether it became a joint of the model.
+    pub moving: bool,
+}
+
+/// A loaded model and what the [`Model`] has no room for.
+#[derive(Clone, Debug)]
+pub struct LoadedModel<const N: usize> {
+    /// The model.
+    pub model: Model<N>,
+    /// The file's format.
+    pub format: Format,
+    /// RL's home position (`home/q`, in rad), `nq` values.
+    pub home: Option<Vec<f64>>,
+    /// Every frame reached from the root, in depth-first order: where it sits in the model.
+    pub frames: Vec<FrameInfo>,
+    /// Every transform reached from the root, in depth-first order.
+    pub transforms: Vec<TransformInfo>,
+    /// Things that loaded but deserve a note (ignored elements, unconnected frames, mimic
+    /// joints loaded as independent).
+    pub warnings: Vec<String>,
+}
+
+impl<const N: usize> LoadedModel<N> {
+    /// The frame (RL frame or body, URDF link) called `name`.
+    pub fn frame(&self, name: &str) -> Option<&FrameInfo> {
+        self.frames.iter().find(|f| f.name == name)
+    }
+
+    /// The type as written in the file of body `body`'s joint.
+    pub fn joint_source_type(&self, body: usize) -> Option<&str> {
+        self.transforms
+            .iter()
+            .find(|t| t.moving && t.body == body)
+            .map(|t| t.source_type.as_str())
+    }
+
+    /// The configuration home (RL's `home/q`) or else the neutral one, `nq` values.
+    pub fn home_or_neutral(&self) -> Vec<f64> {
+        match &self.home {
+            Some(h) => h.clone(),
+            None => {
+                let mut q = std::vec![0.0; self.model.nq()];
+                self.model.neutral(&mut q);
+                q
+            }
+        }
+    }
+
+    /// Converts a Pinocchio configuration of the same URDF to ours: Pinocchio stores a
+    /// continuous joint as `(cos θ, sin θ)` (nq = 2), we store `θ`. Other joints are copied.
+    /// Returns `None` if `q` has the wrong length.
+    pub fn q_from_pinocchio(&self, q: &[f64]) -> Option<Vec<f64>> {
+        let mut out = Vec::with_capacity(self.model.nq());
+        let mut at = 0;
+        for b in 0..self.model.body_count() {
+            let nq = self.model.joint(b).nq();
+            if self.joint_source_type(b) == Some("continuous") {
+                let (c, s) = (*q.get(at)?, *q.get(at + 1)?);
+                out.push(libm::atan2(s, c));
+                at += 2;
+            } else {
+                out.extend_from_slice(q.get(at..at + nq)?);
+                at += nq;
+            }
+        }
+        (at == q.len()).then_some(out)
+    }
+
+    /// The pose of frame `name` in its body's frame and that body ([`ROOT`] for the world).
+    pub fn frame_placement(&self, name: &str) -> Option<(usize, PlueckerTransform)> {
+        self.frame(name).map(|f| (f.body, f.placement))
+    }
+
+    /// Whether frame `name` is fixed to the world.
+    pub fn is_on_world(&self, name: &str) -> bool {
+        self.frame(name).is_some_and(|f| f.body == ROOT)
+    }
+}
+
+/// Loads RL XML or URDF from `text`, by its root element; URDF with `urdf` options.
+pub fn load_str<const N: usize>(
+    text: &str,
+    urdf: &UrdfOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    let doc = xml::parse(text)?;
+    let root = doc.root_element();
+    match root.tag_name().name() {
+        "robot" => urdf::from_document(root, urdf),
+        _ => rlmdl::from_document(root),
+    }
+}
+
+/// Loads RL's XML model format from `text`.
+pub fn load_rlmdl_str<const N: usize>(text: &str) -> Result<LoadedModel<N>, LoadError> {
+    rlmdl::load(text)
+}
+
+/// Loads URDF from `text`.
+pub fn load_urdf_str<const N: usize>(
+    text: &str,
+    options: &UrdfOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    urdf::load(text, options)
+}
+
+/// Loads a model file (RL XML or URDF, by its root element) with default URDF options.
+pub fn load_file<const N: usize>(path: impl AsRef<Path>) -> Result<LoadedModel<N>, LoadError> {
+    load_file_with(path, &UrdfOptions::default())
+}
+
+/// Loads a model file (RL XML or URDF, by its root element).
+pub fn load_file_with<const N: usize>(
+    path: impl AsRef<Path>,
+    urdf: &UrdfOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        LoadError::new(LoadErrorKind::Io(e.to_string())).in_file(path.to_path_buf())
+    })?;
+    load_str(&text, urdf).map_err(|e| e.in_file(path.to_path_buf()))
+}
+
+/// The directory holding example-robot-data's `robots/` (for tests and tools): `$RL_ROBOT_DATA`
+/// if set, else the line printed by `<repo_root>/scripts/robot-data` (which may download the
+/// package once). The error says why neither worked, for a test to print when it skips.
+pub fn example_robot_data_dir(repo_root: &Path) -> Result<PathBuf, String> {
+    if let Some(d) = std::env::var_os("RL_ROBOT_DATA") {
+        let d = PathBuf::from(d);
+        return if d.join("robots").is_dir() {
+            Ok(d)
+        } else {
+            Err(std::format!(
+                "RL_ROBOT_DATA={} has no robots/ folder",
+                d.display()
+            ))
+        };
+    }
+    let script = repo_root.join("scripts/robot-data");
+    let out = std::process::Command::new(&script)
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .map_err(|e| std::format!("cannot run {}: {e}", script.display()))?;
+    if !out.status.success() {
+        return Err(std::format!("{} failed ({})", script.display(), out.status));
+    }
+    let line = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    let d = PathBuf::from(line);
+    if d.join("robots").is_dir() {
+        Ok(d)
+    } else {
+        Err(std::format!(
+            "{} printed {}, which has no robots/",
+            script.display(),
+            d.display()
+        ))
+    }
+}

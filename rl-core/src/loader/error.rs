@@ -1,0 +1,210 @@
+//! Why a model file could not be loaded, and where.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::string::String;
+
+use crate::model::ModelError;
+
+/// An XML element named in an error: its tag, its `id`/`name` and where it starts.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ElementRef {
+    /// The element's tag, e.g. `revolute` or `joint`.
+    pub tag: String,
+    /// Its `id` (RL) or `name` (URDF) attribute, if it has one.
+    pub id: Option<String>,
+    /// Line of the element's start, from 1.
+    pub line: u32,
+    /// Column of the element's start, from 1.
+    pub column: u32,
+}
+
+impl fmt::Display for ElementRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}: <{}", self.line, self.column, self.tag)?;
+        if let Some(id) = &self.id {
+            write!(f, " \"{id}\"")?;
+        }
+        f.write_str(">")
+    }
+}
+
+/// What went wrong.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LoadErrorKind {
+    /// The file could not be read.
+    Io(String),
+    /// The text is not well-formed XML (the message carries roxmltree's line:column).
+    Xml(String),
+    /// The root element is neither RL's `rlmdl`/`rl` nor URDF's `robot`.
+    UnknownFormat {
+        /// The root element's tag.
+        root: String,
+    },
+    /// A joint (transform) type this loader does not know.
+    UnknownJointType {
+        /// The type as written.
+        joint_type: String,
+    },
+    /// A required attribute is missing.
+    MissingAttribute {
+        /// The attribute's name.
+        attribute: &'static str,
+    },
+    /// A required child element is missing.
+    MissingElement {
+        /// The child's tag.
+        child: &'static str,
+    },
+    /// A value that is not a finite number, or out of its domain.
+    InvalidValue {
+        /// What the value is (attribute or element name).
+        what: String,
+        /// The text found.
+        value: String,
+        /// Why it is rejected.
+        reason: &'static str,
+    },
+    /// An inertial description lacks its mass or inertia.
+    MissingInertia {
+        /// The missing part (`mass` or `inertia`).
+        part: &'static str,
+    },
+    /// A reference to a frame, body or link that does not exist.
+    UnresolvedReference {
+        /// The name referred to.
+        target: String,
+    },
+    /// Two frames, links or joints share one name.
+    DuplicateName {
+        /// The name.
+        name: String,
+    },
+    /// The transforms form a cycle (the element is one transform on it).
+    Cycle,
+    /// A frame is the child of two transforms.
+    TwoParents {
+        /// The frame.
+        frame: String,
+        /// The other transform that already has it as its child.
+        other: String,
+    },
+    /// The document has no root (world/root link) or more than one.
+    NoSingleRoot {
+        /// The candidate roots found.
+        roots: std::vec::Vec<String>,
+    },
+    /// The model does not fit in its capacity, or the builder refused a value.
+    Model(ModelError),
+    /// A feature of the format that this loader does not support.
+    Unsupported {
+        /// What it is and, where useful, what to do instead.
+        feature: String,
+    },
+}
+
+impl fmt::Display for LoadErrorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LoadErrorKind::Io(e) => write!(f, "cannot read the file: {e}"),
+            LoadErrorKind::Xml(e) => write!(f, "XML syntax error: {e}"),
+            LoadErrorKind::UnknownFormat { root } => write!(
+                f,
+                "unknown model format: the root element is <{root}>, expected <rlmdl>, <rl> \
+                 (RL XML) or <robot> (URDF)"
+            ),
+            LoadErrorKind::UnknownJointType { joint_type } => {
+                write!(f, "unknown joint type \"{joint_type}\"")
+            }
+            LoadErrorKind::MissingAttribute { attribute } => {
+                write!(f, "missing attribute \"{attribute}\"")
+            }
+            LoadErrorKind::MissingElement { child } => write!(f, "missing element <{child}>"),
+            LoadErrorKind::InvalidValue {
+                what,
+                value,
+                reason,
+            } => {
+                write!(f, "invalid {what} \"{value}\": {reason}")
+            }
+            LoadErrorKind::MissingInertia { part } => {
+                write!(f, "<inertial> without its <{part}>: missing inertia")
+            }
+            LoadErrorKind::UnresolvedReference { target } => {
+                write!(f, "reference to \"{target}\", which does not exist")
+            }
+            LoadErrorKind::DuplicateName { name } => write!(f, "name \"{name}\" is used twice"),
+            LoadErrorKind::Cycle => f.write_str("the transforms form a cycle: not a tree"),
+            LoadErrorKind::TwoParents { frame, other } => write!(
+                f,
+                "\"{frame}\" has two parents (it is also the child of \"{other}\"): not a tree"
+            ),
+            LoadErrorKind::NoSingleRoot { roots } => {
+                if roots.is_empty() {
+                    f.write_str("no root: every frame has a parent")
+                } else {
+                    write!(
+                        f,
+                        "several roots ({}); a model needs exactly one",
+                        roots.join(", ")
+                    )
+                }
+            }
+            LoadErrorKind::Model(e) => write!(f, "{e}"),
+            LoadErrorKind::Unsupported { feature } => write!(f, "unsupported: {feature}"),
+        }
+    }
+}
+
+/// A model file that could not be loaded: what went wrong, in which file and at which element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadError {
+    /// The file, when loading from a file.
+    pub path: Option<PathBuf>,
+    /// The element at fault, when there is one.
+    pub element: Option<ElementRef>,
+    /// What went wrong.
+    pub kind: LoadErrorKind,
+}
+
+impl LoadError {
+    /// An error at `element`.
+    pub(crate) fn at(element: ElementRef, kind: LoadErrorKind) -> Self {
+        Self {
+            path: None,
+            element: Some(element),
+            kind,
+        }
+    }
+
+    /// An error not tied to one element.
+    pub(crate) fn new(kind: LoadErrorKind) -> Self {
+        Self {
+            path: None,
+            element: None,
+            kind,
+        }
+    }
+
+    /// The same error, naming the file.
+    pub(crate) fn in_file(mut self, path: PathBuf) -> Self {
+        self.path = Some(path);
+        self
+    }
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(p) = &self.path {
+            write!(f, "{}:", p.display())?;
+        }
+        if let Some(e) = &self.element {
+            write!(f, "{e}: ")?;
+        } else if self.path.is_some() {
+            f.write_str(" ")?;
+        }
+        write!(f, "{}", self.kind)
+    }
+}
+
+impl std::error::Error for LoadError {}

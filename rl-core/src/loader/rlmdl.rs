@@ -1,0 +1,513 @@
+//! RL's XML model format (`rlmdl`), read as RL's `XmlFactory` reads it.
+//!
+//! Conventions (shared/reference/rl-models.md): angles in degrees with `Rz·Ry·Rx`, body inertia
+//! about the centre of mass in body axes with defaults `m = 1`, `I = 1`, `cm = 0`, and `<g>` the
+//! fictitious base acceleration (physical gravity is its negative). Only the first `<model>` is
+//! loaded. Joint offsets are folded into the placement, so `q` here is RL's `q`.
+
+use std::format;
+use std::string::ToString;
+use std::vec::Vec;
+
+use glam::{DMat3, DVec3};
+use roxmltree::Node;
+
+use super::error::{LoadError, LoadErrorKind};
+use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Frame, assemble};
+use super::xml::{
+    attr, child, child_number, child_xyz, children, elem, err, invalid, number, rot_zyx, unit_axis,
+};
+use super::{Format, LoadedModel};
+use crate::joint::{
+    Cylindrical, Helical, Joint, MAX_JOINT_NV, Prismatic, Revolute, SixDof, Spherical,
+};
+use crate::model::{JointLimits, ModelBuilder};
+use crate::spatial::{PlueckerTransform, RigidBodyInertia};
+
+const DEG: f64 = core::f64::consts::PI / 180.0;
+const TRANSFORMS: [&str; 7] = [
+    "fixed",
+    "revolute",
+    "prismatic",
+    "helical",
+    "cylindrical",
+    "spherical",
+    "sixDof",
+];
+const XINCLUDE: &str = "http://www.w3.org/2001/XInclude";
+
+/// Loads the first model of an RL XML document.
+pub(crate) fn load<const N: usize>(text: &str) -> Result<LoadedModel<N>, LoadError> {
+    let doc = super::xml::parse(text)?;
+    let root = doc.root_element();
+    from_document(root)
+}
+
+pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>, LoadError> {
+    let tag = root.tag_name().name();
+    if tag == "stylesheet" || tag == "transform" {
+        return Err(err(
+            root,
+            LoadErrorKind::Unsupported {
+                feature: "XSLT-parameterised model: apply the stylesheet first (e.g. `xsltproc \
+                          file.xml > model.xml`) and load the result"
+                    .into(),
+            },
+        ));
+    }
+    if let Some(x) = root
+        .descendants()
+        .find(|n| n.is_element() && n.tag_name().namespace() == Some(XINCLUDE))
+    {
+        return Err(err(
+            x,
+            LoadErrorKind::Unsupported {
+                feature: "XInclude: expand it first (e.g. `xmllint --xinclude`)".into(),
+            },
+        ));
+    }
+    let container = match tag {
+        "rlmdl" => root,
+        "rl" => child(root, "mdl")
+            .ok_or_else(|| err(root, LoadErrorKind::MissingElement { child: "mdl" }))?,
+        _ => {
+            return Err(err(
+                root,
+                LoadErrorKind::UnknownFormat {
+                    root: tag.to_string(),
+                },
+            ));
+        }
+    };
+    let model = child(container, "model")
+        .ok_or_else(|| err(container, LoadErrorKind::MissingElement { child: "model" }))?;
+    let mut warnings = Vec::new();
+    if children(container, "model").nth(1).is_some() {
+        warnings.push("only the first <model> is loaded, as RL does".to_string());
+    }
+
+    // Frames: world, bodies and plain frames, by id.
+    let mut nodes: Vec<Frame> = Vec::new();
+    let mut world: Option<(usize, Node)> = None;
+    for n in model.children().filter(|n| n.is_element()) {
+        let t = n.tag_name().name();
+        if t != "world" && t != "body" && t != "frame" {
+            continue;
+        }
+        let id = attr(n, "id")?;
+        if nodes.iter().any(|f| f.name == id) {
+            return Err(err(
+                n,
+                LoadErrorKind::DuplicateName {
+                    name: id.to_string(),
+                },
+            ));
+        }
+        let inertia = if t == "body" {
+            Some(body_inertia(n)?)
+        } else {
+            None
+        };
+        if t == "world" {
+            if let Some((_, first)) = world {
+                return Err(err(
+                    n,
+                    LoadErrorKind::NoSingleRoot {
+                        roots: std::vec![
+                            first.attribute("id").unwrap_or("").to_string(),
+                            id.to_string()
+                        ],
+                    },
+                ));
+            }
+            world = Some((nodes.len(), n));
+        }
+        nodes.push(Frame {
+            name: id.to_string(),
+            inertia,
+            elem: elem(n),
+        });
+    }
+    let Some((world_index, world_node)) = world else {
+        return Err(err(model, LoadErrorKind::MissingElement { child: "world" }));
+    };
+    let rot = match child(world_node, "rotation") {
+        Some(r) => child_xyz(r, DVec3::ZERO)? * DEG,
+        None => DVec3::ZERO,
+    };
+    let world_rotation = rot_zyx(rot.x, rot.y, rot.z);
+    let world_translation = match child(world_node, "translation") {
+        Some(t) => child_xyz(t, DVec3::ZERO)?,
+        None => DVec3::ZERO,
+    };
+    let g = match child(world_node, "g") {
+        Some(g) => child_xyz(g, DVec3::ZERO)?,
+        None => DVec3::ZERO,
+    };
+
+    // Transforms, in file order.
+    let mut edges: Vec<Edge> = Vec::new();
+    for n in model.children().filter(|n| n.is_element()) {
+        let t = n.tag_name().name();
+        if TRANSFORMS.contains(&t) {
+            edges.push(transform(n, &nodes)?);
+        } else if matches!(
+            t,
+            "world" | "body" | "frame" | "manufacturer" | "name" | "home"
+        ) {
+        } else if matches!(t, "gammaPosition" | "gammaVelocity") {
+            check_identity_gamma(n)?;
+        } else if child(n, "frame").is_some_and(|f| child(f, "a").is_some()) {
+            return Err(err(
+                n,
+                LoadErrorKind::UnknownJointType {
+                    joint_type: t.to_string(),
+                },
+            ));
+        } else {
+            let p = n.document().text_pos_at(n.range().start);
+            warnings.push(format!(
+                "{}:{}: <{t}> ignored (RL's XmlFactory does not read it)",
+                p.row, p.col
+            ));
+        }
+    }
+
+    let mut builder = ModelBuilder::<N>::new();
+    let name = child(model, "name")
+        .and_then(|n| n.text())
+        .unwrap_or("")
+        .trim();
+    builder
+        .name(name)
+        .map_err(|e| err(model, LoadErrorKind::Model(e)))?;
+    // `<g>` is the acceleration of the base that stands in for gravity, in world-frame axes.
+    builder.gravity(-(world_rotation * g));
+    let how = Assembly {
+        root: world_index,
+        base: PlueckerTransform::new(world_rotation, world_translation),
+        floating: None,
+        order: ChildOrder::File,
+        leaf_tools: true,
+        extra_tools: &[],
+        doc_elem: elem(model),
+    };
+    let assembled = assemble(&nodes, &edges, &how, &mut builder)?;
+    for f in &assembled.unconnected {
+        warnings.push(format!(
+            "frame \"{f}\" is not connected to the world and is skipped, as RL does"
+        ));
+    }
+    let built = builder.build();
+
+    let home = match child(model, "home") {
+        Some(h) => Some(home(h, built.nq())?),
+        None => None,
+    };
+    Ok(LoadedModel {
+        model: built,
+        format: Format::Rlmdl,
+        home,
+        frames: assembled.frames,
+        transforms: assembled.transforms,
+        warnings,
+    })
+}
+
+/// A body's inertia from `cm`, `i` (about the COM, body axes) and `m`, with RL's defaults.
+fn body_inertia(n: Node) -> Result<RigidBodyInertia, LoadError> {
+    let cm = match child(n, "cm") {
+        Some(c) => child_xyz(c, DVec3::ZERO)?,
+        None => DVec3::ZERO,
+    };
+    let (xx, yy, zz, yz, xz, xy) = match child(n, "i") {
+        Some(i) => (
+            child_number(i, "xx", 1.0)?,
+            child_number(i, "yy", 1.0)?,
+            child_number(i, "zz", 1.0)?,
+            child_number(i, "yz", 0.0)?,
+            child_number(i, "xz", 0.0)?,
+            child_number(i, "xy", 0.0)?,
+        ),
+        None => (1.0, 1.0, 1.0, 0.0, 0.0, 0.0),
+    };
+    let m = child_number(n, "m", 1.0)?;
+    if m < 0.0 {
+        let c = child(n, "m").unwrap_or(n);
+        return Err(invalid(c, "m", &m.to_string(), "negative mass"));
+    }
+    let ic = DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    );
+    Ok(RigidBodyInertia::from_com(m, cm, ic))
+}
+
+/// The `k`-th (from 1) child `tag` as a number, or `default`.
+fn indexed(n: Node, tag: &str, k: usize, default: f64) -> Result<f64, LoadError> {
+    match children(n, tag).nth(k - 1) {
+        Some(c) => number(c, tag, c.text().unwrap_or("")),
+        None => Ok(default),
+    }
+}
+
+/// The `k`-th (from 1) `axis` child, or `default` if absent. Missing components are 0.
+fn axis(n: Node, k: usize, default: DVec3) -> Result<DVec3, LoadError> {
+    match children(n, "axis").nth(k - 1) {
+        Some(a) => unit_axis(a, "axis", child_xyz(a, DVec3::ZERO)?),
+        None => Ok(default),
+    }
+}
+
+/// Limits of DOF `k` (from 1), positions and speed scaled by `scale`.
+fn limits(n: Node, k: usize, scale: f64) -> Result<JointLimits, LoadError> {
+    let lower = indexed(n, "min", k, f64::NEG_INFINITY)?;
+    let upper = indexed(n, "max", k, f64::INFINITY)?;
+    if lower > upper {
+        let c = children(n, "min").nth(k - 1).unwrap_or(n);
+        return Err(invalid(c, "min", &lower.to_string(), "greater than max"));
+    }
+    let speed = indexed(n, "speed", k, f64::INFINITY)?;
+    if speed < 0.0 {
+        let c = children(n, "speed").nth(k - 1).unwrap_or(n);
+        return Err(invalid(c, "speed", &speed.to_string(), "negative"));
+    }
+    Ok(JointLimits {
+        lower: lower * scale,
+        upper: upper * scale,
+        velocity: speed * scale,
+        effort: f64::INFINITY,
+        wraparound: children(n, "wraparound").nth(k - 1).is_some()
+            || (k == 1 && child(n, "wraparound").is_some()),
+    })
+}
+
+fn no_offset(n: Node, kind: &str) -> Result<(), LoadError> {
+    for o in children(n, "offset") {
+        if number(o, "offset", o.text().unwrap_or(""))? != 0.0 {
+            return Err(err(
+                o,
+                LoadErrorKind::Unsupported {
+                    feature: format!("an offset on a {kind} joint"),
+                },
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn same_axis(n: Node, a: DVec3, b: DVec3, kind: &str) -> Result<(), LoadError> {
+    if (a - b).length() > 1e-12 {
+        return Err(err(
+            n,
+            LoadErrorKind::Unsupported {
+                feature: format!("a {kind} joint whose two axes differ"),
+            },
+        ));
+    }
+    Ok(())
+}
+
+/// One transform element.
+fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
+    let t = n.tag_name().name();
+    let name = attr(n, "id")?.to_string();
+    let f = child(n, "frame")
+        .ok_or_else(|| err(n, LoadErrorKind::MissingElement { child: "frame" }))?;
+    let find = |tag: &'static str| -> Result<usize, LoadError> {
+        let e =
+            child(f, tag).ok_or_else(|| err(f, LoadErrorKind::MissingElement { child: tag }))?;
+        let id = attr(e, "idref")?;
+        nodes.iter().position(|x| x.name == id).ok_or_else(|| {
+            err(
+                n,
+                LoadErrorKind::UnresolvedReference {
+                    target: id.to_string(),
+                },
+            )
+        })
+    };
+    let (parent, child_frame) = (find("a")?, find("b")?);
+    let mut lim = [JointLimits::UNLIMITED; MAX_JOINT_NV];
+    let id = PlueckerTransform::IDENTITY;
+    let (kind, origin) = match t {
+        "fixed" => {
+            let rot = match child(n, "rotation") {
+                Some(r) => child_xyz(r, DVec3::ZERO)? * DEG,
+                None => DVec3::ZERO,
+            };
+            let tr = match child(n, "translation") {
+                Some(r) => child_xyz(r, DVec3::ZERO)?,
+                None => DVec3::ZERO,
+            };
+            (
+                EdgeKind::Fixed,
+                PlueckerTransform::new(rot_zyx(rot.x, rot.y, rot.z), tr),
+            )
+        }
+        "revolute" => {
+            let j = Revolute::new(axis(n, 1, DVec3::Z)?);
+            lim[0] = limits(n, 1, DEG)?;
+            let post = j.transform(indexed(n, "offset", 1, 0.0)? * DEG);
+            let joint = Joint::Revolute(j);
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        "prismatic" => {
+            let j = Prismatic::new(axis(n, 1, DVec3::Z)?);
+            lim[0] = limits(n, 1, 1.0)?;
+            let post = j.transform(indexed(n, "offset", 1, 0.0)?);
+            let joint = Joint::Prismatic(j);
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        "helical" => {
+            // RL reads helical limits without unit conversion; its rotation ignores the offset
+            // while its translation uses it.
+            let a = axis(n, 1, DVec3::Z)?;
+            same_axis(n, a, axis(n, 2, DVec3::Z)?, "helical")?;
+            let pitch = child_number(n, "pitch", 1.0)?;
+            lim[0] = limits(n, 1, 1.0)?;
+            let post =
+                PlueckerTransform::from_translation(a * pitch * indexed(n, "offset", 1, 0.0)?);
+            let joint = Joint::Helical(Helical::new(a, pitch));
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        "cylindrical" => {
+            // RL reads cylindrical limits and offsets without unit conversion (rad, m).
+            let a = axis(n, 1, DVec3::Z)?;
+            same_axis(n, a, axis(n, 2, DVec3::Z)?, "cylindrical")?;
+            let j = Cylindrical::new(a);
+            lim[0] = limits(n, 1, 1.0)?;
+            lim[1] = limits(n, 2, 1.0)?;
+            let post = j.transform(indexed(n, "offset", 1, 0.0)?, indexed(n, "offset", 2, 0.0)?);
+            let joint = Joint::Cylindrical(j);
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        "spherical" => {
+            no_offset(n, "spherical")?;
+            let joint = Joint::Spherical(Spherical);
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post: id,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        "sixDof" => {
+            // max[k]/min[k], k = 1..3: the translation, m; speed[k], k = 1..6: [linear; angular].
+            no_offset(n, "sixDof")?;
+            for (k, l) in lim.iter_mut().enumerate() {
+                let full = limits(n, k + 1, 1.0)?;
+                *l = if k < 3 {
+                    full
+                } else {
+                    JointLimits {
+                        velocity: full.velocity,
+                        ..*l
+                    }
+                };
+            }
+            let joint = Joint::SixDof(SixDof);
+            (
+                EdgeKind::Moving {
+                    joint,
+                    post: id,
+                    child_offset: id,
+                    limits: lim,
+                },
+                id,
+            )
+        }
+        _ => {
+            return Err(err(
+                n,
+                LoadErrorKind::UnknownJointType {
+                    joint_type: t.to_string(),
+                },
+            ));
+        }
+    };
+    Ok(Edge {
+        parent,
+        child: child_frame,
+        name,
+        source_type: t.to_string(),
+        origin,
+        kind,
+        elem: elem(n),
+    })
+}
+
+/// `home/q` (rad, or degrees with `unit="deg"`); must have `nq` entries.
+fn home(h: Node, nq: usize) -> Result<Vec<f64>, LoadError> {
+    let mut q = Vec::new();
+    for c in children(h, "q") {
+        let mut x = number(c, "q", c.text().unwrap_or(""))?;
+        if c.attribute("unit") == Some("deg") {
+            x *= DEG;
+        }
+        q.push(x);
+    }
+    if q.len() != nq {
+        return Err(invalid(
+            h,
+            "home position",
+            &format!("{} values", q.len()),
+            "the model's position has a different length",
+        ));
+    }
+    Ok(q)
+}
+
+/// RL's joint coupling matrices: only the identity is supported.
+fn check_identity_gamma(g: Node) -> Result<(), LoadError> {
+    for (r, row) in children(g, "row").enumerate() {
+        for (c, col) in children(row, "col").enumerate() {
+            let x = number(col, "col", col.text().unwrap_or(""))?;
+            if x != if r == c { 1.0 } else { 0.0 } {
+                return Err(err(
+                    g,
+                    LoadErrorKind::Unsupported {
+                        feature: "a joint coupling matrix other than the identity".into(),
+                    },
+                ));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,343 @@
+//! URDF, read as urdfdom and Pinocchio read it.
+//!
+//! Links become bodies (inertial origin with `xyz` and `rpy`: rotated inertial frames are
+//! supported), joints `revolute`, `continuous` (one angle that wraps around, nq = 1, where
+//! Pinocchio uses nq = 2 with cos/sin), `prismatic`, `fixed` (merged), `floating` (six-DOF) and
+//! `planar` (the axis is the plane's normal). The joint order is Pinocchio's by default:
+//! depth-first from the root link, children in ascending byte order of their joint names.
+
+use std::format;
+use std::string::ToString;
+use std::vec::Vec;
+
+use glam::{DMat3, DQuat, DVec3};
+use roxmltree::Node;
+
+use super::error::{LoadError, LoadErrorKind};
+use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Link, assemble};
+use super::xml::{
+    attr, attr_number, attr_vec3, child, children, elem, err, invalid, rot_zyx, unit_axis,
+};
+use super::{Format, JointOrder, LoadedModel, MimicJoints, UrdfOptions};
+use crate::joint::{Joint, MAX_JOINT_NV, Planar, Prismatic, Revolute, SixDof};
+use crate::model::{JointLimits, ModelBuilder};
+use crate::spatial::{PlueckerTransform, RigidBodyInertia};
+
+/// URDF's default physical gravity (RL and Pinocchio use the same value).
+const GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.80665);
+
+pub(crate) fn load<const N: usize>(
+    text: &str,
+    opt: &UrdfOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    let doc = super::xml::parse(text)?;
+    from_document(doc.root_element(), opt)
+}
+
+/// `<origin xyz rpy>` of `n`, identity when absent.
+fn origin(n: Node) -> Result<PlueckerTransform, LoadError> {
+    match child(n, "origin") {
+        Some(o) => {
+            let xyz = attr_vec3(o, "xyz", DVec3::ZERO)?;
+            let rpy = attr_vec3(o, "rpy", DVec3::ZERO)?;
+            Ok(PlueckerTransform::new(rot_zyx(rpy.x, rpy.y, rpy.z), xyz))
+        }
+        None => Ok(PlueckerTransform::IDENTITY),
+    }
+}
+
+/// A link's inertia in the link frame, `None` without `<inertial>`.
+fn link_inertia(link: Node) -> Result<Option<RigidBodyInertia>, LoadError> {
+    let Some(inertial) = child(link, "inertial") else {
+        return Ok(None);
+    };
+    let frame = origin(inertial)?;
+    let mass = child(inertial, "mass")
+        .ok_or_else(|| err(link, LoadErrorKind::MissingInertia { part: "mass" }))?;
+    let m = attr_number(mass, "value", f64::NAN)?;
+    if m.is_nan() {
+        return Err(err(
+            mass,
+            LoadErrorKind::MissingAttribute { attribute: "value" },
+        ));
+    }
+    if m < 0.0 {
+        return Err(invalid(mass, "value", &m.to_string(), "negative mass"));
+    }
+    let i = child(inertial, "inertia")
+        .ok_or_else(|| err(link, LoadErrorKind::MissingInertia { part: "inertia" }))?;
+    let get = |name: &'static str| -> Result<f64, LoadError> {
+        let t = attr(i, name)?;
+        super::xml::number(i, name, t)
+    };
+    let (ixx, ixy, ixz, iyy, iyz, izz) = (
+        get("ixx")?,
+        get("ixy")?,
+        get("ixz")?,
+        get("iyy")?,
+        get("iyz")?,
+        get("izz")?,
+    );
+    let ic = DMat3::from_cols(
+        DVec3::new(ixx, ixy, ixz),
+        DVec3::new(ixy, iyy, iyz),
+        DVec3::new(ixz, iyz, izz),
+    );
+    let r = frame.rotation;
+    Ok(Some(RigidBodyInertia::from_com(
+        m,
+        frame.translation,
+        r * ic * r.transpose(),
+    )))
+}
+
+/// `<limit>` of `j` (position limits only when `positional`).
+fn limit(j: Node, required: bool, positional: bool) -> Result<JointLimits, LoadError> {
+    let Some(l) = child(j, "limit") else {
+        if required {
+            return Err(err(j, LoadErrorKind::MissingElement { child: "limit" }));
+        }
+        return Ok(JointLimits::UNLIMITED);
+    };
+    let mut out = JointLimits {
+        velocity: attr_number(l, "velocity", f64::INFINITY)?,
+        effort: attr_number(l, "effort", f64::INFINITY)?,
+        ..JointLimits::UNLIMITED
+    };
+    if positional {
+        // urdfdom's defaults: 0 for a missing bound.
+        out.lower = attr_number(l, "lower", 0.0)?;
+        out.upper = attr_number(l, "upper", 0.0)?;
+        if out.lower > out.upper {
+            return Err(invalid(
+                l,
+                "lower",
+                l.attribute("lower").unwrap_or(""),
+                "greater than upper",
+            ));
+        }
+    }
+    if out.velocity < 0.0 || out.effort < 0.0 {
+        return Err(invalid(l, "velocity/effort", "", "negative"));
+    }
+    Ok(out)
+}
+
+pub(crate) fn from_document<const N: usize>(
+    robot: Node,
+    opt: &UrdfOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    let tag = robot.tag_name().name();
+    if tag != "robot" {
+        return Err(err(
+            robot,
+            LoadErrorKind::UnknownFormat {
+                root: tag.to_string(),
+            },
+        ));
+    }
+    let mut warnings = Vec::new();
+
+    let mut links: Vec<Link> = Vec::new();
+    for l in children(robot, "link") {
+        let name = attr(l, "name")?;
+        if links.iter().any(|x| x.name == name) {
+            return Err(err(
+                l,
+                LoadErrorKind::DuplicateName {
+                    name: name.to_string(),
+                },
+            ));
+        }
+        links.push(Link {
+            name: name.to_string(),
+            inertia: link_inertia(l)?,
+            elem: elem(l),
+        });
+    }
+
+    let mut edges: Vec<Edge> = Vec::new();
+    let mut locked_used = std::vec![false; opt.locked_joints.len()];
+    for j in children(robot, "joint") {
+        let name = attr(j, "name")?.to_string();
+        if edges.iter().any(|e| e.name == name) {
+            return Err(err(j, LoadErrorKind::DuplicateName { name }));
+        }
+        let ty = attr(j, "type")?;
+        let find = |tag: &'static str| -> Result<usize, LoadError> {
+            let e = child(j, tag)
+                .ok_or_else(|| err(j, LoadErrorKind::MissingElement { child: tag }))?;
+            let link = attr(e, "link")?;
+            links.iter().position(|x| x.name == link).ok_or_else(|| {
+                err(
+                    j,
+                    LoadErrorKind::UnresolvedReference {
+                        target: link.to_string(),
+                    },
+                )
+            })
+        };
+        let (parent, child_link) = (find("parent")?, find("child")?);
+        let o = origin(j)?;
+        let axis = match child(j, "axis") {
+            Some(a) => unit_axis(a, "xyz", attr_vec3(a, "xyz", DVec3::X)?)?,
+            None => DVec3::X,
+        };
+        let lock = opt.locked_joints.iter().position(|(n, _)| *n == name);
+        if let Some(k) = lock {
+            locked_used[k] = true;
+        }
+        if ty != "fixed" && lock.is_none() && child(j, "mimic").is_some() {
+            match opt.mimic {
+                MimicJoints::Reject => {
+                    return Err(err(
+                        j,
+                        LoadErrorKind::Unsupported {
+                            feature: "<mimic> (a joint coupled to another); lock the joint or \
+                                      load it as independent (UrdfOptions::mimic)"
+                                .into(),
+                        },
+                    ));
+                }
+                MimicJoints::Independent => warnings.push(format!(
+                    "mimic joint \"{name}\" loaded as an independent joint"
+                )),
+            }
+        }
+        let id = PlueckerTransform::IDENTITY;
+        let mut lim = [JointLimits::UNLIMITED; MAX_JOINT_NV];
+        let (joint, post, child_offset) = match ty {
+            "fixed" => (None, id, id),
+            "revolute" => {
+                lim[0] = limit(j, true, true)?;
+                (Some(Joint::Revolute(Revolute::new(axis))), id, id)
+            }
+            "continuous" => {
+                let pi = core::f64::consts::PI;
+                let l = limit(j, false, false)?;
+                lim[0] = JointLimits {
+                    lower: -pi,
+                    upper: pi,
+                    wraparound: true,
+                    ..l
+                };
+                (Some(Joint::Revolute(Revolute::new(axis))), id, id)
+            }
+            "prismatic" => {
+                lim[0] = limit(j, true, true)?;
+                (Some(Joint::Prismatic(Prismatic::new(axis))), id, id)
+            }
+            "floating" => (Some(Joint::SixDof(SixDof)), id, id),
+            "planar" => {
+                // Our planar joint moves in its frame's x-y plane: turn that frame so its z is the
+                // URDF normal, and give the child link its original axes back.
+                let align = DMat3::from_quat(DQuat::from_rotation_arc(DVec3::Z, axis));
+                let (post, off) = if axis == DVec3::Z {
+                    (id, id)
+                } else {
+                    (
+                        PlueckerTransform::from_rotation(align),
+                        PlueckerTransform::from_rotation(align.transpose()),
+                    )
+                };
+                (Some(Joint::Planar(Planar)), post, off)
+            }
+            _ => {
+                return Err(err(
+                    j,
+                    LoadErrorKind::UnknownJointType {
+                        joint_type: ty.to_string(),
+                    },
+                ));
+            }
+        };
+        let kind = match (joint, lock) {
+            (None, _) => EdgeKind::Fixed,
+            (Some(joint), Some(k)) => {
+                let value = opt.locked_joints[k].1;
+                if joint.nq() != 1 {
+                    return Err(err(
+                        j,
+                        LoadErrorKind::Unsupported {
+                            feature: format!("locking a {ty} joint (only 1-DOF joints lock)"),
+                        },
+                    ));
+                }
+                edges.push(Edge {
+                    parent,
+                    child: child_link,
+                    name,
+                    source_type: format!("{ty} (locked)"),
+                    origin: o * post * joint.transform(&[value]) * child_offset,
+                    kind: EdgeKind::Fixed,
+                    elem: elem(j),
+                });
+                continue;
+            }
+            (Some(joint), None) => EdgeKind::Moving {
+                joint,
+                post,
+                child_offset,
+                limits: lim,
+            },
+        };
+        edges.push(Edge {
+            parent,
+            child: child_link,
+            name,
+            source_type: ty.to_string(),
+            origin: o,
+            kind,
+            elem: elem(j),
+        });
+    }
+    if let Some(k) = locked_used.iter().position(|u| !u) {
+        return Err(err(
+            robot,
+            LoadErrorKind::UnresolvedReference {
+                target: opt.locked_joints[k].0.clone(),
+            },
+        ));
+    }
+
+    let mut has_parent = std::vec![false; links.len()];
+    for e in &edges {
+        has_parent[e.child] = true;
+    }
+    let roots: Vec<usize> = (0..links.len()).filter(|&i| !has_parent[i]).collect();
+    if roots.len() != 1 {
+        return Err(err(
+            robot,
+            LoadErrorKind::NoSingleRoot {
+                roots: roots.iter().map(|&i| links[i].name.clone()).collect(),
+            },
+        ));
+    }
+
+    let mut builder = ModelBuilder::<N>::new();
+    builder
+        .name(robot.attribute("name").unwrap_or(""))
+        .map_err(|e| err(robot, LoadErrorKind::Model(e)))?;
+    builder.gravity(GRAVITY);
+    let how = Assembly {
+        root: roots[0],
+        base: PlueckerTransform::IDENTITY,
+        floating: opt.floating_base.then_some("root_joint"),
+        order: match opt.joint_order {
+            JointOrder::Pinocchio => ChildOrder::ByName,
+            JointOrder::File => ChildOrder::File,
+        },
+        leaf_tools: opt.leaf_tools,
+        extra_tools: &opt.extra_tools,
+        doc_elem: elem(robot),
+    };
+    let assembled = assemble(&links, &edges, &how, &mut builder)?;
+    Ok(LoadedModel {
+        model: builder.build(),
+        format: Format::Urdf,
+        home: None,
+        frames: assembled.frames,
+        transforms: assembled.transforms,
+        warnings,
+    })
+}
