@@ -2,6 +2,8 @@
 //! round trip, a mailbox publish/read. (Jitter itself is measured by `rl jitter` and
 //! `scripts/jitter-vs-cyclictest`, not here.)
 
+#![allow(missing_docs)] // criterion_group! generates an undocumented pub fn
+
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
