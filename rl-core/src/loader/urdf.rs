@@ -179,9 +179,12 @@ pub(crate) fn from_document<const N: usize>(
         };
         let (parent, child_link) = (find("parent")?, find("child")?);
         let o = origin(j)?;
+        // As urdfdom: fixed and floating joints have no axis (files often write "0 0 0").
         let axis = match child(j, "axis") {
-            Some(a) => unit_axis(a, "xyz", attr_vec3(a, "xyz", DVec3::X)?)?,
-            None => DVec3::X,
+            Some(a) if ty != "fixed" && ty != "floating" => {
+                unit_axis(a, "xyz", attr_vec3(a, "xyz", DVec3::X)?)?
+            }
+            _ => DVec3::X,
         };
         let lock = opt.locked_joints.iter().position(|(n, _)| *n == name);
         if let Some(k) = lock {
@@ -300,6 +303,9 @@ pub(crate) fn from_document<const N: usize>(
         ));
     }
 
+    if links.is_empty() {
+        return Err(err(robot, LoadErrorKind::MissingElement { child: "link" }));
+    }
     let mut has_parent = std::vec![false; links.len()];
     for e in &edges {
         has_parent[e.child] = true;

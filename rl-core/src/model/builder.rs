@@ -27,7 +27,7 @@ fn check_inertia(i: &RigidBodyInertia, body: usize) -> Result<(), ModelError> {
         && i.rotational.to_cols_array().iter().all(|x| x.is_finite());
     let ic = i.inertia_com();
     let (a, b, c) = (ic.col(0).x, ic.col(1).y, ic.col(2).z);
-    let tol = 1e-9 * (a.abs() + b.abs() + c.abs()).max(1e-12);
+    let tol = (1e-9 * (a.abs() + b.abs() + c.abs())).max(1e-12);
     // Moments about the COM are non-negative. (The triangle inequality of physical bodies is not
     // required: RL's own Puma 560 model has I = diag(0, 0.35, 0), a rotor-only inertia.)
     let physical = i.mass >= 0.0 && a >= -tol && b >= -tol && c >= -tol;
