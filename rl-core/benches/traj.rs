@@ -1,2 +1,100 @@
-//! Trajectory benchmarks (issue 4; being built).
-fn main() {}
+//! Trajectory benchmarks, 7 axes (issue 4): evaluation of position, velocity, acceleration and
+//! jerk, and construction of a quintic at rest, a cubic spline through 6 waypoints and a
+//! jerk-limited profile at rest. `scripts/bench-ruckig` runs this and Ruckig in one go.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::{DQuat, DVec3};
+use rl_core::traj::{
+    CubicQuaternionSpline, JerkLimited, Limits, Piecewise, Polynomial, RotationTrajectory,
+    Trajectory, spline,
+};
+
+const TIMES: [f64; 6] = [0.0, 0.5, 1.2, 2.0, 2.4, 3.0];
+const POINTS: [[f64; 7]; 6] = [
+    [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+    [0.5, -0.1, 0.0, 0.8, 0.1, 0.0, -0.6],
+    [1.0, 0.3, -0.4, 0.2, 0.0, 0.9, 0.2],
+    [0.2, 0.5, 0.1, -0.3, 0.6, 0.3, 0.0],
+    [-0.4, 0.0, 0.7, 0.0, 0.2, -0.2, 0.4],
+    [0.0, 0.2, 0.3, 0.1, -0.5, 0.1, 0.2],
+];
+
+/// Walks `t` through the trajectory at 1 kHz so every call evaluates a different time.
+fn eval<const D: usize, T: Trajectory<D>>(c: &mut Criterion, name: &str, traj: &T) {
+    let end = traj.duration();
+    let mut t = 0.0;
+    c.bench_function(name, |b| {
+        b.iter(|| {
+            t += 0.001;
+            if t > end {
+                t = 0.0;
+            }
+            black_box(traj.sample(black_box(t)))
+        })
+    });
+}
+
+fn evaluation(c: &mut Criterion) {
+    let limits = Limits::<7>::uniform(1.0, 2.0, 10.0);
+    let quintic = Polynomial::quintic_at_rest(POINTS[0], POINTS[1], &limits).unwrap();
+    eval(c, "eval/quintic_7", &quintic);
+    let cubic: Piecewise<Polynomial<7, 4>, 8> = spline::natural_cubic(&TIMES, &POINTS).unwrap();
+    eval(c, "eval/cubic_spline_6wp_7", &cubic);
+    let jerk = JerkLimited::new(POINTS[0], POINTS[1], &limits).unwrap();
+    eval(c, "eval/jerk_limited_7", &jerk);
+    let sextic: Piecewise<Polynomial<7, 7>, 15> =
+        spline::six_one_six_at_rest(&POINTS, &limits).unwrap();
+    eval(c, "eval/six_one_six_6wp_7", &sextic);
+    let q = [
+        DQuat::IDENTITY,
+        DQuat::from_rotation_x(1.0),
+        DQuat::from_rotation_y(0.5),
+        DQuat::from_rotation_z(-0.7),
+    ];
+    let rot: CubicQuaternionSpline<4> =
+        CubicQuaternionSpline::new(&TIMES[..4], &q, DVec3::ZERO, DVec3::ZERO).unwrap();
+    let mut t = 0.0;
+    c.bench_function("eval/quaternion_spline", |b| {
+        b.iter(|| {
+            t += 0.001;
+            if t > 2.0 {
+                t = 0.0;
+            }
+            black_box(rot.rotation(black_box(t)))
+        })
+    });
+}
+
+fn construction(c: &mut Criterion) {
+    let limits = Limits::<7>::uniform(1.0, 2.0, 10.0);
+    c.bench_function("build/quintic_at_rest_7", |b| {
+        b.iter(|| {
+            Polynomial::quintic_at_rest(
+                black_box(POINTS[0]),
+                black_box(POINTS[1]),
+                black_box(&limits),
+            )
+        })
+    });
+    c.bench_function("build/cubic_spline_6wp_7", |b| {
+        b.iter(|| {
+            let s: Result<Piecewise<Polynomial<7, 4>, 8>, _> =
+                spline::natural_cubic(black_box(&TIMES), black_box(&POINTS));
+            s
+        })
+    });
+    c.bench_function("build/jerk_limited_7", |b| {
+        b.iter(|| {
+            JerkLimited::new(
+                black_box(POINTS[0]),
+                black_box(POINTS[1]),
+                black_box(&limits),
+            )
+        })
+    });
+}
+
+criterion_group!(benches, evaluation, construction);
+criterion_main!(benches);

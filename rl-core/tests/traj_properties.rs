@@ -107,7 +107,7 @@ proptest! {
     #[test]
     fn blends_are_continuous((times, points) in waypoints(), f in 0.05f64..=1.0) {
         let s: Piecewise<Polynomial<D, 7>, 15> = spline::linear_with_blends(&times, &points, BlendShape::Sextic, BlendTime::Fraction(f)).unwrap();
-        s.check_continuity(3, 1e-7).unwrap();
+        s.check_continuity(3, 1e-9).unwrap();
         assert_close("end", s.position(s.duration()), *points.last().unwrap(), 1e-9);
     }
 

@@ -323,11 +323,13 @@ impl<const D: usize, const C: usize> Polynomial<D, C> {
             c[0] = x0;
         }
         if duration > 0.0 {
+            let inv = 1.0 / duration;
             let mut scale = 1.0;
             for k in 1..C {
-                scale *= duration;
+                scale *= inv;
+                let f = shape[k] * scale;
                 for axis in 0..D {
-                    c[k][axis] = (x1[axis] - x0[axis]) * shape[k] / scale;
+                    c[k][axis] = (x1[axis] - x0[axis]) * f;
                 }
             }
         }
@@ -370,19 +372,17 @@ pub(crate) fn at_rest_duration<const D: usize>(
             });
         }
     }
-    let mut duration: f64 = 0.0;
+    // The root functions are monotonic, so take the maxima first and one root of each.
+    let (mut tv, mut ta2, mut tj3) = (0.0f64, 0.0f64, 0.0f64);
     let mut moving = false;
     for axis in 0..D {
         let h = libm::fabs(x1[axis] - x0[axis]);
-        if h == 0.0 {
-            continue;
-        }
-        moving = true;
-        duration = duration
-            .max(h * peaks[0] / limits.velocity[axis])
-            .max(libm::sqrt(h * peaks[1] / limits.acceleration[axis]))
-            .max(libm::cbrt(h * peaks[2] / limits.jerk[axis]));
+        moving |= h != 0.0;
+        tv = tv.max(h * peaks[0] / limits.velocity[axis]);
+        ta2 = ta2.max(h * peaks[1] / limits.acceleration[axis]);
+        tj3 = tj3.max(h * peaks[2] / limits.jerk[axis]);
     }
+    let duration = tv.max(libm::sqrt(ta2)).max(libm::cbrt(tj3));
     if moving && !(duration > 0.0 && duration.is_finite()) {
         return Err(TrajectoryError::Unreachable);
     }

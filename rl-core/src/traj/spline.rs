@@ -90,7 +90,14 @@ fn cubic<const D: usize, const MAX: usize>(
     let mut c_prime = [0.0; MAX];
     let mut d_prime = [[0.0; D]; MAX];
     let h = |i: usize| times[i + 1] - times[i];
-    let slope = |i: usize, axis: usize| (points[i + 1][axis] - points[i][axis]) / h(i);
+    let mut slopes = [[0.0; D]; MAX];
+    for i in 0..last {
+        let inv = 1.0 / h(i);
+        for axis in 0..D {
+            slopes[i][axis] = (points[i + 1][axis] - points[i][axis]) * inv;
+        }
+    }
+    let slope = |i: usize, axis: usize| slopes[i][axis];
     let row = |i: usize| -> (f64, f64, f64, [f64; D]) {
         let mut rhs = [0.0; D];
         if i == 0 {
@@ -129,10 +136,11 @@ fn cubic<const D: usize, const MAX: usize>(
         if denom == 0.0 || !denom.is_finite() {
             return Err(TrajectoryError::Degenerate);
         }
-        let c = sup / denom;
+        let inv = 1.0 / denom;
+        let c = sup * inv;
         let mut d = [0.0; D];
         for axis in 0..D {
-            d[axis] = (rhs[axis] - sub * prev_d[axis]) / denom;
+            d[axis] = (rhs[axis] - sub * prev_d[axis]) * inv;
         }
         if i < last {
             c_prime[i] = c;
@@ -157,11 +165,12 @@ fn cubic<const D: usize, const MAX: usize>(
         let m0 = d_prime[i];
         let m1 = if i + 1 < last { d_prime[i + 1] } else { m_last };
         let mut c = [[0.0; D]; 4];
+        let inv6h = 1.0 / (6.0 * hi);
         for axis in 0..D {
             c[0][axis] = points[i][axis];
-            c[1][axis] = slope(i, axis) - hi * (2.0 * m0[axis] + m1[axis]) / 6.0;
+            c[1][axis] = slope(i, axis) - hi * (2.0 * m0[axis] + m1[axis]) * (1.0 / 6.0);
             c[2][axis] = 0.5 * m0[axis];
-            c[3][axis] = (m1[axis] - m0[axis]) / (6.0 * hi);
+            c[3][axis] = (m1[axis] - m0[axis]) * inv6h;
         }
         spline.push(Polynomial::new(c, hi)?)?;
     }
