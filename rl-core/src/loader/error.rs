@@ -1,5 +1,6 @@
 //! Why a model file could not be loaded, and where.
 
+use std::boxed::Box;
 use std::fmt;
 use std::path::PathBuf;
 use std::string::String;
@@ -161,8 +162,8 @@ impl fmt::Display for LoadErrorKind {
 pub struct LoadError {
     /// The file, when loading from a file.
     pub path: Option<PathBuf>,
-    /// The element at fault, when there is one.
-    pub element: Option<ElementRef>,
+    /// The element at fault, when there is one (boxed to keep `Result`s small).
+    pub element: Option<Box<ElementRef>>,
     /// What went wrong.
     pub kind: LoadErrorKind,
 }
@@ -172,7 +173,7 @@ impl LoadError {
     pub(crate) fn at(element: ElementRef, kind: LoadErrorKind) -> Self {
         Self {
             path: None,
-            element: Some(element),
+            element: Some(Box::new(element)),
             kind,
         }
     }

@@ -25,6 +25,7 @@ pub(crate) struct Node {
 }
 
 /// How a transform moves.
+#[allow(clippy::large_enum_variant)] // a few per file, built once at load time
 pub(crate) enum EdgeKind {
     /// A constant transform (also URDF joints locked at a value).
     Fixed,
