@@ -53,4 +53,4 @@ pub mod thread;
 pub use clock::MonoTime;
 pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy, StopFlag};
 pub use stats::{Histogram, LoopStats, Summary};
-pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadError};
+pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadCounters, ThreadError};

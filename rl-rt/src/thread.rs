@@ -27,6 +27,7 @@ use std::thread::{self, JoinHandle};
 
 use nix::errno::Errno;
 use nix::sched::{CpuSet, sched_getaffinity, sched_setaffinity};
+use nix::sys::resource::{UsageWho, getrusage};
 use nix::unistd::Pid;
 
 use crate::memory::{self, MemoryError};
@@ -126,6 +127,61 @@ pub fn current_scheduling() -> Result<Scheduling, ThreadError> {
         priority,
         cpus,
     })
+}
+
+/// Per-thread counters of what disturbs a real-time loop: page faults (a locked, prefaulted
+/// loop has none) and context switches (involuntary ones mean something preempted it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ThreadCounters {
+    /// Page faults served without I/O.
+    pub minor_faults: u64,
+    /// Page faults that needed I/O.
+    pub major_faults: u64,
+    /// Times the thread gave up the CPU (sleeping, blocking).
+    pub voluntary_switches: u64,
+    /// Times the thread was preempted.
+    pub involuntary_switches: u64,
+}
+
+impl ThreadCounters {
+    /// The calling thread's counters since it started (`getrusage(RUSAGE_THREAD)`).
+    pub fn current() -> Result<Self, Errno> {
+        let u = getrusage(UsageWho::RUSAGE_THREAD)?;
+        let n = |v: libc::c_long| u64::try_from(v).unwrap_or(0);
+        Ok(Self {
+            minor_faults: n(u.minor_page_faults()),
+            major_faults: n(u.major_page_faults()),
+            voluntary_switches: n(u.voluntary_context_switches()),
+            involuntary_switches: n(u.involuntary_context_switches()),
+        })
+    }
+
+    /// The counts from `earlier` to `self`.
+    pub fn since(&self, earlier: &Self) -> Self {
+        Self {
+            minor_faults: self.minor_faults.saturating_sub(earlier.minor_faults),
+            major_faults: self.major_faults.saturating_sub(earlier.major_faults),
+            voluntary_switches: self
+                .voluntary_switches
+                .saturating_sub(earlier.voluntary_switches),
+            involuntary_switches: self
+                .involuntary_switches
+                .saturating_sub(earlier.involuntary_switches),
+        }
+    }
+}
+
+impl fmt::Display for ThreadCounters {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "page faults {} minor / {} major, context switches {} voluntary / {} involuntary",
+            self.minor_faults,
+            self.major_faults,
+            self.voluntary_switches,
+            self.involuntary_switches
+        )
+    }
 }
 
 /// Why a real-time thread could not be set up as asked.

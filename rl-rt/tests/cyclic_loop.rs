@@ -60,6 +60,7 @@ fn record(
             policy: OverrunPolicy::Skip,
             start: start_guess,
             finished: MonoTime::now(),
+            counters: None,
         });
         (report, seen, stats)
     })

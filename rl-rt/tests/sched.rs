@@ -99,7 +99,22 @@ fn memory_locks_and_a_fifo_loop_returns_its_report_through_join() {
         .expect("VmLck line");
     assert_ne!(locked, "0 kB", "mlockall locked nothing");
     nix::sys::mman::munlockall().expect("unlock again for the other tests");
-    eprintln!("SCHED_FIFO 60 loop: {}", report.stats);
+    let counters = report
+        .counters
+        .expect("getrusage(RUSAGE_THREAD) works on Linux");
+    eprintln!("SCHED_FIFO 60 loop: {}\n{counters}", report.stats);
+    assert_eq!(
+        counters.major_faults, 0,
+        "locked memory must not page in during the loop"
+    );
+    assert_eq!(
+        counters.minor_faults, 0,
+        "locked, prefaulted: no page is touched first in the loop"
+    );
+    assert!(
+        counters.voluntary_switches > 0,
+        "the loop sleeps between cycles"
+    );
 }
 
 #[test]

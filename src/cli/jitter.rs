@@ -234,6 +234,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
             "mlockall": !args.no_mlock,
             "cpu_dma_latency_us": cpu_dma_latency_us,
             "interrupted": interrupted,
+            "minor_faults": report.counters.map(|c| c.minor_faults),
+            "major_faults": report.counters.map(|c| c.major_faults),
+            "involuntary_switches": report.counters.map(|c| c.involuntary_switches),
             "step": {
                 "mean_us": us(stats.step.summary().mean_ns),
                 "max_us": us(stats.step.summary().max_ns),
@@ -252,6 +255,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
             if interrupted { " (interrupted)" } else { "" }
         );
         println!("{stats}");
+        if let Some(c) = report.counters {
+            println!("loop thread: {c}");
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
