@@ -240,3 +240,51 @@ fn the_world_transform_places_the_base() {
     let d = fk_tool(&b.model, &q, 0).translation - fk_tool(&a.model, &q, 0).translation;
     assert!((d - DVec3::new(2.0, 0.0, 0.0)).length() < 1e-12, "{d}");
 }
+
+#[test]
+fn prismatic_helical_and_cylindrical_offsets_follow_rl() {
+    let text = r#"<rlmdl><model><name>joints</name><world id="w"><g><z>9.81</z></g></world>
+    <body id="a"/><body id="b"/><body id="c"/><frame id="t"/>
+    <prismatic id="p"><frame><a idref="w"/><b idref="a"/></frame>
+      <axis><x>1</x><y>0</y><z>0</z></axis><max>2</max><min>-1</min><offset>0.5</offset><speed>0.3</speed></prismatic>
+    <helical id="h"><frame><a idref="a"/><b idref="b"/></frame><offset>2</offset><pitch>0.1</pitch></helical>
+    <cylindrical id="c"><frame><a idref="b"/><b idref="c"/></frame><offset>0.3</offset><offset>0.2</offset></cylindrical>
+    <fixed id="f"><frame><a idref="c"/><b idref="t"/></frame><translation><x>1</x></translation></fixed>
+    </model></rlmdl>"#;
+    let m: LoadedModel<N> = loader::load_rlmdl_str(text).unwrap();
+    assert_eq!((m.model.nq(), m.model.dof()), (4, 4));
+    let l = m.model.limits(0);
+    assert_eq!((l.lower, l.upper, l.velocity), (-1.0, 2.0, 0.3));
+    // Prismatic: x = q + 0.5. Helical (RL's quirk): rotation by q, translation 0.1 (q + 2).
+    // Cylindrical: rotation q0 + 0.3, translation q1 + 0.2.
+    for q in [[0.0, 0.0, 0.0, 0.0], [0.1, 0.5, 0.2, 0.1]] {
+        let x = fk_tool(&m.model, &q, 0).translation;
+        let angle = q[1] + q[2] + 0.3;
+        let expected = DVec3::new(
+            q[0] + 0.5 + angle.cos(),
+            angle.sin(),
+            0.1 * (q[1] + 2.0) + q[3] + 0.2,
+        );
+        assert!((x - expected).length() < 1e-12, "{q:?}: {x} vs {expected}");
+    }
+}
+
+#[test]
+fn elements_rl_ignores_are_reported() {
+    // comau-smart5 has a <gamma> element, which RL's XmlFactory does not read (it reads
+    // gammaPosition/gammaVelocity).
+    let m = load("comau-smart5-nj4-220-27.xml");
+    assert!(
+        m.warnings.iter().any(|w| w.contains("<gamma>")),
+        "{:?}",
+        m.warnings
+    );
+    let home = m.home.as_ref().unwrap();
+    assert!((home[2] + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    let kr16 = load("kuka-kr16-2.xml");
+    assert!(
+        kr16.warnings.iter().any(|w| w.contains("\"frame1\"")),
+        "{:?}",
+        kr16.warnings
+    );
+}
