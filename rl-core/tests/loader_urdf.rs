@@ -441,3 +441,10 @@ fn load_str_dispatches_on_the_root_element() {
     assert_eq!(r.model.gravity(), DVec3::new(0.0, 0.0, -9.81));
     assert_eq!(u.model.gravity(), DVec3::new(0.0, 0.0, -9.80665));
 }
+
+#[test]
+fn a_long_model_name_is_cut_not_refused() {
+    let long = "Ä".repeat(40); // 80 bytes
+    let m = urdf(&branches().replace("name=\"tree\"", &format!("name=\"{long}\"")));
+    assert_eq!(m.model.name(), "Ä".repeat(31));
+}

@@ -194,6 +194,16 @@ impl<const N: usize> LoadedModel<N> {
     }
 }
 
+/// A model's display name cut to what [`crate::model::Name`] holds (at a character boundary):
+/// unlike body and joint names it identifies nothing, so a long one is no error.
+fn display_name(s: &str) -> &str {
+    let mut end = s.len();
+    while !(s.is_char_boundary(end) && crate::model::Name::try_new(&s[..end]).is_some()) {
+        end -= 1;
+    }
+    &s[..end]
+}
+
 /// Loads RL XML or URDF from `text`, by its root element; URDF with `urdf` options.
 pub fn load_str<const N: usize>(
     text: &str,

@@ -179,7 +179,7 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
         .unwrap_or("")
         .trim();
     builder
-        .name(name)
+        .name(super::display_name(name))
         .map_err(|e| err(model, LoadErrorKind::Model(e)))?;
     // `<g>` is the acceleration of the base that stands in for gravity, in world-frame axes.
     builder.gravity(-(world_rotation * g));

@@ -322,7 +322,7 @@ pub(crate) fn from_document<const N: usize>(
 
     let mut builder = ModelBuilder::<N>::new();
     builder
-        .name(robot.attribute("name").unwrap_or(""))
+        .name(super::display_name(robot.attribute("name").unwrap_or("")))
         .map_err(|e| err(robot, LoadErrorKind::Model(e)))?;
     builder.gravity(GRAVITY);
     let how = Assembly {
