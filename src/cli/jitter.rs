@@ -184,6 +184,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
             rl_rt::ThreadError::InvalidPriority { .. } | rl_rt::ThreadError::InvalidCpu { .. } => {
                 CliError::usage(e.to_string())
             }
+            e @ rl_rt::ThreadError::PermissionDenied { .. } => CliError::failed(format!(
+                "{e}; or measure without real-time scheduling: --policy other"
+            )),
             e => CliError::failed(e.to_string()),
         })?;
     let granted = thread.granted().clone();
