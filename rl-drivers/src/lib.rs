@@ -39,6 +39,7 @@
 pub mod capability;
 pub mod device;
 pub mod proto;
+pub mod typestate;
 
 #[cfg(feature = "std")]
 pub mod coach;

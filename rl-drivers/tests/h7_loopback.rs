@@ -373,3 +373,28 @@ fn rls_reply_types_work_and_pulses_follow_joints() {
     }
     robot.stop().unwrap();
 }
+
+#[test]
+fn the_typestate_wrapper_walks_the_life_cycle() {
+    use rl_drivers::typestate::Closed;
+    let fake = fake();
+    let robot = Closed::new(device(&fake)).unwrap();
+    let mut robot = robot
+        .open()
+        .map_err(|(e, _)| e)
+        .unwrap()
+        .start()
+        .map_err(|(e, _)| e)
+        .unwrap();
+    robot.device_mut().set_joint_position(&[0.1; DOF]).unwrap();
+    robot.step().unwrap();
+    let robot = robot
+        .stop()
+        .map_err(|(e, _)| e)
+        .unwrap()
+        .close()
+        .map_err(|(e, _)| e)
+        .unwrap();
+    assert_eq!(robot.device().state(), State::Closed);
+    assert_eq!(fake.status().moves, 1);
+}
