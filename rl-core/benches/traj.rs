@@ -2,6 +2,9 @@
 //! jerk, and construction of a quintic at rest, a cubic spline through 6 waypoints and a
 //! jerk-limited profile at rest. `scripts/bench-ruckig` runs this and Ruckig in one go.
 
+// criterion_group! generates an undocumented public function.
+#![allow(missing_docs)]
+
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};

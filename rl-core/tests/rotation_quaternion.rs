@@ -134,7 +134,7 @@ fn squad_interpolates_and_is_smooth_at_waypoints() {
     let mut rng = Rng(17);
     for _ in 0..50 {
         let mut q = [DQuat::IDENTITY; 4];
-        for (i, qi) in q.iter_mut().enumerate() {
+        for qi in q.iter_mut() {
             *qi = random_quat(&mut rng);
         }
         for i in 1..4 {

@@ -100,9 +100,9 @@ fn axes_synchronise_to_the_slowest_and_keep_their_limits() {
     let alone = JerkLimited::axis_durations(a, b, &l);
     let slowest = alone.iter().copied().fold(0.0, f64::max);
     assert_eq!(p.duration(), slowest);
-    for axis in 0..4 {
-        // Every axis ends when the slowest does.
-        assert!((p.phase_ends(axis).unwrap()[6] - slowest).abs() < 1e-12 || alone[axis] == 0.0);
+    for (axis, own) in alone.iter().enumerate() {
+        // Every moving axis ends when the slowest does.
+        assert!((p.phase_ends(axis).unwrap()[6] - slowest).abs() < 1e-12 || *own == 0.0);
     }
     check_profile(&p, a, b, &l);
     check_finite_differences(&p, 2, 211, &[]);
