@@ -85,10 +85,9 @@ impl Profile {
 
     #[inline]
     fn phase(&self, t: f64) -> (usize, f64) {
-        let mut i = 0;
-        while i < 6 && t >= self.end[i] {
-            i += 1;
-        }
+        // Phase ends are sorted: the phase index is how many of the first six have passed
+        // (branch-free; NaN counts none).
+        let i = self.end[..6].iter().filter(|&&e| t >= e).count();
         (i, t - self.start[i])
     }
 
