@@ -182,7 +182,7 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
         .name(super::display_name(name))
         .map_err(|e| err(model, LoadErrorKind::Model(e)))?;
     // `<g>` is the acceleration of the base that stands in for gravity, in world-frame axes.
-    builder.gravity(-(world_rotation * g));
+    builder.gravity(DVec3::ZERO - world_rotation * g); // not -(..): no -0.0
     let how = Assembly {
         root: world_index,
         base: PlueckerTransform::new(world_rotation, world_translation),
