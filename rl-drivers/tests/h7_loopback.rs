@@ -398,3 +398,103 @@ fn the_typestate_wrapper_walks_the_life_cycle() {
     assert_eq!(robot.device().state(), State::Closed);
     assert_eq!(fake.status().moves, 1);
 }
+
+#[test]
+fn speed_limits_bound_the_simulated_motion() {
+    let config = FakeH7Config::loopback(DOF)
+        .with_speed_limits(&[0.5; DOF])
+        .unwrap();
+    let fake = FakeH7::spawn(config).unwrap();
+    let mut robot = running(&fake);
+    robot.set_joint_position(&[1.0; DOF]).unwrap();
+    for _ in 0..10 {
+        robot.step().unwrap();
+    }
+    let moved = fake.status().actual_rad[0];
+    // 0.5 rad/s for 10 (of the 10 after the command) cycles of 7.11 ms.
+    assert!((moved - 0.5 * 10.0 * 0.00711).abs() < 1e-9, "moved {moved}");
+    assert!(
+        FakeH7Config::loopback(DOF)
+            .with_speed_limits(&[0.5; 2])
+            .is_err()
+    );
+    assert!(
+        FakeH7Config::loopback(DOF)
+            .with_limits(&[1.0; DOF], &[0.0; DOF])
+            .is_err()
+    );
+}
+
+#[test]
+fn joint_limits_clamp_commands_and_are_counted() {
+    let config = FakeH7Config::loopback(DOF)
+        .with_limits(&[-0.1; DOF], &[0.1; DOF])
+        .unwrap();
+    let fake = FakeH7::spawn(config).unwrap();
+    let mut robot = running(&fake);
+    robot
+        .set_joint_position(&[0.5, 0.0, 0.0, 0.0, 0.0, -0.05])
+        .unwrap();
+    for _ in 0..200 {
+        robot.step().unwrap();
+    }
+    let s = fake.status();
+    assert_eq!(s.limit_hits, 1);
+    assert!((s.actual_rad[0] - 0.1).abs() < 1e-9 && (s.actual_rad[5] + 0.05).abs() < 1e-9);
+}
+
+#[test]
+fn cartesian_mode_commands_poses_in_mm() {
+    use rl_drivers::proto::h7::Mode;
+    use rl_drivers::{CartesianPositionActuator, CartesianPositionSensor, Pose};
+    let fake = fake();
+    let mut config = MitsubishiH7Config::new(DOF, fake.udp_addr(), fake.r3_addr());
+    config.mode = Mode::Pose;
+    let mut robot = MitsubishiH7::new(config).unwrap();
+    robot.open().unwrap();
+    robot.start().unwrap();
+    assert!(fake.status().program.contains("MXT 1,0,0"));
+    assert_eq!(
+        robot.set_joint_position(&[0.0; DOF]).unwrap_err().kind(),
+        ErrorKind::InvalidArgument
+    );
+    let pose = Pose {
+        position_m: [0.4, -0.1, 0.3],
+        abc_rad: [3.0, 0.1, -1.0],
+    };
+    robot.set_cartesian_position(&pose).unwrap();
+    let sent = robot.request().dat.pose();
+    assert_eq!(sent.xyz_mm, [400.0, -100.0, 300.0]);
+    for _ in 0..200 {
+        robot.step().unwrap();
+    }
+    let got = robot.cartesian_position().unwrap();
+    for k in 0..3 {
+        assert!(
+            (got.position_m[k] - pose.position_m[k]).abs() < 1e-6,
+            "position {k}"
+        );
+        assert!((got.abc_rad[k] - pose.abc_rad[k]).abs() < 1e-6, "angle {k}");
+    }
+    robot.stop().unwrap();
+}
+
+#[test]
+fn pulse_mode_writes_pulses_to_the_first_data_block() {
+    use rl_drivers::proto::h7::{Data, Mode};
+    let fake = fake();
+    let mut config = MitsubishiH7Config::new(DOF, fake.udp_addr(), fake.r3_addr());
+    config.mode = Mode::Pulse;
+    let mut robot = MitsubishiH7::new(config).unwrap();
+    robot.open().unwrap();
+    robot.start().unwrap();
+    let pulses = [1000, -2000, 3000, 0, 5, -6];
+    robot.set_motor_pulse(&pulses).unwrap();
+    assert_eq!(robot.request().send_type, MxtType::Pulse);
+    assert_eq!(robot.request().dat.i32s()[..DOF], pulses);
+    assert_eq!(robot.request().dat2, Data::ZERO, "not RL's third block");
+    robot.step().unwrap();
+    let per_rad = 2f64.powi(20) / std::f64::consts::TAU;
+    assert!((fake.status().commanded_rad[1] - (-2000.0 / per_rad)).abs() < 1e-12);
+    robot.stop().unwrap();
+}

@@ -5,9 +5,13 @@
 //! The simulated arm: each received packet advances it by one controller cycle. A joint command
 //! is clamped to the joint limits (counted as limit hits) and becomes the target; the actual
 //! joints follow the target through a first-order filter with a time constant of
-//! `filter_cycles` cycles. The fake has no kinematic model: pose replies hold the last commanded
+//! `filter_cycles` cycles, each joint's motion per cycle clamped to its speed limit. The joint
+//! and speed limits are plain data ([`FakeH7Config::with_limits`],
+//! [`FakeH7Config::with_speed_limits`]) so they can come from a loaded robot model. Reply type
+//! 2 (joint command) reports the clamped target; types 5 and 8 (after filter, encoder feedback)
+//! report the simulated joints. The fake has no kinematic model: pose replies hold the last commanded
 //! pose (followed through the same filter); pulses are joints × `pulses_per_rad`; currents are a
-//! synthetic `gain × (target − actual)` clamped to ±100 %.
+//! synthetic `1000 %/rad × (target − actual)` clamped to ±100 %.
 
 use std::collections::HashMap;
 use std::io::{self, Read, Write};
@@ -18,7 +22,7 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use crate::proto::h7::{
-    Command, Data, DataShape, IoType, MAX_AXES, MxtType, PACKET_LEN, Packet, PoseData,
+    CYCLE_US, Command, Data, DataShape, IoType, MAX_AXES, MxtType, PACKET_LEN, Packet, PoseData,
 };
 use crate::proto::r3::{self, DState, Request, run_bits};
 
@@ -66,6 +70,8 @@ pub struct FakeH7Config {
     pub initial_rad: [f64; MAX_AXES],
     /// Time constant of the controller's filter in cycles (0: the arm reaches the target at once).
     pub filter_cycles: u32,
+    /// Joint speed limits in rad/s (infinite: none); the filtered motion is clamped to them.
+    pub max_speed_rad_s: [f64; MAX_AXES],
     /// Motor pulses per rad, for pulse replies.
     pub pulses_per_rad: f64,
     /// DSTATE polls after `SRVON` before the servo reports on (exercises a client's polling).
@@ -86,10 +92,33 @@ impl FakeH7Config {
             upper_rad: [core::f64::consts::PI; MAX_AXES],
             initial_rad: [0.0; MAX_AXES],
             filter_cycles: 2,
+            max_speed_rad_s: [f64::INFINITY; MAX_AXES],
             pulses_per_rad: 2f64.powi(20) / core::f64::consts::TAU,
             servo_on_polls: 2,
             fault: None,
         }
+    }
+
+    /// Sets the joint speed limits (rad/s) from a slice of length `dof`.
+    pub fn with_speed_limits(mut self, max_speed_rad_s: &[f64]) -> io::Result<Self> {
+        if max_speed_rad_s.len() != self.dof {
+            return Err(invalid(format!(
+                "speed limits: expected {} values, got {}",
+                self.dof,
+                max_speed_rad_s.len()
+            )));
+        }
+        if let Some((i, v)) = max_speed_rad_s
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(**v > 0.0))
+        {
+            return Err(invalid(format!(
+                "joint {i}: speed limit {v} is not positive"
+            )));
+        }
+        self.max_speed_rad_s[..self.dof].copy_from_slice(max_speed_rad_s);
+        Ok(self)
     }
 
     /// Sets the joint limits from slices of length `dof`.
@@ -425,9 +454,11 @@ impl Shared {
 
     fn advance(&mut self) {
         let alpha = 1.0 / (1.0 + f64::from(self.config.filter_cycles));
+        let cycle_s = CYCLE_US as f64 * 1e-6;
         for i in 0..self.config.dof {
             let a = &mut self.status.actual_rad[i];
-            *a += alpha * (self.target_rad[i] - *a);
+            let max_step = self.config.max_speed_rad_s[i] * cycle_s;
+            *a += (alpha * (self.target_rad[i] - *a)).clamp(-max_step, max_step);
         }
         let f = |a: &mut f32, t: f32| *a += (alpha as f32) * (t - *a);
         let t = self.target_pose;
