@@ -288,3 +288,16 @@ fn elements_rl_ignores_are_reported() {
         kr16.warnings
     );
 }
+
+#[test]
+fn a_turned_world_turns_gravity_with_it() {
+    // RL's <g> is given in the world frame's axes; the world frame is turned by its rotation.
+    let text = r#"<rlmdl><model><world id="w"><rotation><x>90</x></rotation>
+        <g><z>9.81</z></g></world><body id="b"/>
+        <revolute id="j"><frame><a idref="w"/><b idref="b"/></frame></revolute></model></rlmdl>"#;
+    let m: LoadedModel<N> = loader::load_rlmdl_str(text).unwrap();
+    assert!((m.model.gravity() - DVec3::new(0.0, 9.81, 0.0)).length() < 1e-12);
+    // The joint axis (z of the world frame) is the absolute -y axis.
+    let x = *m.model.placement(0);
+    assert!((x.rotation * DVec3::Z - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
+}
