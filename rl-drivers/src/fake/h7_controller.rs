@@ -111,7 +111,7 @@ impl FakeH7Config {
         if let Some((i, v)) = max_speed_rad_s
             .iter()
             .enumerate()
-            .find(|(_, v)| !(**v > 0.0))
+            .find(|(_, v)| v.is_nan() || **v <= 0.0)
         {
             return Err(invalid(format!(
                 "joint {i}: speed limit {v} is not positive"
