@@ -136,6 +136,8 @@ pub fn check() -> Report {
             cpu_governor(),
             isolated_cpus(),
             clock_source(),
+            idle_states(),
+            virtualisation(),
             memlock(),
             rtprio(),
             fifo_permitted(),
@@ -302,6 +304,92 @@ fn clock_source() -> Item {
     }
 }
 
+fn idle_states() -> Item {
+    let name = "CPU idle states";
+    let driver = read_trim("/sys/devices/system/cpu/cpuidle/current_driver");
+    let mut states = Vec::new();
+    let mut deepest_us = 0u64;
+    for i in 0.. {
+        let dir = format!("/sys/devices/system/cpu/cpu0/cpuidle/state{i}");
+        let Some(state) = read_trim(format!("{dir}/name")) else {
+            break;
+        };
+        let latency: u64 = read_trim(format!("{dir}/latency"))
+            .and_then(|l| l.parse().ok())
+            .unwrap_or(0);
+        let disabled = read_trim(format!("{dir}/disable")).is_some_and(|d| d == "1");
+        if !disabled {
+            deepest_us = deepest_us.max(latency);
+        }
+        states.push(format!(
+            "{state} {latency} µs{}",
+            if disabled { " (disabled)" } else { "" }
+        ));
+    }
+    let Some(driver) = driver else {
+        return item(name, Status::Info, "no cpuidle driver", None);
+    };
+    let found = format!("driver {driver}; states: {}", states.join(", "));
+    if deepest_us <= 10 {
+        item(name, Status::Ok, found, None)
+    } else {
+        item(
+            name,
+            Status::Warn,
+            found,
+            Some(
+                "leaving a deep idle state adds up to its exit latency to a wake-up: hold \
+                 /dev/cpu_dma_latency at 0 while the loop runs (`rl jitter` does; in code \
+                 rl_rt::cpu_latency::CpuLatencyHint::hold(0)) or limit C-states on the kernel \
+                 command line (processor.max_cstate=1, intel_idle.max_cstate=0)",
+            ),
+        )
+    }
+}
+
+/// Share of CPU time stolen by the hypervisor since boot, in percent, from /proc/stat.
+fn steal_percent() -> Option<f64> {
+    let stat = fs::read_to_string("/proc/stat").ok()?;
+    let line = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let fields: Vec<u64> = line
+        .split_whitespace()
+        .skip(1)
+        .filter_map(|f| f.parse().ok())
+        .collect();
+    let total: u64 = fields.iter().take(8).sum();
+    let steal = *fields.get(7)?;
+    (total > 0).then(|| 100.0 * steal as f64 / total as f64)
+}
+
+fn virtualisation() -> Item {
+    let name = "virtualisation";
+    let cpuinfo = fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let guest = cpuinfo
+        .lines()
+        .filter(|l| l.starts_with("flags"))
+        .any(|l| l.split_whitespace().any(|f| f == "hypervisor"));
+    let steal = steal_percent().map_or("unknown".to_owned(), |p| format!("{p:.2} %"));
+    if guest {
+        item(
+            name,
+            Status::Warn,
+            format!("running as a virtual machine guest; CPU time stolen since boot: {steal}"),
+            Some(
+                "the hypervisor can stop a virtual CPU for milliseconds (steal time), which no \
+                 guest setting removes: run on bare metal, or give the VM dedicated, pinned \
+                 physical cores",
+            ),
+        )
+    } else {
+        item(
+            name,
+            Status::Ok,
+            format!("bare metal (no hypervisor flag); steal {steal}"),
+            None,
+        )
+    }
+}
+
 fn memlock() -> Item {
     let name = "memlock limit";
     let cap = memory::has_capability(Capability::IpcLock);
@@ -410,6 +498,8 @@ mod tests {
                 "CPU frequency governor",
                 "isolated CPUs",
                 "clock source",
+                "CPU idle states",
+                "virtualisation",
                 "memlock limit",
                 "rtprio limit",
                 "SCHED_FIFO permitted"
