@@ -54,3 +54,8 @@ pub use clock::MonoTime;
 pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy, StopFlag};
 pub use stats::{Histogram, LoopStats, Summary};
 pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadCounters, ThreadError};
+
+/// The crate README's examples, compiled as doc tests so they cannot rot.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
