@@ -201,6 +201,17 @@ proptest! {
     }
 
     #[test]
+    fn g6_prints_like_glibc_printf(v in finite()) {
+        let mut ours = String::new();
+        write_g6(&mut ours, v).unwrap();
+        let mut buf = [0u8; 64];
+        // SAFETY: the buffer is 64 bytes and its length is passed; the format takes one double.
+        let n = unsafe { libc::snprintf(buf.as_mut_ptr().cast(), buf.len(), c"%g".as_ptr(), v) };
+        let theirs = std::str::from_utf8(&buf[..n as usize]).unwrap();
+        prop_assert_eq!(ours.as_str(), theirs);
+    }
+
+    #[test]
     fn coach_parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
         let _ = Message::parse(&bytes);
         let mut lines = LineBuffer::<64>::new();

@@ -159,9 +159,34 @@ pub fn write_g6<W: Write>(w: &mut W, v: f64) -> fmt::Result {
     let (mantissa, exp) = sci.split_once('e').ok_or(fmt::Error)?;
     let exp: i32 = exp.parse().map_err(|_| fmt::Error)?;
     if (-4..6).contains(&exp) {
-        let mut fixed = heapless::String::<32>::new();
-        write!(fixed, "{:.*}", (5 - exp) as usize, v)?;
-        w.write_str(trim_zeros(&fixed))
+        // Fixed notation from the same 6 rounded digits (what %g does), without formatting again.
+        if mantissa.starts_with('-') {
+            w.write_char('-')?;
+        }
+        let mut digits = [b'0'; 6];
+        for (d, b) in digits
+            .iter_mut()
+            .zip(mantissa.bytes().filter(u8::is_ascii_digit))
+        {
+            *d = b;
+        }
+        let digits = core::str::from_utf8(&digits).map_err(|_| fmt::Error)?;
+        let (int, frac, zeros) = if exp >= 0 {
+            let e = exp as usize + 1;
+            (&digits[..e], &digits[e..], 0)
+        } else {
+            ("0", digits, (-exp - 1) as usize)
+        };
+        w.write_str(int)?;
+        let frac = frac.trim_end_matches('0');
+        if !frac.is_empty() {
+            w.write_char('.')?;
+            for _ in 0..zeros {
+                w.write_char('0')?;
+            }
+            w.write_str(frac)?;
+        }
+        Ok(())
     } else {
         w.write_str(trim_zeros(mantissa))?;
         write!(
@@ -467,6 +492,11 @@ mod tests {
             (0.00001234, "1.234e-05"),
             (1e-300, "1e-300"),
             (100.0, "100"),
+            (100000.0, "100000"),
+            (-0.000123456, "-0.000123456"),
+            (0.00005, "5e-05"),
+            (12.5, "12.5"),
+            (-99999.95, "-99999.9"),
             (0.1 + 0.2, "0.3"),
         ];
         for (v, want) in cases {
