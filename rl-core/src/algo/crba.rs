@@ -1,9 +1,10 @@
 //! The joint-space mass matrix `M(q)` by the composite rigid-body algorithm (CRBA).
 //!
-//! Featherstone, *Rigid Body Dynamics Algorithms*, Table 6.2: composite inertias are
-//! accumulated from the leaves, and each column's force is carried up the body's ancestors
-//! only (the matrix is as sparse as the tree). `q`: `nq`; result: the full symmetric
-//! `dof × dof` matrix in [`Data::mass_matrix`]. O(n·depth). Does not allocate.
+//! Featherstone, *Rigid Body Dynamics Algorithms*, §6.2, in world coordinates (as Pinocchio
+//! does it): each body's inertia and motion subspace are brought to the world frame once, the
+//! composite inertias then add without transforms, and each matrix entry `M[k][l]` (DOF `l` an
+//! ancestor of DOF `k`) is a single scalar product `S_lᵀ (I^c_k S_k)`. `q`: `nq`; result: the
+//! full symmetric `dof × dof` matrix in [`Data::mass_matrix`]. O(n·depth). Does not allocate.
 
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
@@ -19,35 +20,35 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
     }
     for i in 0..model.nbodies {
         body_pose(model, data, q, i);
-        data.composite[i] = model.inertias[i];
+        let x = data.world_pose[i];
+        data.composite[i] = model.inertias[i].transform_to_parent(&x);
+        let sv = model.idx_v[i];
+        for k in sv..sv + model.joints[i].nv() {
+            data.world_subspace[k] = x.act_motion(&model.subspace[k]);
+        }
     }
     for i in (0..model.nbodies).rev() {
         let sv = model.idx_v[i];
-        let nv = model.joints[i].nv();
         let ic = data.composite[i];
-        for k in sv..sv + nv {
-            let mut f = ic.mul_motion(&model.subspace[k]);
+        for k in sv..sv + model.joints[i].nv() {
+            let f = ic.mul_motion(&data.world_subspace[k]);
+            // This joint's own block, then every ancestor's DOFs.
             for l in sv..=k {
-                let m = model.subspace[l].dot(&f);
+                let m = data.world_subspace[l].dot(&f);
                 data.mass_matrix[k][l] = m;
                 data.mass_matrix[l][k] = m;
             }
-            let mut j = i;
-            while model.parents[j] != ROOT {
-                f = data.parent_pose[j].act_force(&f);
-                j = model.parents[j];
-                let sj = model.idx_v[j];
-                for l in sj..sj + model.joints[j].nv() {
-                    let m = model.subspace[l].dot(&f);
-                    data.mass_matrix[k][l] = m;
-                    data.mass_matrix[l][k] = m;
-                }
+            let mut l = model.dof_parent[sv];
+            while l != ROOT {
+                let m = data.world_subspace[l].dot(&f);
+                data.mass_matrix[k][l] = m;
+                data.mass_matrix[l][k] = m;
+                l = model.dof_parent[l];
             }
         }
         let p = model.parents[i];
         if p != ROOT {
-            let ic_parent = ic.transform_to_parent(&data.parent_pose[i]);
-            data.composite[p] += ic_parent;
+            data.composite[p] += ic;
         }
     }
     Ok(())

@@ -19,13 +19,24 @@ pub fn forward_position<const N: usize>(
     Ok(())
 }
 
-/// Body `i`'s pose in its parent (`placement · X_J(q)`) and in the world, into `data`.
+/// Body `i`'s pose in its parent, `placement · X_J(q)`, into `data`.
 #[inline]
-pub(crate) fn body_pose<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64], i: usize) {
+pub(crate) fn local_pose<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    i: usize,
+) {
     let joint = &model.joints[i];
     let sq = model.idx_q[i];
-    let x = model.placements[i] * joint.transform(&q[sq..sq + joint.nq()]);
-    data.parent_pose[i] = x;
+    data.parent_pose[i] = joint.placed_transform(&model.placements[i], &q[sq..sq + joint.nq()]);
+}
+
+/// Body `i`'s pose in its parent and in the world, into `data`.
+#[inline]
+pub(crate) fn body_pose<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64], i: usize) {
+    local_pose(model, data, q, i);
+    let x = data.parent_pose[i];
     let p = model.parents[i];
     data.world_pose[i] = if p == ROOT { x } else { data.world_pose[p] * x };
 }

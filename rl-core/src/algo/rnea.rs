@@ -9,7 +9,7 @@ use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
 use crate::spatial::{ForceVector, MotionVector};
 
-use super::forward_position::body_pose;
+use super::forward_position::local_pose;
 
 /// `τ = RNEA(q, q̇, q̈)`, with the model's gravity.
 pub fn rnea<'d, const N: usize>(
@@ -70,45 +70,38 @@ pub(crate) fn run<const N: usize>(
         },
     );
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
-        let sv = model.idx_v[i];
-        let nv = model.joints[i].nv();
-        let mut vj = MotionVector::ZERO;
-        let mut aj = MotionVector::ZERO;
-        if let Some(qd) = qd {
-            for k in sv..sv + nv {
-                vj += model.subspace[k] * qd[k];
-            }
-        }
-        if let Some(qdd) = qdd {
-            for k in sv..sv + nv {
-                aj += model.subspace[k] * qdd[k];
-            }
-        }
+        local_pose(model, data, q, i);
         let p = model.parents[i];
         let x = &data.parent_pose[i];
-        let (vp, ap) = if p == ROOT {
-            (MotionVector::ZERO, base)
-        } else {
-            (data.v[p], data.a[p])
-        };
-        let v = x.inv_act_motion(&vp) + vj;
-        let a = x.inv_act_motion(&ap) + aj + v.cross_motion(&vj);
         let inertia = &model.inertias[i];
-        let mut f = inertia.mul_motion(&a) + v.cross_force(&inertia.mul_motion(&v));
+        let ap = if p == ROOT { base } else { data.a[p] };
+        let mut a = x.inv_act_motion(&ap);
+        if let Some(qdd) = qdd {
+            a += model.joint_motion(i, qdd);
+        }
+        let mut f;
+        if let Some(qd) = qd {
+            let vj = model.joint_motion(i, qd);
+            let v = if p == ROOT {
+                vj
+            } else {
+                x.inv_act_motion(&data.v[p]) + vj
+            };
+            a += v.cross_motion(&vj);
+            f = inertia.mul_motion(&a) + v.cross_force(&inertia.mul_motion(&v));
+            data.v[i] = v;
+        } else {
+            f = inertia.mul_motion(&a);
+        }
         if let Some(fext) = fext {
             f -= fext[i];
         }
-        data.v[i] = v;
         data.a[i] = a;
         data.f[i] = f;
     }
     for i in (0..model.nbodies).rev() {
-        let sv = model.idx_v[i];
         let f = data.f[i];
-        for k in sv..sv + model.joints[i].nv() {
-            data.tau[k] = model.subspace[k].dot(&f);
-        }
+        model.joint_force(i, &f, &mut data.tau);
         let p = model.parents[i];
         if p != ROOT {
             let fp = data.parent_pose[i].act_force(&f);

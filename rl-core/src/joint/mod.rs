@@ -141,6 +141,21 @@ impl Joint {
         }
     }
 
+    /// `placement · X_J(q)`: the child frame's pose in the frame the joint is placed in,
+    /// with the common joints' products written out (a rotation about a coordinate axis
+    /// touches two columns).
+    #[inline]
+    pub fn placed_transform(&self, placement: &PlueckerTransform, q: &[f64]) -> PlueckerTransform {
+        match self {
+            Joint::Revolute(j) => j.placed(placement, q[0]),
+            Joint::Prismatic(j) => PlueckerTransform::new(
+                placement.rotation,
+                placement.translation + placement.rotation * (j.axis * q[0]),
+            ),
+            _ => *placement * self.transform(q),
+        }
+    }
+
     /// The columns of the motion subspace `S` in child coordinates, written to `out[..nv]`.
     pub fn motion_subspace(&self, out: &mut [MotionVector]) {
         match self {

@@ -24,12 +24,47 @@ impl Revolute {
     pub fn transform(&self, q: f64) -> PlueckerTransform {
         PlueckerTransform::from_rotation(rotation(self.axis, q))
     }
+
+    /// `placement · X_J(q)`; about a coordinate axis only two columns change.
+    #[inline]
+    pub fn placed(&self, placement: &PlueckerTransform, q: f64) -> PlueckerTransform {
+        let (s, c) = crate::math::real::sin_cos(q);
+        let r = &placement.rotation;
+        let rotation = if self.axis == DVec3::Z {
+            DMat3::from_cols(
+                r.x_axis * c + r.y_axis * s,
+                r.y_axis * c - r.x_axis * s,
+                r.z_axis,
+            )
+        } else if self.axis == DVec3::X {
+            DMat3::from_cols(
+                r.x_axis,
+                r.y_axis * c + r.z_axis * s,
+                r.z_axis * c - r.y_axis * s,
+            )
+        } else if self.axis == DVec3::Y {
+            DMat3::from_cols(
+                r.x_axis * c - r.z_axis * s,
+                r.y_axis,
+                r.x_axis * s + r.z_axis * c,
+            )
+        } else {
+            *r * rotation_sc(self.axis, s, c)
+        };
+        PlueckerTransform::new(rotation, placement.translation)
+    }
 }
 
 /// The rotation matrix by `angle` about the unit vector `axis`, with the common axes exact.
 #[inline]
 pub(crate) fn rotation(axis: DVec3, angle: f64) -> DMat3 {
-    let (s, c) = (libm::sin(angle), libm::cos(angle));
+    let (s, c) = crate::math::real::sin_cos(angle);
+    rotation_sc(axis, s, c)
+}
+
+/// [`rotation`] from the angle's sine and cosine.
+#[inline]
+fn rotation_sc(axis: DVec3, s: f64, c: f64) -> DMat3 {
     if axis == DVec3::Z {
         DMat3::from_cols(DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0), DVec3::Z)
     } else if axis == DVec3::X {

@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::{JointLimits, Name};
 use crate::joint::{Joint, Revolute};
-use crate::spatial::{MotionVector, PlueckerTransform, RigidBodyInertia};
+use crate::spatial::{ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia};
 
 /// The parent index of a body attached to the world (the fixed base).
 pub const ROOT: usize = usize::MAX;
@@ -212,6 +212,38 @@ impl<const N: usize> Model<N> {
             b = self.parents[b];
         }
         false
+    }
+
+    /// `S q̇` of body `i`'s joint, with `x` a full velocity-sized vector.
+    #[inline]
+    pub(crate) fn joint_motion(&self, i: usize, x: &[f64]) -> MotionVector {
+        let sv = self.idx_v[i];
+        match &self.joints[i] {
+            Joint::Revolute(j) => MotionVector::new(j.axis * x[sv], DVec3::ZERO),
+            Joint::Prismatic(j) => MotionVector::new(DVec3::ZERO, j.axis * x[sv]),
+            j => {
+                let mut m = MotionVector::ZERO;
+                for k in sv..sv + j.nv() {
+                    m += self.subspace[k] * x[k];
+                }
+                m
+            }
+        }
+    }
+
+    /// `Sᵀ f` of body `i`'s joint into its entries of `out` (a velocity-sized vector).
+    #[inline]
+    pub(crate) fn joint_force(&self, i: usize, f: &ForceVector, out: &mut [f64]) {
+        let sv = self.idx_v[i];
+        match &self.joints[i] {
+            Joint::Revolute(j) => out[sv] = j.axis.dot(f.moment),
+            Joint::Prismatic(j) => out[sv] = j.axis.dot(f.force),
+            j => {
+                for k in sv..sv + j.nv() {
+                    out[k] = self.subspace[k].dot(f);
+                }
+            }
+        }
     }
 
     /// The neutral configuration (zeros, identity quaternions) into `q[..nq]`.

@@ -4,7 +4,10 @@ use core::ops::{AddAssign, Sub};
 
 use glam::{DMat3, DVec3};
 
-use super::{ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia, skew};
+use super::{
+    ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia, rotate_symmetric, skew,
+    skew_mul,
+};
 
 /// A symmetric 6×6 spatial inertia kept as 3×3 blocks: `f = [I ω + H v; Hᵀ ω + M v]`.
 ///
@@ -75,16 +78,17 @@ impl ArticulatedBodyInertia {
     /// `A_X_B* I B_X_A`.
     #[inline]
     pub fn transform_to_parent(&self, a_b: &PlueckerTransform) -> Self {
-        let r = a_b.rotation;
-        let rt = r.transpose();
-        let i = r * self.angular * rt;
-        let h = r * self.coupling * rt;
-        let m = r * self.linear * rt;
-        let p = skew(a_b.translation);
-        let pm = p * m;
-        let hp = h * p;
+        let r = &a_b.rotation;
+        let p = a_b.translation;
+        let i = rotate_symmetric(r, &self.angular);
+        let h = *r * self.coupling * r.transpose();
+        let m = rotate_symmetric(r, &self.linear);
+        // With P = [p]×: I_A = I − H P − (H P)ᵀ − P M P, H_A = H + P M; and X P = −(P Xᵀ)ᵀ.
+        let pm = skew_mul(p, &m);
+        let hp = -skew_mul(p, &h.transpose()).transpose();
+        let pmp = -skew_mul(p, &pm.transpose()).transpose();
         Self {
-            angular: i - hp - hp.transpose() - pm * p,
+            angular: i - hp - hp.transpose() - pmp,
             coupling: h + pm,
             linear: m,
         }

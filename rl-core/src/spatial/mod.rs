@@ -28,3 +28,31 @@ pub fn skew(v: DVec3) -> DMat3 {
         DVec3::new(v.y, -v.x, 0.0),
     )
 }
+
+/// `[p]× M`: the cross product of `p` with each column of `M`.
+#[inline]
+pub(crate) fn skew_mul(p: DVec3, m: &DMat3) -> DMat3 {
+    DMat3::from_cols(p.cross(m.x_axis), p.cross(m.y_axis), p.cross(m.z_axis))
+}
+
+/// `a bᵀ + b aᵀ`, symmetric.
+#[inline]
+pub(crate) fn sym_outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x + b * a.x, a * b.y + b * a.y, a * b.z + b * a.z)
+}
+
+/// `R S Rᵀ` for a symmetric `S`.
+#[inline]
+pub(crate) fn rotate_symmetric(r: &DMat3, s: &DMat3) -> DMat3 {
+    let rs = *r * *s;
+    // Only the upper triangle of (R S) Rᵀ is computed; the rest mirrors it.
+    let (r0, r1, r2) = (r.row(0), r.row(1), r.row(2));
+    let (a0, a1, a2) = (rs.row(0), rs.row(1), rs.row(2));
+    let (m00, m01, m02) = (a0.dot(r0), a0.dot(r1), a0.dot(r2));
+    let (m11, m12, m22) = (a1.dot(r1), a1.dot(r2), a2.dot(r2));
+    DMat3::from_cols(
+        DVec3::new(m00, m01, m02),
+        DVec3::new(m01, m11, m12),
+        DVec3::new(m02, m12, m22),
+    )
+}

@@ -4,7 +4,7 @@ use core::ops::{Add, AddAssign};
 
 use glam::{DMat3, DVec3};
 
-use super::{ForceVector, MotionVector, PlueckerTransform, skew};
+use super::{ForceVector, MotionVector, PlueckerTransform, rotate_symmetric, skew, sym_outer};
 
 /// The spatial inertia of a rigid body about a frame's origin, in that frame's coordinates.
 ///
@@ -75,16 +75,20 @@ impl RigidBodyInertia {
     /// in A): `A_X_B* I B_X_A`.
     #[inline]
     pub fn transform_to_parent(&self, a_b: &PlueckerTransform) -> Self {
-        let r = a_b.rotation;
+        let r = &a_b.rotation;
         let p = a_b.translation;
-        let h = r * self.first_moment;
-        let rot = r * self.rotational * r.transpose();
-        let px = skew(p);
-        let hx = skew(h);
+        let h = *r * self.first_moment;
+        // Ī_A = R Ī Rᵀ − ([h]×[p]× + [p]×[h]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1.
+        let m = self.mass;
+        let diag = 2.0 * h.dot(p) + m * p.length_squared();
+        let rotational = rotate_symmetric(r, &self.rotational)
+            - sym_outer(h, p)
+            - DMat3::from_cols(p * (m * p.x), p * (m * p.y), p * (m * p.z))
+            + DMat3::from_diagonal(DVec3::splat(diag));
         Self {
-            mass: self.mass,
-            first_moment: h + p * self.mass,
-            rotational: rot - hx * px - px * hx - px * px * self.mass,
+            mass: m,
+            first_moment: h + p * m,
+            rotational,
         }
     }
 }

@@ -107,11 +107,17 @@ impl PlueckerTransform {
     /// A motion vector given in A coordinates, in B coordinates (`B_X_A m`).
     #[inline]
     pub fn inv_act_motion(&self, m: &MotionVector) -> MotionVector {
-        let rt = self.rotation.transpose();
         MotionVector {
-            angular: rt * m.angular,
-            linear: rt * (m.linear - self.translation.cross(m.angular)),
+            angular: self.inv_rotate(m.angular),
+            linear: self.inv_rotate(m.linear - self.translation.cross(m.angular)),
         }
+    }
+
+    /// `Rᵀ v` without forming `Rᵀ`: three dot products with the columns.
+    #[inline]
+    pub fn inv_rotate(&self, v: DVec3) -> DVec3 {
+        let r = &self.rotation;
+        DVec3::new(r.x_axis.dot(v), r.y_axis.dot(v), r.z_axis.dot(v))
     }
 
     /// A force vector given in B coordinates, in A coordinates (`A_X_B* f`).
@@ -127,10 +133,9 @@ impl PlueckerTransform {
     /// A force vector given in A coordinates, in B coordinates (`B_X_A* f`).
     #[inline]
     pub fn inv_act_force(&self, f: &ForceVector) -> ForceVector {
-        let rt = self.rotation.transpose();
         ForceVector {
-            moment: rt * (f.moment - self.translation.cross(f.force)),
-            force: rt * f.force,
+            moment: self.inv_rotate(f.moment - self.translation.cross(f.force)),
+            force: self.inv_rotate(f.force),
         }
     }
 
