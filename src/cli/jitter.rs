@@ -10,7 +10,10 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use rl_rt::preflight::{self, Status};
-use rl_rt::{CyclicLoop, LoopEnd, LoopError, OverrunPolicy, Policy, RtThreadBuilder, StopFlag};
+use rl_rt::{
+    CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy, Policy, RtThreadBuilder, Scheduling,
+    StopFlag,
+};
 
 use super::{CliError, CliResult};
 
@@ -142,6 +145,17 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         OverrunArg::Stop => OverrunPolicy::Stop,
     };
 
+    let mut builder = RtThreadBuilder::new("rl-jitter")
+        .policy(policy)
+        .priority(priority);
+    if let Some(cpu) = args.cpu {
+        builder = builder.cpus([cpu]);
+    }
+    // Bad priority or CPU is a usage error, found before anything is locked or blocked.
+    builder
+        .validate()
+        .map_err(|e| CliError::usage(e.to_string()))?;
+
     let stop = StopFlag::new();
     stop.raise_on_termination_signals()
         .map_err(|e| CliError::failed(format!("cannot watch SIGINT/SIGTERM: {e}")))?;
@@ -172,12 +186,6 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         .max_cycles(cycles)
         .stop_flag(&stop)
         .histogram_range(Duration::from_micros(args.histogram_range_us as u64));
-    let mut builder = RtThreadBuilder::new("rl-jitter")
-        .policy(policy)
-        .priority(priority);
-    if let Some(cpu) = args.cpu {
-        builder = builder.cpus([cpu]);
-    }
     let thread = builder
         .spawn(move || looped.run(|_cycle| ControlFlow::Continue(())))
         .map_err(|e| match e {
@@ -212,39 +220,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
     }
 
     let stats = &report.stats;
-    let w = stats.wakeup.summary();
-    let us = |ns: u64| ns as f64 / 1_000.0;
     let interrupted = report.end == LoopEnd::StopRequested;
     if args.json {
-        let value = serde_json::json!({
-            "cycles": stats.cycles(),
-            "overruns": stats.overruns,
-            "min_us": us(w.min_ns),
-            "mean_us": us(w.mean_ns),
-            "p50_us": us(w.p50_ns),
-            "p99_us": us(w.p99_ns),
-            "p999_us": us(w.p999_ns),
-            "p9999_us": us(w.p9999_ns),
-            "max_us": us(w.max_ns),
-            "missed_deadlines": stats.missed_deadlines,
-            "histogram_overflows": w.overflow,
-            "histogram_range_us": stats.wakeup.range_us(),
-            "interval_us": args.interval_us,
-            "overrun_policy": overrun.to_string(),
-            "policy": granted.policy.map(|p| p.to_string()),
-            "priority": granted.priority,
-            "cpus": granted.cpus,
-            "mlockall": !args.no_mlock,
-            "cpu_dma_latency_us": cpu_dma_latency_us,
-            "interrupted": interrupted,
-            "minor_faults": report.counters.map(|c| c.minor_faults),
-            "major_faults": report.counters.map(|c| c.major_faults),
-            "involuntary_switches": report.counters.map(|c| c.involuntary_switches),
-            "step": {
-                "mean_us": us(stats.step.summary().mean_ns),
-                "max_us": us(stats.step.summary().max_ns),
-            },
-        });
+        let value = jitter_json(&report, &granted, &args, cpu_dma_latency_us);
         println!("{value}");
     } else {
         println!(
@@ -263,6 +241,47 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The `rl jitter --json` object: the documented keys `cycles`, `overruns`, `min_us`,
+/// `mean_us`, `p50_us`, `p99_us`, `p999_us`, `p9999_us`, `max_us` (wake-up latency), then the
+/// settings and the loop thread's health counters.
+fn jitter_json(
+    report: &LoopReport,
+    granted: &Scheduling,
+    args: &JitterArgs,
+    cpu_dma_latency_us: Option<u32>,
+) -> serde_json::Value {
+    let stats = &report.stats;
+    let w = stats.wakeup.summary();
+    let step = stats.step.summary();
+    let us = |ns: u64| ns as f64 / 1_000.0;
+    serde_json::json!({
+        "cycles": stats.cycles(),
+        "overruns": stats.overruns,
+        "min_us": us(w.min_ns),
+        "mean_us": us(w.mean_ns),
+        "p50_us": us(w.p50_ns),
+        "p99_us": us(w.p99_ns),
+        "p999_us": us(w.p999_ns),
+        "p9999_us": us(w.p9999_ns),
+        "max_us": us(w.max_ns),
+        "missed_deadlines": stats.missed_deadlines,
+        "histogram_overflows": w.overflow,
+        "histogram_range_us": stats.wakeup.range_us(),
+        "interval_us": args.interval_us,
+        "overrun_policy": report.policy.to_string(),
+        "policy": granted.policy.map(|p| p.to_string()),
+        "priority": granted.priority,
+        "cpus": granted.cpus,
+        "mlockall": !args.no_mlock,
+        "cpu_dma_latency_us": cpu_dma_latency_us,
+        "interrupted": report.end == LoopEnd::StopRequested,
+        "minor_faults": report.counters.map(|c| c.minor_faults),
+        "major_faults": report.counters.map(|c| c.major_faults),
+        "involuntary_switches": report.counters.map(|c| c.involuntary_switches),
+        "step": { "mean_us": us(step.mean_ns), "max_us": us(step.max_ns) },
+    })
 }
 
 /// Runs `rl preflight`.
@@ -301,5 +320,100 @@ mod tests {
         assert_eq!(parse_duration("1.5"), Ok(Duration::from_millis(1500)));
         assert!(parse_duration("10 parsecs").is_err());
         assert!(parse_duration("fast").is_err());
+    }
+
+    #[derive(clap::Parser)]
+    struct Wrapper {
+        #[command(flatten)]
+        args: JitterArgs,
+    }
+
+    fn args(line: &[&str]) -> JitterArgs {
+        use clap::Parser;
+        Wrapper::parse_from(std::iter::once("jitter").chain(line.iter().copied())).args
+    }
+
+    #[test]
+    fn json_carries_the_documented_keys_consistently() {
+        let a = args(&[
+            "--policy",
+            "other",
+            "--cycles",
+            "50",
+            "--interval-us",
+            "200",
+            "--json",
+        ]);
+        let looped = CyclicLoop::new(Duration::from_micros(200))
+            .expect("valid")
+            .max_cycles(50);
+        let report = looped
+            .run(|_| ControlFlow::Continue(()))
+            .expect("loop runs");
+        let granted = rl_rt::thread::current_scheduling().expect("read back");
+        let v = jitter_json(&report, &granted, &a, Some(0));
+        assert_eq!(v["cycles"], 50);
+        let key = |k: &str| {
+            v[k].as_f64()
+                .unwrap_or_else(|| panic!("{k} missing in {v}"))
+        };
+        let ordered = [
+            "min_us", "p50_us", "p99_us", "p999_us", "p9999_us", "max_us",
+        ]
+        .map(key);
+        assert!(ordered.windows(2).all(|w| w[0] <= w[1]), "{ordered:?}");
+        assert!(key("min_us") <= key("mean_us") && key("mean_us") <= key("max_us"));
+        assert!(v["overruns"].is_u64());
+        assert_eq!(v["interval_us"], 200);
+        assert_eq!(v["overrun_policy"], "skip");
+    }
+
+    #[test]
+    fn run_writes_a_cyclictest_histogram() {
+        let path = std::env::temp_dir().join(format!("rl-jitter-test-{}.hist", std::process::id()));
+        let a = args(&[
+            "--policy",
+            "other",
+            "--no-mlock",
+            "--no-cpu-latency-hint",
+            "--cycles",
+            "30",
+            "--interval-us",
+            "500",
+            "--histogram-range-us",
+            "100000",
+            "--histogram",
+            path.to_str().expect("utf-8 temp path"),
+        ]);
+        run_jitter(a).expect("measures at SCHED_OTHER without privileges");
+        let text = std::fs::read_to_string(&path).expect("histogram written");
+        let _ = std::fs::remove_file(&path);
+        let in_bins: u64 = text
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .filter_map(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+            .sum();
+        let overflow: u64 = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# Histogram Overflows: "))
+            .and_then(|n| n.trim().parse().ok())
+            .expect("overflow line");
+        assert_eq!(in_bins + overflow, 30);
+        assert!(text.starts_with("# Histogram\n000000 "));
+    }
+
+    #[test]
+    fn bad_priority_is_a_usage_error() {
+        let e = run_jitter(args(&[
+            "--policy",
+            "other",
+            "--priority",
+            "5",
+            "--cycles",
+            "1",
+        ]))
+        .expect_err("SCHED_OTHER takes priority 0 only");
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("0..=0"), "{e}");
     }
 }
