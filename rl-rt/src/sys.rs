@@ -26,20 +26,6 @@ pub(crate) fn set_current_thread_scheduling(
     }
 }
 
-/// Reads back policy and priority of the calling thread with `pthread_getschedparam`.
-pub(crate) fn current_thread_scheduling() -> Result<(libc::c_int, i32), Errno> {
-    let mut policy: libc::c_int = 0;
-    // SAFETY: as above, a zeroed sched_param is a valid value.
-    let mut param: libc::sched_param = unsafe { core::mem::zeroed() };
-    // SAFETY: pthread_self() is valid; both out-pointers point to live locals.
-    let rc = unsafe { libc::pthread_getschedparam(libc::pthread_self(), &mut policy, &mut param) };
-    if rc == 0 {
-        Ok((policy, param.sched_priority))
-    } else {
-        Err(Errno::from_raw(rc))
-    }
-}
-
 /// The priority range `(min, max)` the kernel accepts for `policy`.
 pub(crate) fn priority_range(policy: libc::c_int) -> Result<(i32, i32), Errno> {
     // SAFETY: both functions take a plain integer and only read it.
@@ -112,4 +98,60 @@ pub(crate) fn keep_freed_heap() -> bool {
     {
         false
     }
+}
+
+/// Policy, priority and SCHED_DEADLINE parameters (runtime, deadline, period in ns) of the
+/// calling thread, read from the kernel with `sched_getattr` (no library-side caching).
+pub(crate) fn current_thread_attr() -> Result<(i32, i32, [u64; 3]), Errno> {
+    // SAFETY: sched_attr is a plain C struct of integers; all-zero is a valid value.
+    let mut attr: libc::sched_attr = unsafe { core::mem::zeroed() };
+    let size = core::mem::size_of::<libc::sched_attr>() as libc::c_uint;
+    // SAFETY: pid 0 is the calling thread; `attr` is live and `size` is its exact size, so the
+    // kernel writes at most that many bytes; flags must be 0.
+    let rc = unsafe {
+        libc::syscall(
+            libc::SYS_sched_getattr,
+            0 as libc::pid_t,
+            &mut attr,
+            size,
+            0 as libc::c_uint,
+        )
+    };
+    if rc != 0 {
+        return Err(Errno::last());
+    }
+    Ok((
+        attr.sched_policy as i32,
+        attr.sched_priority as i32,
+        [attr.sched_runtime, attr.sched_deadline, attr.sched_period],
+    ))
+}
+
+/// Makes the calling thread SCHED_DEADLINE with these parameters (ns) via `sched_setattr`.
+pub(crate) fn set_current_thread_deadline(
+    runtime: u64,
+    deadline: u64,
+    period: u64,
+) -> Result<(), Errno> {
+    let attr = libc::sched_attr {
+        size: core::mem::size_of::<libc::sched_attr>() as u32,
+        sched_policy: libc::SCHED_DEADLINE as u32,
+        sched_flags: 0,
+        sched_nice: 0,
+        sched_priority: 0,
+        sched_runtime: runtime,
+        sched_deadline: deadline,
+        sched_period: period,
+    };
+    // SAFETY: pid 0 is the calling thread; `attr` is a fully initialised sched_attr whose
+    // `size` field matches its layout; the kernel only reads it; flags must be 0.
+    let rc = unsafe {
+        libc::syscall(
+            libc::SYS_sched_setattr,
+            0 as libc::pid_t,
+            &attr,
+            0 as libc::c_uint,
+        )
+    };
+    if rc == 0 { Ok(()) } else { Err(Errno::last()) }
 }

@@ -22,6 +22,7 @@
 //! ```
 
 use core::fmt;
+use core::time::Duration;
 use std::sync::mpsc;
 use std::thread::{self, JoinHandle};
 
@@ -30,6 +31,7 @@ use nix::sched::{CpuSet, sched_getaffinity, sched_setaffinity};
 use nix::sys::resource::{UsageWho, getrusage};
 use nix::unistd::Pid;
 
+use crate::clock::duration_to_nanos;
 use crate::memory::{self, MemoryError};
 use crate::sys;
 
@@ -43,22 +45,50 @@ pub enum Policy {
     Fifo,
     /// `SCHED_RR`: like FIFO with a time slice among equal priorities (1..=99).
     RoundRobin,
+    /// `SCHED_DEADLINE` (earliest deadline first with admission control): the thread gets
+    /// `runtime_ns` of CPU in every `period_ns`, done by `deadline_ns` after the period starts.
+    /// Priority 0; the thread's CPU affinity must span its root domain (do not pin it with
+    /// [`RtThreadBuilder::cpus`]; use an exclusive cpuset instead). Build with
+    /// [`Policy::deadline`].
+    Deadline {
+        /// CPU time per period, ns (at least 1024).
+        runtime_ns: u64,
+        /// Relative deadline, ns (runtime ≤ deadline ≤ period).
+        deadline_ns: u64,
+        /// Period, ns.
+        period_ns: u64,
+    },
 }
 
 impl Policy {
+    /// SCHED_DEADLINE with these parameters, or `None` if one does not fit in u64 ns.
+    pub fn deadline(runtime: Duration, deadline: Duration, period: Duration) -> Option<Self> {
+        Some(Self::Deadline {
+            runtime_ns: duration_to_nanos(runtime)?,
+            deadline_ns: duration_to_nanos(deadline)?,
+            period_ns: duration_to_nanos(period)?,
+        })
+    }
+
     fn to_raw(self) -> libc::c_int {
         match self {
             Self::Other => libc::SCHED_OTHER,
             Self::Fifo => libc::SCHED_FIFO,
             Self::RoundRobin => libc::SCHED_RR,
+            Self::Deadline { .. } => libc::SCHED_DEADLINE,
         }
     }
 
-    fn from_raw(raw: libc::c_int) -> Option<Self> {
+    fn from_raw(raw: libc::c_int, deadline: [u64; 3]) -> Option<Self> {
         match raw {
             libc::SCHED_OTHER => Some(Self::Other),
             libc::SCHED_FIFO => Some(Self::Fifo),
             libc::SCHED_RR => Some(Self::RoundRobin),
+            libc::SCHED_DEADLINE => Some(Self::Deadline {
+                runtime_ns: deadline[0],
+                deadline_ns: deadline[1],
+                period_ns: deadline[2],
+            }),
             _ => None,
         }
     }
@@ -68,9 +98,9 @@ impl Policy {
         sys::priority_range(self.to_raw())
     }
 
-    /// Whether this is a real-time policy (FIFO or RR).
+    /// Whether this is a real-time policy (FIFO, RR or DEADLINE).
     pub fn is_realtime(self) -> bool {
-        matches!(self, Self::Fifo | Self::RoundRobin)
+        !matches!(self, Self::Other)
     }
 }
 
@@ -80,6 +110,19 @@ impl fmt::Display for Policy {
             Self::Other => "SCHED_OTHER",
             Self::Fifo => "SCHED_FIFO",
             Self::RoundRobin => "SCHED_RR",
+            Self::Deadline {
+                runtime_ns,
+                deadline_ns,
+                period_ns,
+            } => {
+                return write!(
+                    f,
+                    "SCHED_DEADLINE (runtime {} µs, deadline {} µs, period {} µs)",
+                    *runtime_ns as f64 / 1e3,
+                    *deadline_ns as f64 / 1e3,
+                    *period_ns as f64 / 1e3
+                );
+            }
         })
     }
 }
@@ -107,11 +150,12 @@ impl fmt::Display for Scheduling {
     }
 }
 
-/// Reads the calling thread's policy, priority and CPU affinity from the kernel.
+/// Reads the calling thread's policy, priority (and SCHED_DEADLINE parameters) and CPU
+/// affinity from the kernel (`sched_getattr`, `sched_getaffinity`).
 pub fn current_scheduling() -> Result<Scheduling, ThreadError> {
-    let (raw_policy, priority) =
-        sys::current_thread_scheduling().map_err(|errno| ThreadError::Sys {
-            call: "pthread_getschedparam",
+    let (raw_policy, priority, deadline) =
+        sys::current_thread_attr().map_err(|errno| ThreadError::Sys {
+            call: "sched_getattr",
             errno,
         })?;
     let set = sched_getaffinity(Pid::from_raw(0)).map_err(|errno| ThreadError::Sys {
@@ -122,7 +166,7 @@ pub fn current_scheduling() -> Result<Scheduling, ThreadError> {
         .filter(|&c| set.is_set(c).unwrap_or(false))
         .collect();
     Ok(Scheduling {
-        policy: Policy::from_raw(raw_policy),
+        policy: Policy::from_raw(raw_policy, deadline),
         raw_policy,
         priority,
         cpus,
@@ -184,6 +228,15 @@ impl fmt::Display for ThreadCounters {
     }
 }
 
+/// What was asked and what the kernel granted, when they differ.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SchedulingMismatch {
+    /// What was asked: policy, priority, CPUs (empty = unchanged).
+    pub requested: (Policy, i32, Vec<usize>),
+    /// What the read-back showed.
+    pub granted: Scheduling,
+}
+
 /// Why a real-time thread could not be set up as asked.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ThreadError {
@@ -205,6 +258,18 @@ pub enum ThreadError {
         /// The priority asked for.
         priority: i32,
     },
+    /// SCHED_DEADLINE parameters out of order: it needs 1024 ns ≤ runtime ≤ deadline ≤ period.
+    InvalidDeadline {
+        /// The policy with the parameters asked for.
+        policy: Policy,
+    },
+    /// The kernel refused SCHED_DEADLINE.
+    DeadlineRefused {
+        /// The policy with the parameters asked for.
+        policy: Policy,
+        /// The errno (EBUSY: admission control; EPERM: privilege or affinity).
+        errno: Errno,
+    },
     /// A CPU number is beyond what a CPU set can hold.
     InvalidCpu {
         /// The CPU asked for.
@@ -222,12 +287,7 @@ pub enum ThreadError {
     /// Memory locking failed.
     Memory(MemoryError),
     /// The kernel granted something other than what was asked.
-    Mismatch {
-        /// What was asked: policy, priority, CPUs (empty = unchanged).
-        requested: (Policy, i32, Vec<usize>),
-        /// What the read-back showed.
-        granted: Scheduling,
-    },
+    Mismatch(Box<SchedulingMismatch>),
     /// The thread could not be created.
     Spawn(std::io::ErrorKind),
     /// The new thread died before reporting its set-up.
@@ -263,6 +323,29 @@ impl fmt::Display for ThreadError {
                  /etc/security/limits.conf); also check that no cgroup forbids real-time \
                  runtime (cpu.rt_runtime_us)"
             ),
+            Self::InvalidDeadline { policy } => write!(
+                f,
+                "{policy} is invalid: it needs 1024 ns ≤ runtime ≤ deadline ≤ period"
+            ),
+            Self::DeadlineRefused {
+                policy,
+                errno: Errno::EBUSY,
+            } => write!(
+                f,
+                "{policy} refused by admission control (EBUSY): the CPUs' deadline bandwidth \
+                 (kernel.sched_rt_runtime_us / sched_rt_period_us) is taken; lower the \
+                 runtime/period ratio or end other SCHED_DEADLINE tasks"
+            ),
+            Self::DeadlineRefused {
+                policy,
+                errno: Errno::EPERM,
+            } => write!(
+                f,
+                "{policy} not permitted (EPERM): needs CAP_SYS_NICE (RLIMIT_RTPRIO does not \
+                 cover SCHED_DEADLINE), and the thread's CPU affinity must span its root \
+                 domain: do not pin it with cpus(), use an exclusive cpuset"
+            ),
+            Self::DeadlineRefused { policy, errno } => write!(f, "{policy} refused: {errno}"),
             Self::InvalidCpu { cpu, limit } => {
                 write!(
                     f,
@@ -275,10 +358,10 @@ impl fmt::Display for ThreadError {
                  (/sys/devices/system/cpu/online) and the process's cpuset (taskset -p, cgroup)"
             ),
             Self::Memory(e) => e.fmt(f),
-            Self::Mismatch { requested, granted } => write!(
+            Self::Mismatch(m) => write!(
                 f,
-                "asked for {} priority {} on CPUs {:?} but the kernel reports {granted}",
-                requested.0, requested.1, requested.2
+                "asked for {} priority {} on CPUs {:?} but the kernel reports {}",
+                m.requested.0, m.requested.1, m.requested.2, m.granted
             ),
             Self::Spawn(kind) => write!(f, "cannot create the thread: {kind}"),
             Self::SetupLost => f.write_str("the new thread ended before reporting its set-up"),
@@ -385,6 +468,18 @@ impl RtThreadBuilder {
                 max,
             });
         }
+        if let Policy::Deadline {
+            runtime_ns,
+            deadline_ns,
+            period_ns,
+        } = self.policy
+        {
+            if !(1024 <= runtime_ns && runtime_ns <= deadline_ns && deadline_ns <= period_ns) {
+                return Err(ThreadError::InvalidDeadline {
+                    policy: self.policy,
+                });
+            }
+        }
         if let Some(cpu) = self
             .cpus
             .iter()
@@ -427,23 +522,38 @@ impl RtThreadBuilder {
         if self.lock_memory {
             memory::lock_memory()?;
         }
-        sys::set_current_thread_scheduling(self.policy.to_raw(), self.priority).map_err(
-            |errno| match errno {
-                Errno::EPERM => ThreadError::PermissionDenied {
+        match self.policy {
+            Policy::Deadline {
+                runtime_ns,
+                deadline_ns,
+                period_ns,
+            } => sys::set_current_thread_deadline(runtime_ns, deadline_ns, period_ns).map_err(
+                |errno| ThreadError::DeadlineRefused {
                     policy: self.policy,
-                    priority: self.priority,
-                },
-                errno => ThreadError::Sys {
-                    call: "pthread_setschedparam",
                     errno,
                 },
-            },
-        )?;
+            )?,
+            policy => sys::set_current_thread_scheduling(policy.to_raw(), self.priority).map_err(
+                |errno| match errno {
+                    Errno::EPERM => ThreadError::PermissionDenied {
+                        policy,
+                        priority: self.priority,
+                    },
+                    errno => ThreadError::Sys {
+                        call: "pthread_setschedparam",
+                        errno,
+                    },
+                },
+            )?,
+        }
         memory::prefault_stack(self.prefault_stack.min(self.stack_size / 2));
         let granted = current_scheduling()?;
         let requested = self.requested();
         if self.exact && !matches_request(&requested, &granted) {
-            return Err(ThreadError::Mismatch { requested, granted });
+            return Err(ThreadError::Mismatch(Box::new(SchedulingMismatch {
+                requested,
+                granted,
+            })));
         }
         Ok(granted)
     }

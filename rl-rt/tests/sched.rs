@@ -129,3 +129,53 @@ fn other_policy_refuses_a_priority_before_any_syscall() {
         "{e:?}"
     );
 }
+
+#[test]
+fn deadline_thread_reads_back_its_parameters_and_runs_a_loop() {
+    if !privileged("deadline_thread_reads_back_its_parameters_and_runs_a_loop") {
+        return;
+    }
+    let policy = Policy::deadline(
+        Duration::from_micros(200),
+        Duration::from_micros(900),
+        Duration::from_millis(1),
+    )
+    .expect("fits in ns");
+    let looped = CyclicLoop::new(Duration::from_millis(1))
+        .expect("valid")
+        .max_cycles(100);
+    let t = match RtThreadBuilder::new("edf").policy(policy).spawn(move || {
+        let inside = current_scheduling().expect("read back inside");
+        (inside, looped.run(|_| ControlFlow::Continue(())))
+    }) {
+        Ok(t) => t,
+        Err(rl_rt::ThreadError::DeadlineRefused { errno, .. }) => {
+            // e.g. a cgroup without deadline bandwidth, or a kernel without SCHED_DEADLINE.
+            eprintln!("SKIP deadline_thread_reads_back_its_parameters_and_runs_a_loop: {errno}");
+            return;
+        }
+        Err(e) => panic!("unexpected error: {e}"),
+    };
+    assert_eq!(t.granted().policy, Some(policy));
+    assert_eq!(t.granted().priority, 0);
+    let (inside, report) = t.join().expect("no panic");
+    assert_eq!(inside.policy, Some(policy));
+    let report = report.expect("loop ran");
+    assert_eq!(report.stats.cycles(), 100);
+    eprintln!("{policy} loop: {}", report.stats);
+}
+
+#[test]
+fn deadline_parameters_out_of_order_are_refused_before_any_syscall() {
+    let bad = Policy::deadline(
+        Duration::from_millis(2),
+        Duration::from_millis(1),
+        Duration::from_millis(1),
+    )
+    .expect("fits in ns");
+    let e = RtThreadBuilder::new("bad-edf").policy(bad).spawn(|| ());
+    assert!(
+        matches!(e, Err(rl_rt::ThreadError::InvalidDeadline { .. })),
+        "{e:?}"
+    );
+}
