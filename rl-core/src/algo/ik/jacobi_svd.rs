@@ -11,8 +11,10 @@ use super::MAX_ROWS;
 /// Sweeps before giving up; for the ≤ 24 rows used here convergence takes 5 to 10.
 const MAX_SWEEPS: usize = 40;
 
-/// Two rows count as orthogonal once `|bₚ·b_r| ≤ TOL |bₚ| |b_r|`.
-const TOL: f64 = 1e-15;
+/// Two rows count as orthogonal once `|bₚ·b_r| ≤ TOL_PER_COLUMN · n · |bₚ| |b_r|`: the
+/// rounding error of an `n`-term dot product is about `n ε |bₚ| |b_r|`, so a tighter test
+/// could never be met and would spin until `MAX_SWEEPS`.
+const TOL_PER_COLUMN: f64 = 2.0 * f64::EPSILON;
 
 /// Rotates the first `m` rows (first `n` columns) of `b` until they are mutually orthogonal,
 /// writing the accumulated rotation into `u` (`m × m`), so that on return the original `J`
@@ -36,7 +38,8 @@ pub(super) fn orthogonalize_rows<const N: usize>(
         .map(|row| row[..n].iter().map(|x| x * x).sum::<f64>())
         .sum();
     let negligible = frob2 * (4.0 * f64::EPSILON) * (4.0 * f64::EPSILON);
-    for _ in 0..MAX_SWEEPS {
+    let tol = TOL_PER_COLUMN * n.max(1) as f64;
+    for _sweep in 0..MAX_SWEEPS {
         let mut rotated = false;
         for p in 0..m {
             for r in p + 1..m {
@@ -47,7 +50,7 @@ pub(super) fn orthogonalize_rows<const N: usize>(
                 if gamma == 0.0
                     || alpha <= negligible
                     || beta <= negligible
-                    || libm::fabs(gamma) <= TOL * libm::sqrt(alpha * beta)
+                    || libm::fabs(gamma) <= tol * libm::sqrt(alpha * beta)
                 {
                     continue;
                 }
@@ -73,6 +76,8 @@ pub(super) fn orthogonalize_rows<const N: usize>(
             }
         }
         if !rotated {
+            #[cfg(test)]
+            SWEEPS.with(|c| c.set(c.get().max(_sweep + 1)));
             return true;
         }
     }
@@ -91,8 +96,48 @@ fn dots(a: &[f64], b: &[f64]) -> (f64, f64, f64) {
 }
 
 #[cfg(test)]
+extern crate std;
+
+#[cfg(test)]
+std::thread_local! {
+    /// The most sweeps any call on this thread needed (tests only).
+    static SWEEPS: core::cell::Cell<usize> = const { core::cell::Cell::new(0) };
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn converges_in_few_sweeps() {
+        // Random 6×n matrices (n = 3..13), some with a rank deficiency.
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for trial in 0..2000 {
+            let n = 3 + trial % 11;
+            let mut j = [[0.0; 13]; MAX_ROWS];
+            for row in j.iter_mut().take(6) {
+                for x in row.iter_mut().take(n) {
+                    *x = next();
+                }
+            }
+            if trial % 3 == 0 {
+                let (r0, r1) = (j[0], j[1]);
+                for (k, x) in j[4].iter_mut().enumerate() {
+                    *x = r0[k] - 2.0 * r1[k];
+                }
+            }
+            let mut u = [[0.0; MAX_ROWS]; MAX_ROWS];
+            assert!(orthogonalize_rows(&mut j, 6, n, &mut u), "trial {trial}");
+        }
+        let worst = SWEEPS.with(|c| c.get());
+        assert!(worst <= 12, "needed {worst} sweeps");
+    }
 
     #[test]
     fn reconstructs_and_orthogonalises() {
