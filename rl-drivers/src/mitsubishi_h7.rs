@@ -76,9 +76,12 @@ pub struct MitsubishiH7Config {
     pub server: SocketAddr,
     /// The controller's R3 TCP address (port 10001).
     pub r3: SocketAddr,
-    /// Local UDP address to bind (default 127.0.0.1:0; use the NIC's address for a real robot).
+    /// Local UDP address to bind. Default: 127.0.0.1:0 when the controller is on loopback,
+    /// otherwise any address (0.0.0.0:0) so the route to the controller decides.
     pub local: SocketAddr,
-    /// Address written into the program's `ENET:` line; default: the bound local address.
+    /// Address written into the program's `ENET:` line (where the controller sends replies).
+    /// Default: the bound local address, or, if that is unspecified, the local address of the
+    /// route to the controller.
     pub client_ip: Option<IpAddr>,
     /// What the client commands (the MXT program's mode).
     pub mode: Mode,
@@ -115,7 +118,13 @@ impl MitsubishiH7Config {
             dof,
             server,
             r3,
-            local: SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 0),
+            local: if server.ip().is_loopback() {
+                SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 0)
+            } else if server.is_ipv6() {
+                SocketAddr::new(IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED), 0)
+            } else {
+                SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0)
+            },
             client_ip: None,
             mode: Mode::Joint,
             filter: 0,
@@ -421,11 +430,18 @@ impl MitsubishiH7 {
         const OP: Operation = Operation::Start;
         let client = match self.config.client_ip {
             Some(ip) => ip,
-            None => self
-                .udp(OP)?
-                .local_addr()
-                .map_err(|e| Error::io(OP, &e))?
-                .ip(),
+            None => {
+                let ip = self
+                    .udp(OP)?
+                    .local_addr()
+                    .map_err(|e| Error::io(OP, &e))?
+                    .ip();
+                if ip.is_unspecified() {
+                    route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?
+                } else {
+                    ip
+                }
+            }
         };
         let mut program = [0u8; 256];
         let n = r3::write_program(&mut program, client, self.config.mode, self.config.filter)
@@ -563,6 +579,19 @@ impl MitsubishiH7 {
         self.counters.consecutive_failures = 0;
         Ok(())
     }
+}
+
+/// The local address the system would use to reach `server` (a connected UDP socket sends
+/// nothing; connecting only picks the route).
+fn route_ip(server: SocketAddr) -> std::io::Result<IpAddr> {
+    let any: SocketAddr = if server.is_ipv6() {
+        SocketAddr::new(IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED), 0)
+    } else {
+        SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0)
+    };
+    let probe = std::net::UdpSocket::bind(any)?;
+    probe.connect(server)?;
+    Ok(probe.local_addr()?.ip())
 }
 
 impl Device for MitsubishiH7 {

@@ -498,3 +498,29 @@ fn pulse_mode_writes_pulses_to_the_first_data_block() {
     assert!((fake.status().commanded_rad[1] - (-2000.0 / per_rad)).abs() < 1e-12);
     robot.stop().unwrap();
 }
+
+#[test]
+fn an_unspecified_local_address_writes_the_routed_address_into_the_program() {
+    let fake = fake();
+    let mut config = MitsubishiH7Config::new(DOF, fake.udp_addr(), fake.r3_addr());
+    config.local = "0.0.0.0:0".parse().unwrap();
+    let mut robot = MitsubishiH7::new(config).unwrap();
+    robot.open().unwrap();
+    robot.start().unwrap();
+    assert!(
+        fake.status()
+            .program
+            .starts_with("10 OPEN \"ENET:127.0.0.1\" AS #1")
+    );
+    robot.step().unwrap();
+    robot.stop().unwrap();
+    let remote = MitsubishiH7Config::new(
+        DOF,
+        "192.0.2.1:10000".parse().unwrap(),
+        "192.0.2.1:10001".parse().unwrap(),
+    );
+    assert!(
+        remote.local.ip().is_unspecified(),
+        "a remote controller is reached from any address"
+    );
+}
