@@ -524,3 +524,12 @@ fn an_unspecified_local_address_writes_the_routed_address_into_the_program() {
         "a remote controller is reached from any address"
     );
 }
+
+#[test]
+fn devices_and_fakes_can_move_to_another_thread() {
+    fn send<T: Send>() {}
+    send::<MitsubishiH7>();
+    send::<FakeH7>();
+    send::<rl_drivers::Coach>();
+    send::<rl_drivers::fake::coach_server::CoachServer>();
+}
