@@ -168,3 +168,27 @@ fn a_slow_reply_times_out_and_is_counted_late() {
     let c = coach.counters();
     assert_eq!((c.timeouts, c.late), (1, 1));
 }
+
+#[test]
+fn coach_calls_in_the_wrong_state_are_refused() {
+    let server = server(Delivery::default());
+    let mut config = CoachConfig::new(DOF);
+    config.server = server.addr();
+    let mut coach = Coach::new(config).unwrap();
+    assert_eq!(coach.step().unwrap_err().kind(), ErrorKind::State);
+    assert_eq!(
+        coach.set_joint_position(&[0.0; DOF]).unwrap_err().kind(),
+        ErrorKind::State
+    );
+    coach.open().unwrap();
+    assert_eq!(coach.step().unwrap_err().kind(), ErrorKind::State);
+    assert_eq!(
+        coach.set_joint_position(&[0.0; 2]).unwrap_err().kind(),
+        ErrorKind::InvalidArgument
+    );
+    coach.start().unwrap();
+    assert_eq!(coach.close().unwrap_err().kind(), ErrorKind::State);
+    coach.stop().unwrap();
+    coach.close().unwrap();
+    assert!(Coach::new(CoachConfig::new(0)).is_err());
+}

@@ -533,3 +533,28 @@ fn devices_and_fakes_can_move_to_another_thread() {
     send::<rl_drivers::Coach>();
     send::<rl_drivers::fake::coach_server::CoachServer>();
 }
+
+#[test]
+fn a_controller_error_during_start_faults_with_its_code() {
+    use rl_drivers::proto::r3::R3Error;
+    let fake = fake();
+    let mut robot = device(&fake);
+    robot.open().unwrap();
+    fake.set_r3_rejection(Some("SRVON"));
+    let e = robot.start().unwrap_err();
+    assert_eq!(
+        e,
+        Error::Protocol {
+            operation: rl_drivers::Operation::Start,
+            error: ProtocolError::R3(R3Error::Controller { code: 4100 })
+        }
+    );
+    assert_eq!((robot.state(), robot.fault()), (State::Faulted, Some(e)));
+    assert_eq!(e.to_string(), "start: R3 reply: controller error QeR4100");
+    robot.close().unwrap();
+    fake.set_r3_rejection(None);
+    robot.open().unwrap();
+    robot.start().unwrap();
+    robot.step().unwrap();
+    robot.stop().unwrap();
+}

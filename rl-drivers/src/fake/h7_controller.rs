@@ -200,6 +200,7 @@ struct Shared {
     target_pose: PoseData,
     inputs: HashMap<u16, u16>,
     frozen: bool,
+    reject: Option<String>,
     control: bool,
     servo_polls_left: Option<u32>,
 }
@@ -250,6 +251,7 @@ impl FakeH7 {
             target_pose: PoseData::default(),
             inputs: HashMap::new(),
             frozen: false,
+            reject: None,
             control: false,
             servo_polls_left: None,
         }));
@@ -305,6 +307,12 @@ impl FakeH7 {
     /// packets nor R3 requests (a hung controller; sockets stay open).
     pub fn set_frozen(&self, frozen: bool) {
         lock(&self.shared).frozen = frozen;
+    }
+
+    /// Makes the R3 responder answer `QeR4100` to every request with this command name (such as
+    /// `SRVON`), as a controller in an error state would; `None` accepts everything again.
+    pub fn set_r3_rejection(&self, command: Option<&str>) {
+        lock(&self.shared).reject = command.map(str::to_owned);
     }
 
     /// Sets the input word at `bit_top` that the fake reports when asked for inputs.
@@ -515,6 +523,9 @@ impl Shared {
     /// Answers one R3 request body.
     fn r3(&mut self, req: &Request<'_>) -> String {
         self.status.r3_log.push(req.body.to_string());
+        if self.reject.as_deref() == Some(req.name()) {
+            return "QeR4100".into();
+        }
         let args = req.args();
         match req.name() {
             "STOP" => {
