@@ -266,10 +266,13 @@ impl MitsubishiH7 {
         )
     }
 
-    /// Writes `data` under `mask` to the output word at `bit_top` with the next step.
+    /// Writes `data` under `mask` to the output word at `bit_top` with the next step (replaces a
+    /// pending [`request_input`](Self::request_input): a packet carries one `bitTop`).
     pub fn set_output(&mut self, bit_top: u16, mask: u16, data: u16) -> Result<(), Error> {
         self.lifecycle.check(Operation::Set)?;
+        // One `bitTop` per packet: an output replaces a pending input request (as in RL).
         self.request.send_io_type = IoType::Output;
+        self.request.recv_io_type = IoType::Null;
         self.request.bit_top = bit_top;
         self.request.bit_mask = mask;
         self.request.io_data = data;
@@ -279,7 +282,9 @@ impl MitsubishiH7 {
     /// Asks for the input word at `bit_top` with the next step; read it with [`io_data`](Self::io_data).
     pub fn request_input(&mut self, bit_top: u16) -> Result<(), Error> {
         self.lifecycle.check(Operation::Set)?;
+        // One `bitTop` per packet: an input request replaces a pending output (as in RL).
         self.request.recv_io_type = IoType::Input;
+        self.request.send_io_type = IoType::Null;
         self.request.bit_top = bit_top;
         Ok(())
     }

@@ -243,7 +243,8 @@ impl<'a> Reply<'a> {
 }
 
 /// The controller status from a `DSTATE` reply: `QoK` + RunSts (2 hex digits) + StopSts (2 hex
-/// digits) + `errorNo;stepNo;mechNo`.
+/// digits) + `errorNo;stepNo;mechNo`. (RL's `doDstate` reads StopSts from the RunSts digits
+/// again, a bug; this parser reads digits 3 and 4.)
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct DState {
     /// RunSts bits ([`run_bits`]).
