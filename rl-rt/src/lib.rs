@@ -2,7 +2,7 @@
 //! absolute-deadline periodic loops, allocation-free jitter statistics and non-blocking
 //! exchange between the real-time thread and the rest of the program.
 //!
-//! - [`thread`]: [`RtThreadBuilder`] (policy SCHED_FIFO/RR/OTHER, validated priority, CPU
+//! - [`thread`]: [`RtThreadBuilder`] (policy SCHED_FIFO/RR/OTHER/DEADLINE, validated priority, CPU
 //!   affinity, stack size and prefault) with a read-back of what the kernel granted.
 //! - [`memory`]: `mlockall`, stack and heap prefault, `RLIMIT_MEMLOCK`/`RLIMIT_RTPRIO`.
 //! - [`cyclic`]: [`CyclicLoop`] on `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)`, measuring
