@@ -919,6 +919,44 @@ fn same_seed_same_answer() {
     assert!(a.0.is_ok() && c.0.is_ok());
 }
 
+#[test]
+fn a_solved_start_needs_no_iteration_and_steps_are_bounded() {
+    let model = puma();
+    let start = [0.3, 0.2, -0.4, 0.5, 0.6, 0.7];
+    let goal = [IkGoal::pose(0, fk_tool(&model, &start, 0))];
+    let mut q = [0.0; 6];
+    let s = IkSolver::<8>::default()
+        .solve(&model, &mut Data::new(), &goal, &start, &mut q)
+        .unwrap();
+    assert_eq!((s.iterations, s.restarts), (0, 0));
+    assert_eq!(q, start);
+    // One iteration towards a far goal moves q by at most max_step (Euclidean).
+    let far = [IkGoal::pose(
+        0,
+        fk_tool(&model, &[-1.0, 1.0, -1.0, 1.0, -1.0, 1.0], 0),
+    )];
+    let options = IkOptions {
+        max_iterations: 1,
+        max_step: 0.1,
+        ..dls()
+    };
+    let err = IkSolver::<8>::new(options)
+        .solve(&model, &mut Data::new(), &far, &start, &mut q)
+        .unwrap_err();
+    assert!(
+        matches!(err, IkError::NotConverged { iterations: 1, .. }),
+        "{err:?}"
+    );
+    // q_out is the best of the two configurations seen, so either the start or one step on.
+    let moved = q
+        .iter()
+        .zip(start)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(moved <= 0.1 + 1e-12, "{moved}");
+}
+
 // ---------------------------------------------------------------- bad input
 
 #[test]
@@ -1115,4 +1153,66 @@ fn solving_allocates_nothing() {
     assert!(results[0].is_ok() && results[1].is_ok(), "{results:?}");
     assert!(matches!(results[3], Err(IkError::NotConverged { .. })));
     assert!(results[4].is_ok());
+}
+
+// ---------------------------------------------------------------- RL's example models
+
+/// Every model of RL's example corpus (`tests/data/rlmdl`): random reachable poses of all its
+/// tools at once (up to `MAX_GOALS`) with DLS and SVD, checked independently.
+#[cfg(feature = "std")]
+#[test]
+fn rl_example_models_reach_random_poses() {
+    use rl_core::loader;
+    const C: usize = 32;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/rlmdl");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "xml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 12, "corpus not found in {}", dir.display());
+    for (f, path) in files.iter().enumerate() {
+        let model = loader::load_file::<C>(path).unwrap().model;
+        let tools = model.tools().len().min(MAX_GOALS);
+        assert!(tools > 0);
+        for (method, options) in [("DLS", dls()), ("SVD", svd())] {
+            let mut rng = SplitMix64::new(100 + f as u64);
+            let mut solver = IkSolver::<C>::new(options);
+            let mut data = Data::<C>::new();
+            let mut stats = Stats::default();
+            for _ in 0..20 {
+                let q_target = random_q(&model, &mut rng);
+                let goals: Vec<IkGoal> = (0..tools)
+                    .map(|t| IkGoal::pose(t, fk_tool(&model, &q_target, t)))
+                    .collect();
+                let start = random_q(&model, &mut rng);
+                let mut q = vec![0.0; model.nq()];
+                stats.tries += 1;
+                if let Ok(s) = solver.solve(&model, &mut data, &goals, &start, &mut q) {
+                    let err2: f64 = goals
+                        .iter()
+                        .map(|g| {
+                            let rl_core::algo::ik::IkTarget::Pose(x) = g.target else {
+                                unreachable!()
+                            };
+                            let (dp, da) = pose_distance(&fk_tool(&model, &q, g.tool), &x);
+                            dp * dp + da * da
+                        })
+                        .sum();
+                    assert!(err2.sqrt() < 1e-6, "{}: {s:?}", path.display());
+                    assert!(within_limits(&model, &q));
+                    stats.solved += 1;
+                    stats.iterations += s.iterations;
+                    stats.restarts += s.restarts;
+                }
+            }
+            let name = path.file_name().unwrap().to_string_lossy();
+            stats.report(&format!(
+                "{name} ({} DOF, {tools} tools), {method}",
+                model.dof()
+            ));
+            assert!(stats.rate() >= 0.9, "{name}, {method}: {stats:?}");
+        }
+    }
 }

@@ -8,16 +8,48 @@
 //! when their Euclidean norm is below `epsilon`, and otherwise steps `q ← q ⊕ dq` through
 //! [`Joint::integrate`](crate::joint::Joint::integrate) (so spherical and free joints stay
 //! on the unit quaternion), then clamps every coordinate into its limits (wraparound joints
-//! are wrapped into `[-π, π)`). After `iterations_per_attempt` iterations without success it
-//! restarts from a random configuration drawn with a seeded [`SplitMix64`], until the total
+//! are wrapped into `[-π, π)`). A joint already at a limit that the step would push further
+//! out is locked for that step and the step recomputed without it. An attempt ends after
+//! `iterations_per_attempt` iterations, or earlier when the error stalls; the next attempt
+//! starts from a random configuration drawn with a seeded [`SplitMix64`], until the total
 //! iteration budget, the restart limit or the (optional) time budget is spent.
 //!
 //! Differences from RL, on purpose: "dls" damps (RL passes `λ = 0`); the step length is
-//! bounded by default (RL's `delta` is infinite); the result is reproducible (fixed default
-//! seed); on failure the best configuration found is returned with its residual.
+//! bounded by default (RL's `delta` is infinite); stalled attempts restart early; the result
+//! is reproducible (fixed default seed); on failure the best configuration found is returned
+//! in `q_out` with its residual in the error.
 //!
 //! All scratch lives in [`IkSolver`] (fixed arrays sized by the model capacity `N` and
 //! [`MAX_GOALS`]); solving does not allocate and never panics on bad input.
+//!
+//! ```
+//! use glam::{DMat3, DVec3};
+//! use rl_core::algo::ik::{IkGoal, IkSolver};
+//! use rl_core::joint::{Joint, Revolute};
+//! use rl_core::model::ROOT;
+//! use rl_core::spatial::{PlueckerTransform, RigidBodyInertia};
+//! use rl_core::{Data, ModelBuilder};
+//!
+//! // A planar 2R arm with 1 m links, its tool at the tip.
+//! let mut b = ModelBuilder::<2>::new();
+//! let link = RigidBodyInertia::from_com(1.0, DVec3::ZERO, DMat3::IDENTITY * 0.01);
+//! let z = Joint::Revolute(Revolute::new(DVec3::Z));
+//! let x1 = PlueckerTransform::from_translation(DVec3::X);
+//! let b0 = b.add_body(ROOT, "j0", z, PlueckerTransform::IDENTITY, "l0", link).unwrap();
+//! let b1 = b.add_body(b0, "j1", z, x1, "l1", link).unwrap();
+//! b.add_tool("tip", b1, x1).unwrap();
+//! let model = b.build();
+//!
+//! let mut solver = IkSolver::<2>::default();
+//! let mut data = Data::new();
+//! let mut q = [0.0; 2];
+//! let goal = IkGoal::position(0, DVec3::new(1.0, 1.0, 0.0));
+//! let s = solver.solve(&model, &mut data, &[goal], &[0.3, 0.3], &mut q).unwrap();
+//! assert!(s.residual < 1e-6);
+//! // Either elbow solution: (0, π/2) or (π/2, -π/2).
+//! let elbow = q[1].abs();
+//! assert!((elbow - core::f64::consts::FRAC_PI_2).abs() < 1e-5);
+//! ```
 
 mod dls;
 mod error;
