@@ -1113,6 +1113,10 @@ fn bad_input_is_refused_with_a_typed_error() {
 
 #[test]
 fn solving_allocates_nothing() {
+    // The counter sees this thread's allocations (a check of the instrument itself).
+    let before = allocations();
+    let probe = std::hint::black_box(vec![1u8; 16]);
+    assert!(allocations() > before && probe.len() == 16);
     let model = two_arms();
     let mut data = Data::<16>::new();
     let mut rng = SplitMix64::new(12);
