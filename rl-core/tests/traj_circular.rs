@@ -128,6 +128,10 @@ fn pose_trajectory_joins_position_and_rotation() {
         1e-14,
     );
     assert!(s.orientation.abs_diff_eq(rot.rotation(t).orientation, 0.0));
+    // Spatial = classical minus ω × v.
+    let sp = s.spatial_acceleration();
+    let expect = s.linear_acceleration - s.angular_velocity.cross(s.linear_velocity);
+    assert_close("spatial", [sp[0], sp[1], sp[2]], expect.to_array(), 0.0);
     let short = SlerpTrajectory::new(q0, q1, 0.5 * pos.duration()).unwrap();
     assert_eq!(
         PoseTrajectory::new(pos, short).unwrap_err(),

@@ -295,3 +295,35 @@ fn bad_waypoints_are_typed_errors() {
     let r: Result<Piecewise<Polynomial<2, 4>, 8>, _> = spline::natural_cubic(&TIMES[..3], &POINTS);
     assert!(matches!(r, Err(TrajectoryError::TooFewWaypoints { .. })));
 }
+
+#[test]
+fn a_spline_of_splines_plays_them_in_order() {
+    // Two natural cubic splines one after another: composition of piecewise functions.
+    let first: Piecewise<Polynomial<2, 4>, 5> =
+        spline::natural_cubic(&TIMES[..3], &POINTS[..3]).unwrap();
+    let second: Piecewise<Polynomial<2, 4>, 5> =
+        spline::natural_cubic(&TIMES[2..], &POINTS[2..]).unwrap();
+    let mut both: Piecewise<Piecewise<Polynomial<2, 4>, 5>, 2> = Piecewise::new();
+    both.push(first.clone()).unwrap();
+    both.push(second.clone()).unwrap();
+    assert!((both.duration() - 4.0).abs() < 1e-15);
+    for k in 0..=40 {
+        let t = 4.0 * k as f64 / 40.0;
+        let expect = if t < 1.5 {
+            first.sample(t)
+        } else {
+            second.sample(t - 1.5)
+        };
+        assert_close("composed", both.position(t), expect.position, 1e-15);
+        assert_close(
+            "composed v",
+            both.sample(t).velocity,
+            expect.velocity,
+            1e-15,
+        );
+    }
+    // Both end at rest in acceleration and meet at waypoint 2: C⁰ and C² there, velocity jumps.
+    both.check_continuity(0, 1e-12).unwrap();
+    let e = both.check_continuity(1, 1e-12).unwrap_err();
+    assert_eq!((e.boundary, e.order), (0, 1));
+}

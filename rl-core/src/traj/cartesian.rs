@@ -29,6 +29,15 @@ impl PoseSample {
         [v.x, v.y, v.z, w.x, w.y, w.z]
     }
 
+    /// Spatial acceleration (Featherstone) of the moving frame at its origin, world-aligned
+    /// axes, `[a - ω × v; α]` (linear first, as RL): the classical acceleration minus the
+    /// velocity-product term.
+    pub fn spatial_acceleration(&self) -> [f64; 6] {
+        let a = self.linear_acceleration - self.angular_velocity.cross(self.linear_velocity);
+        let b = self.angular_acceleration;
+        [a.x, a.y, a.z, b.x, b.y, b.z]
+    }
+
     /// Classical acceleration `[a; α]` of the frame origin, the target of `J q̈ + J̇ q̇`.
     pub fn acceleration(&self) -> [f64; 6] {
         let (a, b) = (self.linear_acceleration, self.angular_acceleration);

@@ -51,34 +51,6 @@ fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
 }
 
 impl Profile {
-    /// Builds the phases from the phase times, stretched by `1/k` in time (`k ≤ 1`).
-    fn new(x0: f64, x1: f64, jerk: f64, (tj, ta, tv): (f64, f64, f64), k: f64) -> Self {
-        let sign = if x1 >= x0 { 1.0 } else { -1.0 };
-        let j = sign * jerk * k * k * k;
-        let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
-        let durations =
-            [tj, ta - 2.0 * tj, tj, tv, tj, ta - 2.0 * tj, tj].map(|d| d.max(0.0) * stretch);
-        let jerks = [j, 0.0, -j, 0.0, -j, 0.0, j];
-        let mut p = Profile {
-            end: [0.0; 7],
-            start: [0.0; 7],
-            state: [[0.0; 4]; 7],
-        };
-        let (mut x, mut v, mut a, mut t) = (x0, 0.0, 0.0, 0.0);
-        for i in 0..7 {
-            let (d, ji) = (durations[i], jerks[i]);
-            p.start[i] = t;
-            p.state[i] = [x, v, a, ji];
-            x += d * (v + d * (0.5 * a + d * ji / 6.0));
-            v += d * (a + 0.5 * d * ji);
-            a += d * ji;
-            t += d;
-            p.end[i] = t;
-        }
-        // Rounding leaves |x - x1| at a few ulps; the last phase is exact by construction.
-        p
-    }
-
     fn duration(&self) -> f64 {
         self.end[6]
     }
@@ -137,12 +109,42 @@ impl<const D: usize> JerkLimited<D> {
         if !duration.is_finite() {
             return Err(TrajectoryError::Unreachable);
         }
-        let axes = core::array::from_fn(|axis| {
-            let (_, ta, tv) = times[axis];
+        // Phase durations stretched by 1/k (k = own duration / common duration ≤ 1) and
+        // jerks scaled by k³, then the seven phases integrated for all axes at once (axis
+        // inner, so the independent chains overlap).
+        let mut durations = [[0.0; 7]; D];
+        let mut jerk = [0.0; D];
+        for axis in 0..D {
+            let (tj, ta, tv) = times[axis];
             let own = 2.0 * ta + tv;
             let k = if duration > 0.0 { own / duration } else { 1.0 };
-            Profile::new(start[axis], goal[axis], limits.jerk[axis], times[axis], k)
-        });
+            let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
+            let sign = if goal[axis] >= start[axis] { 1.0 } else { -1.0 };
+            jerk[axis] = sign * limits.jerk[axis] * k * k * k;
+            let (tj, cruise_a) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
+            durations[axis] = [tj, cruise_a, tj, tv * stretch, tj, cruise_a, tj];
+        }
+        const JERK_SIGN: [f64; 7] = [1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0];
+        let mut axes = [Profile {
+            end: [0.0; 7],
+            start: [0.0; 7],
+            state: [[0.0; 4]; 7],
+        }; D];
+        let mut x = start;
+        let (mut v, mut a, mut t) = ([0.0; D], [0.0; D], [0.0; D]);
+        for i in 0..7 {
+            for axis in 0..D {
+                let (d, j) = (durations[axis][i], JERK_SIGN[i] * jerk[axis]);
+                let p = &mut axes[axis];
+                p.start[i] = t[axis];
+                p.state[i] = [x[axis], v[axis], a[axis], j];
+                x[axis] += d * (v[axis] + d * (0.5 * a[axis] + d * j * (1.0 / 6.0)));
+                v[axis] += d * (a[axis] + 0.5 * d * j);
+                a[axis] += d * j;
+                t[axis] += d;
+                p.end[i] = t[axis];
+            }
+        }
         Ok(Self { axes, duration })
     }
 
