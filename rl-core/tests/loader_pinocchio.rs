@@ -12,7 +12,7 @@ use glam::{DMat3, DVec3};
 use rl_core::Data;
 use rl_core::algo;
 use rl_core::joint::JointKind;
-use rl_core::loader::{self, LoadedModel, MimicJoints, UrdfOptions};
+use rl_core::loader::{self, JointOrder, LoadedModel, MimicJoints, UrdfOptions};
 use rl_core::model::ROOT;
 use rl_core::spatial::{MotionVector, PlueckerTransform};
 use serde_json::Value;
@@ -98,6 +98,7 @@ fn options(fx: &Value) -> UrdfOptions {
     UrdfOptions {
         floating_base: fx["floating_base"].as_bool().unwrap(),
         mimic: MimicJoints::Independent,
+        joint_order: JointOrder::Pinocchio,
         locked_joints: fx["locked_joints"]
             .as_array()
             .unwrap()

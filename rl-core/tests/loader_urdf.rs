@@ -332,31 +332,32 @@ fn branches_with_tip(xyz: &str) -> String {
 }
 
 #[test]
-fn joint_order_is_pinocchios_by_default_or_the_files() {
+fn joint_order_is_the_files_by_default_or_pinocchios() {
     let text = branches_with_tip("0 0 0");
-    let p = urdf(&text);
+    let f = urdf(&text);
+    let names: Vec<&str> = (0..3).map(|i| f.model.joint_name(i)).collect();
+    assert_eq!(names, ["z_right", "z_right2", "a_left"]);
+    let tools: Vec<&str> = f.model.tools().iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(tools, ["tip", "l1"]);
+    let p = urdf_with(
+        &text,
+        &UrdfOptions {
+            joint_order: JointOrder::Pinocchio,
+            ..Default::default()
+        },
+    );
     let names: Vec<&str> = (0..3).map(|i| p.model.joint_name(i)).collect();
     assert_eq!(names, ["a_left", "z_right", "z_right2"]);
     assert_eq!(p.model.parent(2), 1);
     let tools: Vec<&str> = p.model.tools().iter().map(|t| t.name.as_str()).collect();
     assert_eq!(tools, ["l1", "tip"]);
-    let f = urdf_with(
-        &text,
-        &UrdfOptions {
-            joint_order: JointOrder::File,
-            ..Default::default()
-        },
-    );
-    let names: Vec<&str> = (0..3).map(|i| f.model.joint_name(i)).collect();
-    assert_eq!(names, ["z_right", "z_right2", "a_left"]);
-    let tools: Vec<&str> = f.model.tools().iter().map(|t| t.name.as_str()).collect();
-    assert_eq!(tools, ["tip", "l1"]);
 }
 
 #[test]
 fn extra_tools_and_no_leaf_tools() {
     let text = branches_with_tip("0 0 0");
     let opt = UrdfOptions {
+        joint_order: JointOrder::Pinocchio,
         leaf_tools: false,
         extra_tools: vec!["r1".into(), "base".into()],
         ..Default::default()
@@ -382,8 +383,13 @@ fn extra_tools_and_no_leaf_tools() {
 #[test]
 fn a_locked_joint_is_fixed_at_its_value() {
     let text = branches_with_tip("1 0 0");
-    let free = urdf(&text);
+    let pinocchio_order = UrdfOptions {
+        joint_order: JointOrder::Pinocchio,
+        ..Default::default()
+    };
+    let free = urdf_with(&text, &pinocchio_order);
     let opt = UrdfOptions {
+        joint_order: JointOrder::Pinocchio,
         locked_joints: vec![("z_right2".into(), 0.4)],
         ..Default::default()
     };

@@ -41,6 +41,10 @@ pub struct ModelFile {
     /// URDF only: number sibling joints in file order (RL) or by name (Pinocchio).
     #[arg(long, value_enum, default_value_t = Order::File)]
     pub joint_order: Order,
+    /// URDF only: load joints that have a `<mimic>` tag as independent joints (as Pinocchio
+    /// does) instead of refusing the file.
+    #[arg(long)]
+    pub mimic_independent: bool,
 }
 
 /// Sibling joint order for URDF files.
@@ -98,6 +102,14 @@ pub struct BenchArgs {
     /// Number of timed rounds (the median is reported).
     #[arg(long, default_value_t = 15)]
     rounds: usize,
+    /// Time these states instead of random ones: a file in the `rl-bench-states 1` format of
+    /// scripts/bench-pinocchio (joints named, so any joint order maps by name).
+    #[arg(long, value_name = "FILE")]
+    states_file: Option<PathBuf>,
+    /// Time the Jacobian of this tool (URDF: any link, added as a tool when it is not a
+    /// leaf) instead of the first tool.
+    #[arg(long, value_name = "NAME")]
+    tool: Option<String>,
 }
 
 /// Runs `rl model`.
@@ -111,11 +123,25 @@ pub fn run(cmd: ModelCommand) -> CliResult {
 
 /// Loads a model file into a boxed model of [`CAPACITY`].
 pub fn load(m: &ModelFile) -> Result<Box<LoadedModel<CAPACITY>>, CliError> {
+    load_with_tools(m, Vec::new())
+}
+
+/// Loads a model file with `extra_tools` (URDF link names) made tools after the leaves.
+fn load_with_tools(
+    m: &ModelFile,
+    extra_tools: Vec<String>,
+) -> Result<Box<LoadedModel<CAPACITY>>, CliError> {
     let options = UrdfOptions {
         floating_base: m.floating_base,
         joint_order: match m.joint_order {
             Order::File => JointOrder::File,
             Order::Pinocchio => JointOrder::Pinocchio,
+        },
+        extra_tools,
+        mimic: if m.mimic_independent {
+            loader::MimicJoints::Independent
+        } else {
+            loader::MimicJoints::Reject
         },
         ..UrdfOptions::default()
     };
@@ -358,29 +384,173 @@ fn time_per_call(states: usize, rounds: usize, mut f: impl FnMut(usize)) -> f64 
 /// The algorithms `rl model bench` times, with their JSON keys.
 pub const BENCH_KEYS: [&str; 7] = ["fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba"];
 
-/// Median ns per call for each of [`BENCH_KEYS`] on `model`.
-pub fn bench_model(
-    model: &Model<CAPACITY>,
-    nstates: usize,
-    rounds: usize,
-) -> Result<[f64; 7], CliError> {
-    let nstates = nstates.max(1);
-    let rounds = rounds.max(1);
-    let mut rng = SplitMix(0x5EED);
-    let (nq, nv) = (model.nq(), model.dof());
-    let mut qs = vec![0.0; nq * nstates];
-    for s in 0..nstates {
-        model.random_configuration(&mut qs[s * nq..(s + 1) * nq], || rng.uniform());
+/// Benchmark states in the model's own layout: `n` states of `q` (nq), `q̇` and `q̈` (dof).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchStates {
+    /// Number of states.
+    pub n: usize,
+    /// Positions, state after state.
+    pub q: Vec<f64>,
+    /// Velocities, state after state.
+    pub qd: Vec<f64>,
+    /// Accelerations, state after state.
+    pub qdd: Vec<f64>,
+}
+
+impl BenchStates {
+    /// `n` reproducible random states (SplitMix64 seed 0x5EED; positions within limits).
+    pub fn random(model: &Model<CAPACITY>, n: usize) -> Self {
+        let n = n.max(1);
+        let mut rng = SplitMix(0x5EED);
+        let (nq, nv) = (model.nq(), model.dof());
+        let mut q = vec![0.0; nq * n];
+        for s in 0..n {
+            model.random_configuration(&mut q[s * nq..(s + 1) * nq], || rng.uniform());
+        }
+        let mut r = || rng.uniform() * 2.0 - 1.0;
+        let qd = (0..nv * n).map(|_| r()).collect();
+        let qdd = (0..nv * n).map(|_| r()).collect();
+        Self { n, q, qd, qdd }
     }
-    let mut r = || rng.uniform() * 2.0 - 1.0;
-    let qds: Vec<f64> = (0..nv * nstates).map(|_| r()).collect();
-    let qdds: Vec<f64> = (0..nv * nstates).map(|_| r()).collect();
+
+    /// Parses a states file (`rl-bench-states 1`, written by scripts/bench-pinocchio) and maps
+    /// its joints onto `model`'s by name: every moving joint of the model must appear once,
+    /// with the same nq and nv.
+    pub fn parse(model: &Model<CAPACITY>, text: &str) -> Result<Self, String> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty());
+        let mut next = |what: &str| lines.next().ok_or(format!("file ends before the {what}"));
+        let (_, magic) = next("header")?;
+        if magic != "rl-bench-states 1" {
+            return Err(format!(
+                "line 1: expected \"rl-bench-states 1\", found {magic:?}"
+            ));
+        }
+        let (ln, sizes) = next("sizes line")?;
+        let f: Vec<&str> = sizes.split_whitespace().collect();
+        let num = |i: usize| -> Result<usize, String> {
+            f.get(i).and_then(|x| x.parse().ok()).ok_or(format!(
+                "line {ln}: expected \"nq N nv N joints N states N\""
+            ))
+        };
+        if f.len() != 8 || f[0] != "nq" || f[2] != "nv" || f[4] != "joints" || f[6] != "states" {
+            return Err(format!(
+                "line {ln}: expected \"nq N nv N joints N states N\""
+            ));
+        }
+        let (fnq, fnv, nj, n) = (num(1)?, num(3)?, num(5)?, num(7)?);
+        if n == 0 {
+            return Err(format!("line {ln}: no states"));
+        }
+        // (our body index, offset in the file's q, offset in the file's v) per file joint.
+        let mut map = Vec::with_capacity(nj);
+        let (mut oq, mut ov) = (0, 0);
+        for _ in 0..nj {
+            let (ln, l) = next("joint lines")?;
+            let f: Vec<&str> = l.split_whitespace().collect();
+            let (Some(&"joint"), Some(name), Some(jq), Some(jv), 4) = (
+                f.first(),
+                f.get(1),
+                f.get(2).and_then(|x| x.parse::<usize>().ok()),
+                f.get(3).and_then(|x| x.parse::<usize>().ok()),
+                f.len(),
+            ) else {
+                return Err(format!("line {ln}: expected \"joint NAME NQ NV\""));
+            };
+            let body = (0..model.body_count())
+                .find(|&i| model.joint_name(i) == *name)
+                .ok_or(format!("line {ln}: the model has no joint named {name}"))?;
+            let j = model.joint(body);
+            if (j.nq(), j.nv()) != (jq, jv) {
+                return Err(format!(
+                    "line {ln}: joint {name} has nq {jq}, nv {jv} in the file but {}, {} in the model",
+                    j.nq(),
+                    j.nv()
+                ));
+            }
+            map.push((body, oq, ov));
+            oq += jq;
+            ov += jv;
+        }
+        let (nq, nv) = (model.nq(), model.dof());
+        if (oq, ov) != (fnq, fnv) || (fnq, fnv) != (nq, nv) {
+            return Err(format!(
+                "the file's joints give nq {oq}, nv {ov} (header: {fnq}, {fnv}); the model has nq {nq}, nv {nv}"
+            ));
+        }
+        let mut out = Self {
+            n,
+            q: vec![0.0; nq * n],
+            qd: vec![0.0; nv * n],
+            qdd: vec![0.0; nv * n],
+        };
+        for s in 0..n {
+            let (ln, l) = next("state lines")?;
+            let mut it = l.split_whitespace();
+            if it.next() != Some("state") {
+                return Err(format!(
+                    "line {ln}: expected \"state\" and {} numbers",
+                    nq + 2 * nv
+                ));
+            }
+            let x: Vec<f64> = it
+                .map(|t| t.parse::<f64>().ok().filter(|v| v.is_finite()))
+                .collect::<Option<_>>()
+                .ok_or(format!("line {ln}: a value is not a finite number"))?;
+            if x.len() != nq + 2 * nv {
+                return Err(format!(
+                    "line {ln}: {} numbers, expected {}",
+                    x.len(),
+                    nq + 2 * nv
+                ));
+            }
+            let (fq, rest) = x.split_at(nq);
+            let (fv, fa) = rest.split_at(nv);
+            for &(body, oq, ov) in &map {
+                let j = model.joint(body);
+                let (mq, mv) = (model.q_index(body), model.v_index(body));
+                out.q[s * nq + mq..][..j.nq()].copy_from_slice(&fq[oq..oq + j.nq()]);
+                out.qd[s * nv + mv..][..j.nv()].copy_from_slice(&fv[ov..ov + j.nv()]);
+                out.qdd[s * nv + mv..][..j.nv()].copy_from_slice(&fa[ov..ov + j.nv()]);
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Median ns per call for each of [`BENCH_KEYS`] on `model` over `states`, with the
+/// Jacobian of tool index `tool`.
+pub fn bench_states(
+    model: &Model<CAPACITY>,
+    states: &BenchStates,
+    rounds: usize,
+    tool: usize,
+) -> Result<[f64; 7], CliError> {
+    let nstates = states.n;
+    let rounds = rounds.max(1);
+    let (nq, nv) = (model.nq(), model.dof());
+    if states.q.len() != nq * nstates
+        || states.qd.len() != nv * nstates
+        || states.qdd.len() != nv * nstates
+    {
+        return Err(CliError::usage(
+            "the states do not fit the model's nq and dof",
+        ));
+    }
+    if tool >= model.tools().len() {
+        return Err(CliError::usage(
+            "the model has no tool to compute a Jacobian for",
+        ));
+    }
     let mut d = Box::new(Data::<CAPACITY>::new());
     let mut jac = Box::new([[0.0; CAPACITY]; 6]);
-    let q = |s: usize| &qs[s * nq..(s + 1) * nq];
-    let qd = |s: usize| &qds[s * nv..(s + 1) * nv];
-    let qdd = |s: usize| &qdds[s * nv..(s + 1) * nv];
-    // τ for ABA: RNEA of the random accelerations, so ABA sees realistic torques.
+    let q = |s: usize| &states.q[s * nq..(s + 1) * nq];
+    let qd = |s: usize| &states.qd[s * nv..(s + 1) * nv];
+    let qdd = |s: usize| &states.qdd[s * nv..(s + 1) * nv];
+    // τ for ABA: RNEA of the states' accelerations, so ABA sees realistic torques.
     let mut taus = vec![0.0; nv * nstates];
     for s in 0..nstates {
         let t = algo::rnea(model, &mut d, q(s), qd(s), qdd(s))
@@ -388,17 +558,18 @@ pub fn bench_model(
         taus[s * nv..(s + 1) * nv].copy_from_slice(t);
     }
     let tau = |s: usize| &taus[s * nv..(s + 1) * nv];
-    if model.tools().is_empty() {
-        return Err(CliError::usage(
-            "the model has no tool to compute a Jacobian for",
-        ));
-    }
     let mut out = [0.0; 7];
     out[0] = time_per_call(nstates, rounds, |s| {
         let _ = black_box(algo::forward_position(model, &mut d, black_box(q(s))));
     });
     out[1] = time_per_call(nstates, rounds, |s| {
-        let _ = black_box(algo::jacobian(model, &mut d, black_box(q(s)), 0, &mut jac));
+        let _ = black_box(algo::jacobian(
+            model,
+            &mut d,
+            black_box(q(s)),
+            tool,
+            &mut jac,
+        ));
     });
     out[2] = time_per_call(nstates, rounds, |s| {
         let _ = black_box(algo::rnea(model, &mut d, black_box(q(s)), qd(s), qdd(s)).map(|t| t[0]));
@@ -420,16 +591,42 @@ pub fn bench_model(
 }
 
 fn bench(a: BenchArgs) -> CliResult {
-    let loaded = load(&a.model)?;
+    let first = load(&a.model)?;
+    let loaded = match a.tool.as_deref() {
+        Some(t) if first.model.tool_index(t).is_none() => {
+            load_with_tools(&a.model, vec![t.to_string()])?
+        }
+        _ => first,
+    };
     let m = &loaded.model;
-    let ns = bench_model(m, a.states, a.rounds)?;
+    let tool = match a.tool.as_deref() {
+        None => 0,
+        Some(t) => m.tool_index(t).ok_or_else(|| {
+            let names: Vec<_> = m.tools().iter().map(|x| x.name.as_str()).collect();
+            CliError::usage(format!(
+                "--tool: the model has no tool or link named {t:?} (tools: {})",
+                names.join(", ")
+            ))
+        })?,
+    };
+    let states = match &a.states_file {
+        None => BenchStates::random(m, a.states),
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| CliError::usage(format!("--states-file {}: {e}", path.display())))?;
+            BenchStates::parse(m, &text)
+                .map_err(|e| CliError::usage(format!("--states-file {}: {e}", path.display())))?
+        }
+    };
+    let ns = bench_states(m, &states, a.rounds, tool)?;
     if a.json {
         let mut obj = serde_json::Map::new();
         for (k, v) in BENCH_KEYS.iter().zip(ns) {
             obj.insert(format!("{k}_ns"), json!((v * 10.0).round() / 10.0));
         }
         obj.insert("dof".into(), json!(m.dof()));
-        obj.insert("tool".into(), json!(m.tools()[0].name.as_str()));
+        obj.insert("tool".into(), json!(m.tools()[tool].name.as_str()));
+        obj.insert("states".into(), json!(states.n));
         println!("{}", serde_json::Value::Object(obj));
     } else {
         println!(
@@ -437,8 +634,8 @@ fn bench(a: BenchArgs) -> CliResult {
             m.name(),
             m.dof(),
             a.rounds,
-            a.states,
-            m.tools()[0].name.as_str()
+            states.n,
+            m.tools()[tool].name.as_str()
         );
         for (k, v) in BENCH_KEYS.iter().zip(ns) {
             println!("  {k:<10} {v:>10.1} ns");

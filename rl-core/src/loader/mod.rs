@@ -43,12 +43,13 @@ pub enum Format {
 /// The order in which the joints below one URDF link are numbered.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum JointOrder {
-    /// Pinocchio's: ascending byte order of the joint names (urdfdom keeps joints in a sorted
-    /// map). This makes `q` line up with Pinocchio's.
+    /// The order of the `<joint>` elements in the file (depth-first, siblings in file order),
+    /// as RL numbers them.
     #[default]
-    Pinocchio,
-    /// The order of the `<joint>` elements in the file.
     File,
+    /// Pinocchio's: siblings in ascending byte order of their joint names (urdfdom keeps joints
+    /// in a sorted map). This makes `q` line up with Pinocchio's on branched robots.
+    Pinocchio,
 }
 
 /// What to do with a moving URDF joint that has a `<mimic>` tag.
@@ -84,7 +85,7 @@ impl Default for UrdfOptions {
     fn default() -> Self {
         Self {
             floating_base: false,
-            joint_order: JointOrder::Pinocchio,
+            joint_order: JointOrder::File,
             mimic: MimicJoints::Reject,
             locked_joints: Vec::new(),
             leaf_tools: true,

@@ -3,8 +3,9 @@
 //! Links become bodies (inertial origin with `xyz` and `rpy`: rotated inertial frames are
 //! supported), joints `revolute`, `continuous` (one angle that wraps around, nq = 1, where
 //! Pinocchio uses nq = 2 with cos/sin), `prismatic`, `fixed` (merged), `floating` (six-DOF) and
-//! `planar` (the axis is the plane's normal). The joint order is Pinocchio's by default:
-//! depth-first from the root link, children in ascending byte order of their joint names.
+//! `planar` (the axis is the plane's normal). The joint order is depth-first from the root
+//! link with siblings in file order (RL's) by default; [`super::JointOrder::Pinocchio`] orders
+//! siblings by joint name, as Pinocchio does (urdfdom keeps joints in a sorted map).
 
 use std::format;
 use std::string::ToString;
