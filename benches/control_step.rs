@@ -1,0 +1,2 @@
+//! Cost of one full control step (issue 7; being built).
+fn main() {}
