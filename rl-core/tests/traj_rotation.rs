@@ -135,6 +135,49 @@ fn cubic_quaternion_spline_meets_orientations_and_end_angular_velocities() {
 }
 
 #[test]
+fn cubic_quaternion_spline_is_c2_at_interior_waypoints() {
+    let mut rng = Rng(31);
+    for _ in 0..30 {
+        let times = [0.0, 0.6, 1.5, 2.1, 3.0, 3.4];
+        // Neighbouring orientations up to ~1 rad apart.
+        let mut q = vec![random_quat(&mut rng)];
+        for _ in 1..6 {
+            let step = DVec3::new(
+                rng.range(-0.3, 0.3),
+                rng.range(-0.3, 0.3),
+                rng.range(-0.3, 0.3),
+            );
+            q.push(exp(step) * *q.last().unwrap());
+        }
+        let w0 = DVec3::new(0.2, 0.0, -0.1);
+        let s: CubicQuaternionSpline<5> =
+            CubicQuaternionSpline::new(&times, &q, w0, DVec3::ZERO).unwrap();
+        assert!(
+            s.acceleration_jump() < 1e-12,
+            "not C²: {}",
+            s.acceleration_jump()
+        );
+        for &t in &times[1..5] {
+            let i = s.starts().partition_point(|&x| x <= t) - 1;
+            let left_start = s.starts()[i - 1];
+            // Left limit via the previous segment's end, right value at the knot.
+            let left = s.rotation(t - 1e-7).angular_acceleration;
+            let right = s.rotation(t).angular_acceleration;
+            assert!(
+                (left - right).length() < 1e-5 * (1.0 + right.length()),
+                "α jumps at {t} ({left_start})"
+            );
+        }
+        assert!((s.rotation(0.0).angular_velocity - w0).length() < 1e-13);
+        assert!(s.rotation(3.4).angular_velocity.length() < 1e-13);
+        for (t, qi) in times.iter().zip(&q) {
+            assert!(same_rotation(s.rotation(*t).orientation, *qi, 1e-13));
+        }
+        check_rates(&s, &times);
+    }
+}
+
+#[test]
 fn quaternion_spline_errors() {
     let q = [DQuat::IDENTITY; 3];
     let r: Result<CubicQuaternionSpline<1>, _> =

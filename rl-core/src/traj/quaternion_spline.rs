@@ -134,16 +134,24 @@ impl CubicSegment {
     }
 }
 
-/// A C¹ cubic quaternion spline through orientations at given times, with given world angular
-/// velocities at both ends. Interior angular velocities are the mean of the neighbouring
-/// segments' average angular velocities (Catmull-Rom style), so the angular velocity is
-/// continuous at every waypoint; the angular acceleration may jump there.
+/// A cubic quaternion spline through orientations at given times, with given world angular
+/// velocities at both ends: each segment is a cubic in Kim-Kim-Shin cumulative form, so the
+/// angular velocity is continuous at every waypoint (C¹) by construction. The interior angular
+/// velocities are then chosen by a Newton iteration so that the angular acceleration is
+/// continuous too (C², as RL's `SplineQuaternion`); [`CubicQuaternionSpline::acceleration_jump`]
+/// reports how far that got (it converges in a few steps unless neighbouring orientations are
+/// far apart).
 #[derive(Clone, Debug)]
 pub struct CubicQuaternionSpline<const MAX: usize> {
     segments: Vec<CubicSegment, MAX>,
     starts: [f64; MAX],
     duration: f64,
+    acceleration_jump: f64,
 }
+
+/// Newton steps towards continuous angular acceleration, and when to stop.
+const C2_ITERATIONS: usize = 30;
+const C2_TOLERANCE: f64 = 1e-13;
 
 impl<const MAX: usize> CubicQuaternionSpline<MAX> {
     /// Through `orientations` at `times` (strictly increasing) with world angular velocities
@@ -189,37 +197,92 @@ impl<const MAX: usize> CubicQuaternionSpline<MAX> {
                 index: 0,
             });
         }
-        let q = |i: usize| -> DQuat { orientations[i].normalize() };
-        // Sign-consistent copies are computed on the fly from the previous one.
-        let mut prev = q(0);
-        let mut cur = if prev.dot(q(1)) < 0.0 { -q(1) } else { q(1) };
-        // World rotation vector of segment i divided by its duration.
-        let rate = |a: DQuat, b: DQuat, h: f64| log(b * a.conjugate()) * (2.0 / h);
-        let mut omega_prev = omega_start;
+        // Sign-consistent unit orientations: knots 0..n-2 in `qs`, the last one apart (the
+        // arrays hold MAX entries and there are up to MAX + 1 knots).
+        let mut qs = [DQuat::IDENTITY; MAX];
+        let mut q_last = orientations[0].normalize();
+        for (i, q) in orientations.iter().enumerate() {
+            let mut q = q.normalize();
+            if q.dot(q_last) < 0.0 {
+                q = -q;
+            }
+            if i < n - 1 {
+                qs[i] = q;
+            }
+            q_last = q;
+        }
+        let quat = |i: usize| if i < n - 1 { qs[i] } else { q_last };
+        let h = |i: usize| times[i + 1] - times[i];
+        // Knot angular velocities: the ends are given; interior ones start as the mean of the
+        // neighbouring segments' average rates (Catmull-Rom), C¹.
+        let rate = |i: usize| log(quat(i + 1) * quat(i).conjugate()) * (2.0 / h(i));
+        let mut w = [DVec3::ZERO; MAX];
+        w[0] = omega_start;
+        for (i, wi) in w.iter_mut().enumerate().take(n - 1).skip(1) {
+            *wi = (rate(i - 1) + rate(i)) * 0.5;
+        }
+        let omega = |w: &[DVec3; MAX], i: usize| if i < n - 1 { w[i] } else { omega_end };
+        let segment = |w: &[DVec3; MAX], i: usize| {
+            CubicSegment::new(quat(i), quat(i + 1), omega(w, i), omega(w, i + 1), h(i))
+        };
+        // Largest jump of the angular acceleration over interior knots, relative to its size,
+        // and the residuals r_i = α_left - α_right.
+        let residuals = |w: &[DVec3; MAX], r: &mut [DVec3; MAX]| -> f64 {
+            let mut worst: f64 = 0.0;
+            let mut left_end = segment(w, 0).rotation(h(0)).angular_acceleration;
+            for i in 1..n - 1 {
+                let seg = segment(w, i);
+                let right_start = seg.rotation(0.0).angular_acceleration;
+                r[i] = left_end - right_start;
+                let size = 1.0 + left_end.length().max(right_start.length());
+                worst = worst.max(r[i].length() / size);
+                left_end = seg.rotation(h(i)).angular_acceleration;
+            }
+            worst
+        };
+        // Newton iteration towards C² with the Jacobian of the Euclidean cubic spline
+        // (∂r_i/∂ω_{i-1} = 2/h_{i-1}, ∂r_i/∂ω_i = 4/h_{i-1} + 4/h_i, ∂r_i/∂ω_{i+1} = 2/h_i),
+        // keeping the best knot velocities seen.
+        let mut r = [DVec3::ZERO; MAX];
+        let mut best = w;
+        let mut best_jump = residuals(&w, &mut r);
+        let mut jump = best_jump;
+        for _ in 0..C2_ITERATIONS {
+            if jump <= C2_TOLERANCE || n < 3 {
+                break;
+            }
+            // Thomas algorithm over rows 1..n-2 (Δ_0 = Δ_{n-1} = 0).
+            let mut c_prime = [0.0; MAX];
+            let mut d_prime = [DVec3::ZERO; MAX];
+            for i in 1..n - 1 {
+                let sub = if i > 1 { 2.0 / h(i - 1) } else { 0.0 };
+                let sup = if i < n - 2 { 2.0 / h(i) } else { 0.0 };
+                let diag = 4.0 / h(i - 1) + 4.0 / h(i);
+                let denom = diag - sub * c_prime[i - 1];
+                c_prime[i] = sup / denom;
+                d_prime[i] = (-r[i] - d_prime[i - 1] * sub) / denom;
+            }
+            let mut next = DVec3::ZERO;
+            for i in (1..n - 1).rev() {
+                let delta = d_prime[i] - next * c_prime[i];
+                w[i] += delta;
+                next = delta;
+            }
+            jump = residuals(&w, &mut r);
+            if !(jump < best_jump) {
+                break;
+            }
+            best = w;
+            best_jump = jump;
+        }
         let mut spline = Self {
             segments: Vec::new(),
             starts: [0.0; MAX],
             duration: 0.0,
+            acceleration_jump: best_jump,
         };
         for i in 0..n - 1 {
-            let h = times[i + 1] - times[i];
-            let omega_next = if i + 2 < n {
-                let next = if cur.dot(q(i + 2)) < 0.0 {
-                    -q(i + 2)
-                } else {
-                    q(i + 2)
-                };
-                let w = (rate(prev, cur, h) + rate(cur, next, times[i + 2] - times[i + 1])) * 0.5;
-                let seg = CubicSegment::new(prev, cur, omega_prev, w, h);
-                spline.push(seg)?;
-                prev = cur;
-                cur = next;
-                w
-            } else {
-                spline.push(CubicSegment::new(prev, cur, omega_prev, omega_end, h))?;
-                omega_end
-            };
-            omega_prev = omega_next;
+            spline.push(segment(&best, i))?;
         }
         Ok(spline)
     }
@@ -241,6 +304,13 @@ impl<const MAX: usize> CubicQuaternionSpline<MAX> {
     /// Number of segments.
     pub fn len(&self) -> usize {
         self.segments.len()
+    }
+
+    /// The largest jump of the angular acceleration at an interior waypoint, relative to
+    /// `1 + |α|` there: about 1e-13 when the Newton iteration reached C², larger when it stopped
+    /// early (then the spline is still C¹).
+    pub fn acceleration_jump(&self) -> f64 {
+        self.acceleration_jump
     }
 
     /// `true` without segments (never, once constructed).
