@@ -18,6 +18,24 @@
 //! Capacity is a const generic everywhere; construction and evaluation allocate nothing and
 //! never panic: bad input is a [`TrajectoryError`]. Times outside `[0, duration]` are clamped
 //! to the interval, so a finished trajectory holds its end state.
+//!
+//! ```
+//! use rl_core::traj::{JerkLimited, Limits, Piecewise, Polynomial, Trajectory, spline};
+//!
+//! // Time-optimal jerk-limited move of two axes from rest to rest, synchronised.
+//! let limits = Limits::uniform(1.0, 2.0, 10.0); // rad/s, rad/s², rad/s³
+//! let jerk = JerkLimited::new([0.0, 0.5], [1.0, -0.5], &limits)?;
+//! let s = jerk.sample(0.5 * jerk.duration());
+//! assert!(s.velocity[0] <= 1.0 && s.acceleration[1].abs() <= 2.0);
+//!
+//! // Natural cubic spline through timed waypoints (capacity: 8 segments), C² everywhere.
+//! let times = [0.0, 1.0, 2.5, 3.0];
+//! let points = [[0.0, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 0.0]];
+//! let cubic: Piecewise<Polynomial<2, 4>, 8> = spline::natural_cubic(&times, &points)?;
+//! cubic.check_continuity(2, 1e-12).expect("C² at every waypoint");
+//! assert!((cubic.position(2.5)[1] - 1.0).abs() < 1e-12);
+//! # Ok::<(), rl_core::traj::TrajectoryError>(())
+//! ```
 
 // Index loops over axes read as the math does; `!(x > 0.0)` is how NaN is rejected.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
