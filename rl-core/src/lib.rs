@@ -4,6 +4,8 @@
 //! format) is behind the `std` feature.
 #![no_std]
 #![forbid(unsafe_code)]
+// Index loops over DOFs and matrix entries read as the equations do.
+#![allow(clippy::needless_range_loop)]
 
 #[cfg(feature = "std")]
 extern crate std;

@@ -74,7 +74,7 @@ fn unknown_format() {
 
 #[test]
 fn unknown_joint_type() {
-    let text = format!(
+    let text = String::from(
         "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"ball\" type=\"spherical\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>"
     );
     let e = urdf_err(&text);
@@ -155,7 +155,7 @@ fn invalid_value() {
     let e = urdf_err(&text.replace("1 2", "1 2 x"));
     assert!(e.to_string().contains("not a number"), "{e}");
     // A zero axis on a moving joint.
-    let text = format!(
+    let text = String::from(
         "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"j\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>\n<axis xyz=\"0 0 0\"/></joint></robot>"
     );
     let e = urdf_err(&text);

@@ -1,5 +1,6 @@
 //! RL's XML model format: every example model loads with RL's DOF and tool counts, and the
 //! loaded geometry is RL's (offsets, degrees, Rz·Ry·Rx, COM-frame inertia, gravity sign).
+#![allow(clippy::needless_range_loop)]
 
 use std::path::PathBuf;
 

@@ -20,12 +20,18 @@ pub struct CliError {
 impl CliError {
     /// Bad usage: a flag, a file or a value the user gave is wrong (exit code 2).
     pub fn usage(message: impl Into<String>) -> Self {
-        Self { message: message.into(), code: 2 }
+        Self {
+            message: message.into(),
+            code: 2,
+        }
     }
 
     /// The command ran and failed (exit code 1).
     pub fn failed(message: impl Into<String>) -> Self {
-        Self { message: message.into(), code: 1 }
+        Self {
+            message: message.into(),
+            code: 1,
+        }
     }
 
     /// The process exit code for this error.
