@@ -16,13 +16,16 @@ use super::{
 /// One axis: seven phases of constant jerk.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Profile {
-    /// Phase end times.
+    /// Phase end times; phase `i` starts at `end[i - 1]` (the first at 0).
     end: [f64; 7],
-    /// Phase start times.
-    start: [f64; 7],
-    /// Position, velocity, acceleration at each phase start, then the phase's jerk.
-    state: [[f64; 4]; 7],
+    /// Position, velocity and acceleration at each phase start.
+    state: [[f64; 3]; 7],
+    /// Jerk of the first phase; phase `i` has `JERK_SIGN[i]` times it.
+    jerk: f64,
 }
+
+/// Jerk pattern of the seven phases.
+const JERK_SIGN: [f64; 7] = [1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0];
 
 /// Phase durations `(Tj, Ta, Tv)` of the time-optimal rest-to-rest profile over distance
 /// `h ≥ 0` (Biagiotti & Melchiorri eqs. 3.30-3.33 with zero boundary velocities).
@@ -57,19 +60,24 @@ impl Profile {
 
     #[inline]
     fn phase(&self, t: f64) -> (usize, f64) {
-        // Phase ends are sorted: the phase index is how many of the first six have passed
-        // (branch-free; NaN counts none).
-        let i = self.end[..6].iter().filter(|&&e| t >= e).count();
-        (i, t - self.start[i])
+        // Phase ends are sorted; scan from the first phase. In a control loop `t` advances
+        // slowly, so the exit branch is predicted (NaN stops at phase 0).
+        let mut i = 0;
+        while i < 6 && t >= self.end[i] {
+            i += 1;
+        }
+        let start = if i > 0 { self.end[i - 1] } else { 0.0 };
+        (i, t - start)
     }
 
     #[inline]
     fn eval(&self, t: f64) -> [f64; 4] {
         let t = clamp_time(t, self.duration());
         let (i, tau) = self.phase(t);
-        let [x, v, a, j] = self.state[i];
+        let [x, v, a] = self.state[i];
+        let j = JERK_SIGN[i] * self.jerk;
         [
-            x + tau * (v + tau * (0.5 * a + tau * j / 6.0)),
+            x + tau * (v + tau * (0.5 * a + tau * j * (1.0 / 6.0))),
             v + tau * (a + 0.5 * tau * j),
             a + tau * j,
             j,
@@ -124,20 +132,21 @@ impl<const D: usize> JerkLimited<D> {
             let (tj, cruise_a) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
             durations[axis] = [tj, cruise_a, tj, tv * stretch, tj, cruise_a, tj];
         }
-        const JERK_SIGN: [f64; 7] = [1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0];
         let mut axes = [Profile {
             end: [0.0; 7],
-            start: [0.0; 7],
-            state: [[0.0; 4]; 7],
+            state: [[0.0; 3]; 7],
+            jerk: 0.0,
         }; D];
+        for axis in 0..D {
+            axes[axis].jerk = jerk[axis];
+        }
         let mut x = start;
         let (mut v, mut a, mut t) = ([0.0; D], [0.0; D], [0.0; D]);
         for i in 0..7 {
             for axis in 0..D {
                 let (d, j) = (durations[axis][i], JERK_SIGN[i] * jerk[axis]);
                 let p = &mut axes[axis];
-                p.start[i] = t[axis];
-                p.state[i] = [x[axis], v[axis], a[axis], j];
+                p.state[i] = [x[axis], v[axis], a[axis]];
                 x[axis] += d * (v[axis] + d * (0.5 * a[axis] + d * j * (1.0 / 6.0)));
                 v[axis] += d * (a[axis] + 0.5 * d * j);
                 a[axis] += d * j;

@@ -116,15 +116,16 @@ pub(crate) fn clamp_time(t: f64, duration: f64) -> f64 {
 pub(crate) fn check_finite_points<const D: usize>(
     points: &[[f64; D]],
 ) -> Result<(), TrajectoryError> {
-    for (index, p) in points.iter().enumerate() {
-        if p.iter().any(|x| !x.is_finite()) {
-            return Err(TrajectoryError::NotFinite {
-                what: "waypoint",
-                index,
-            });
-        }
+    if polynomial::all_finite(points.as_flattened()) {
+        return Ok(());
     }
-    Ok(())
+    match points.iter().position(|p| !polynomial::all_finite(p)) {
+        Some(index) => Err(TrajectoryError::NotFinite {
+            what: "waypoint",
+            index,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Times must be finite and strictly increasing.

@@ -57,19 +57,38 @@ impl<const D: usize> Limits<D> {
 
     /// Every limit must be positive (NaN fails); with `finite`, also finite.
     pub(crate) fn validate(&self, finite: bool) -> Result<(), TrajectoryError> {
+        let bound = if finite { f64::INFINITY } else { f64::NAN };
+        let ok = |x: f64| x > 0.0 && !(x >= bound);
+        // Fast path without branches; the slow path names the first bad limit.
+        let all_ok = (0..D).fold(true, |acc, i| {
+            acc & ok(self.velocity[i]) & ok(self.acceleration[i]) & ok(self.jerk[i])
+        });
+        if all_ok {
+            return Ok(());
+        }
         for axis in 0..D {
             for (value, kind) in [
                 (self.velocity[axis], LimitKind::Velocity),
                 (self.acceleration[axis], LimitKind::Acceleration),
                 (self.jerk[axis], LimitKind::Jerk),
             ] {
-                if !(value > 0.0) || (finite && !value.is_finite()) {
+                if !ok(value) {
                     return Err(TrajectoryError::BadLimit { axis, kind });
                 }
             }
         }
         Ok(())
     }
+}
+
+/// `true` when no value is NaN or infinite: an OR over the exponent test, branch-free, so it
+/// vectorises.
+#[inline]
+pub(crate) fn all_finite(values: &[f64]) -> bool {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    values.iter().fold(0u64, |bad, &x| {
+        bad | u64::from(x.to_bits() & EXPONENT == EXPONENT)
+    }) == 0
 }
 
 /// `k! / (k - m)!`
@@ -112,18 +131,28 @@ impl<const D: usize, const C: usize> Polynomial<D, C> {
         if !duration.is_finite() || duration < 0.0 {
             return Err(TrajectoryError::BadDuration);
         }
-        for (index, c) in coefficients.iter().enumerate() {
-            if c.iter().any(|x| !x.is_finite()) {
-                return Err(TrajectoryError::NotFinite {
-                    what: "coefficient",
-                    index,
-                });
+        if !all_finite(coefficients.as_flattened()) {
+            for (index, c) in coefficients.iter().enumerate() {
+                if !all_finite(c) {
+                    return Err(TrajectoryError::NotFinite {
+                        what: "coefficient",
+                        index,
+                    });
+                }
             }
         }
         Ok(Self {
             coefficients,
             duration,
         })
+    }
+
+    /// Without checks, for coefficients computed here from validated input.
+    pub(crate) const fn from_parts(coefficients: [[f64; D]; C], duration: f64) -> Self {
+        Self {
+            coefficients,
+            duration,
+        }
     }
 
     /// A constant (duration may be zero).
@@ -627,22 +656,40 @@ impl<const D: usize, const C: usize> Trajectory<D> for Polynomial<D, C> {
     #[inline]
     fn sample(&self, t: f64) -> Sample<D> {
         let t = clamp_time(t, self.duration);
-        // Synthetic division: p, p', p''/2, p'''/6 in one Horner pass.
+        // Powers of t shared by all axes, then one independent dot product per quantity and
+        // axis (no Horner dependency chain; the loops vectorise over axes and skip the terms
+        // a derivative removes).
+        let mut pow = [1.0; C];
+        for k in 1..C {
+            pow[k] = pow[k - 1] * t;
+        }
         let mut p = [0.0; D];
         let mut v = [0.0; D];
         let mut a = [0.0; D];
         let mut j = [0.0; D];
-        for ck in self.coefficients.iter().rev() {
+        for k in 0..C {
+            let w = pow[k];
             for axis in 0..D {
-                j[axis] = j[axis] * t + a[axis];
-                a[axis] = a[axis] * t + v[axis];
-                v[axis] = v[axis] * t + p[axis];
-                p[axis] = p[axis] * t + ck[axis];
+                p[axis] += self.coefficients[k][axis] * w;
             }
         }
-        for axis in 0..D {
-            a[axis] *= 2.0;
-            j[axis] *= 6.0;
+        for k in 1..C {
+            let w = k as f64 * pow[k - 1];
+            for axis in 0..D {
+                v[axis] += self.coefficients[k][axis] * w;
+            }
+        }
+        for k in 2..C {
+            let w = (k * (k - 1)) as f64 * pow[k - 2];
+            for axis in 0..D {
+                a[axis] += self.coefficients[k][axis] * w;
+            }
+        }
+        for k in 3..C {
+            let w = (k * (k - 1) * (k - 2)) as f64 * pow[k - 3];
+            for axis in 0..D {
+                j[axis] += self.coefficients[k][axis] * w;
+            }
         }
         Sample {
             position: p,

@@ -172,7 +172,8 @@ fn cubic<const D: usize, const MAX: usize>(
             c[2][axis] = 0.5 * m0[axis];
             c[3][axis] = (m1[axis] - m0[axis]) * inv6h;
         }
-        spline.push(Polynomial::new(c, hi)?)?;
+        // Finite: from validated times and points.
+        spline.push(Polynomial::from_parts(c, hi))?;
     }
     Ok(spline)
 }
