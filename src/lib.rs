@@ -8,3 +8,8 @@
 pub use rl_core as core;
 pub use rl_drivers as drivers;
 pub use rl_rt as rt;
+
+/// The README's examples, compiled and run as doc tests so they cannot rot.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

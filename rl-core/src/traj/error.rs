@@ -127,3 +127,5 @@ impl fmt::Display for Discontinuity {
         )
     }
 }
+
+impl core::error::Error for TrajectoryError {}
