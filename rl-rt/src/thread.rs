@@ -228,6 +228,15 @@ impl fmt::Display for ThreadCounters {
     }
 }
 
+/// The outcome of applying a builder's settings to a thread.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Applied {
+    /// Policy, priority and CPUs as read back from the kernel.
+    pub granted: Scheduling,
+    /// What was refused and skipped in best-effort mode.
+    pub degraded: Vec<ThreadError>,
+}
+
 /// What was asked and what the kernel granted, when they differ.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SchedulingMismatch {
@@ -391,6 +400,7 @@ pub struct RtThreadBuilder {
     prefault_stack: usize,
     lock_memory: bool,
     exact: bool,
+    best_effort: bool,
 }
 
 impl RtThreadBuilder {
@@ -405,6 +415,7 @@ impl RtThreadBuilder {
             prefault_stack: 256 << 10,
             lock_memory: false,
             exact: true,
+            best_effort: false,
         }
     }
 
@@ -448,6 +459,15 @@ impl RtThreadBuilder {
     /// reported in [`RtThread::granted`]'s comparison with [`RtThread::matches_request`].
     pub fn require_exact(mut self, exact: bool) -> Self {
         self.exact = exact;
+        self
+    }
+
+    /// Run even where real-time scheduling or memory locking is refused for lack of privilege
+    /// (EPERM; EBUSY from SCHED_DEADLINE admission): the thread then keeps SCHED_OTHER and
+    /// unlocked memory, and [`RtThread::degraded`] lists what was refused with its remedy. For
+    /// programs that must also run for an unprivileged user (demos, CI without root).
+    pub fn best_effort(mut self, best_effort: bool) -> Self {
+        self.best_effort = best_effort;
         self
     }
 
@@ -504,8 +524,11 @@ impl RtThreadBuilder {
 
     /// Applies these settings to the calling thread (affinity, memory lock, policy and
     /// priority, stack prefault) and returns the read-back. Stack size does not apply here.
-    pub fn apply_to_current(&self) -> Result<Scheduling, ThreadError> {
+    /// In [`best_effort`](Self::best_effort) mode, refusals for lack of privilege are listed in
+    /// [`Applied::degraded`] instead of failing.
+    pub fn apply_to_current(&self) -> Result<Applied, ThreadError> {
         self.validate()?;
+        let mut degraded = Vec::new();
         if let Some(cpus) = &self.cpus {
             let mut set = CpuSet::new();
             for &cpu in cpus {
@@ -520,9 +543,13 @@ impl RtThreadBuilder {
             })?;
         }
         if self.lock_memory {
-            memory::lock_memory()?;
+            match memory::lock_memory() {
+                Ok(()) => {}
+                Err(e) if self.best_effort => degraded.push(ThreadError::Memory(e)),
+                Err(e) => return Err(e.into()),
+            }
         }
-        match self.policy {
+        let scheduled = match self.policy {
             Policy::Deadline {
                 runtime_ns,
                 deadline_ns,
@@ -532,7 +559,7 @@ impl RtThreadBuilder {
                     policy: self.policy,
                     errno,
                 },
-            )?,
+            ),
             policy => sys::set_current_thread_scheduling(policy.to_raw(), self.priority).map_err(
                 |errno| match errno {
                     Errno::EPERM => ThreadError::PermissionDenied {
@@ -544,18 +571,29 @@ impl RtThreadBuilder {
                         errno,
                     },
                 },
-            )?,
+            ),
+        };
+        match scheduled {
+            Ok(()) => {}
+            Err(
+                e @ (ThreadError::PermissionDenied { .. }
+                | ThreadError::DeadlineRefused {
+                    errno: Errno::EPERM | Errno::EBUSY,
+                    ..
+                }),
+            ) if self.best_effort => degraded.push(e),
+            Err(e) => return Err(e),
         }
         memory::prefault_stack(self.prefault_stack.min(self.stack_size / 2));
         let granted = current_scheduling()?;
         let requested = self.requested();
-        if self.exact && !matches_request(&requested, &granted) {
+        if self.exact && degraded.is_empty() && !matches_request(&requested, &granted) {
             return Err(ThreadError::Mismatch(Box::new(SchedulingMismatch {
                 requested,
                 granted,
             })));
         }
-        Ok(granted)
+        Ok(Applied { granted, degraded })
     }
 
     /// Starts the thread: it applies the settings to itself, reports the read-back, and only
@@ -581,12 +619,13 @@ impl RtThreadBuilder {
             })
             .map_err(|e| ThreadError::Spawn(e.kind()))?;
         match rx.recv() {
-            Ok(Ok(granted)) => {
+            Ok(Ok(Applied { granted, degraded })) => {
                 let exact = matches_request(&self.requested(), &granted);
                 Ok(RtThread {
                     handle,
                     granted,
                     exact,
+                    degraded,
                 })
             }
             Ok(Err(e)) => {
@@ -610,6 +649,7 @@ pub struct RtThread<T> {
     handle: JoinHandle<Option<T>>,
     granted: Scheduling,
     exact: bool,
+    degraded: Vec<ThreadError>,
 }
 
 impl<T> RtThread<T> {
@@ -618,7 +658,14 @@ impl<T> RtThread<T> {
         &self.granted
     }
 
-    /// Whether the grant equals the request (always true unless `require_exact(false)`).
+    /// What was refused in [`best_effort`](RtThreadBuilder::best_effort) mode (real-time
+    /// policy, memory lock), each with its remedy; empty when everything was granted.
+    pub fn degraded(&self) -> &[ThreadError] {
+        &self.degraded
+    }
+
+    /// Whether the grant equals the request (always true unless `require_exact(false)` or
+    /// `best_effort(true)`).
     pub fn matches_request(&self) -> bool {
         self.exact
     }
