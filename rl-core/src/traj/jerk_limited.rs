@@ -13,17 +13,6 @@ use super::{
     check_finite_points, clamp_time,
 };
 
-/// One axis: seven phases of constant jerk.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Profile {
-    /// Phase end times; phase `i` starts at `end[i - 1]` (the first at 0).
-    end: [f64; 7],
-    /// Position, velocity and acceleration at each phase start.
-    state: [[f64; 3]; 7],
-    /// Jerk of the first phase; phase `i` has `JERK_SIGN[i]` times it.
-    jerk: f64,
-}
-
 /// Jerk pattern of the seven phases.
 const JERK_SIGN: [f64; 7] = [1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0];
 
@@ -53,42 +42,16 @@ fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
     (tj, ta, tv)
 }
 
-impl Profile {
-    fn duration(&self) -> f64 {
-        self.end[6]
-    }
-
-    #[inline]
-    fn phase(&self, t: f64) -> (usize, f64) {
-        // Phase ends are sorted; scan from the first phase. In a control loop `t` advances
-        // slowly, so the exit branch is predicted (NaN stops at phase 0).
-        let mut i = 0;
-        while i < 6 && t >= self.end[i] {
-            i += 1;
-        }
-        let start = if i > 0 { self.end[i - 1] } else { 0.0 };
-        (i, t - start)
-    }
-
-    #[inline]
-    fn eval(&self, t: f64) -> [f64; 4] {
-        let t = clamp_time(t, self.duration());
-        let (i, tau) = self.phase(t);
-        let [x, v, a] = self.state[i];
-        let j = JERK_SIGN[i] * self.jerk;
-        [
-            x + tau * (v + tau * (0.5 * a + tau * j * (1.0 / 6.0))),
-            v + tau * (a + 0.5 * tau * j),
-            a + tau * j,
-            j,
-        ]
-    }
-}
-
 /// Jerk-limited rest-to-rest motion of `D` axes, synchronised to the slowest axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JerkLimited<const D: usize> {
-    axes: [Profile; D],
+    /// Phase end times, `[phase][axis]`; phase `i` starts at `end[i - 1]` (the first at 0).
+    /// Stored axis-minor so construction runs over all axes at once.
+    end: [[f64; D]; 7],
+    /// Position, velocity and acceleration at each phase start, `[phase][quantity][axis]`.
+    state: [[[f64; D]; 3]; 7],
+    /// Jerk of the first phase of each axis; phase `i` has `JERK_SIGN[i]` times it.
+    jerk: [f64; D],
     duration: f64,
 }
 
@@ -118,49 +81,71 @@ impl<const D: usize> JerkLimited<D> {
             return Err(TrajectoryError::Unreachable);
         }
         // Phase durations stretched by 1/k (k = own duration / common duration ≤ 1) and
-        // jerks scaled by k³, then the seven phases integrated for all axes at once (axis
-        // inner, so the independent chains overlap).
-        let mut durations = [[0.0; 7]; D];
-        let mut jerk = [0.0; D];
+        // jerks scaled by k³, then the seven phases integrated for all axes at once.
+        let mut out = Self {
+            end: [[0.0; D]; 7],
+            state: [[[0.0; D]; 3]; 7],
+            jerk: [0.0; D],
+            duration,
+        };
+        let mut durations = [[0.0; D]; 7];
         for axis in 0..D {
             let (tj, ta, tv) = times[axis];
             let own = 2.0 * ta + tv;
             let k = if duration > 0.0 { own / duration } else { 1.0 };
             let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
             let sign = if goal[axis] >= start[axis] { 1.0 } else { -1.0 };
-            jerk[axis] = sign * limits.jerk[axis] * k * k * k;
+            out.jerk[axis] = sign * limits.jerk[axis] * k * k * k;
             let (tj, cruise_a) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
-            durations[axis] = [tj, cruise_a, tj, tv * stretch, tj, cruise_a, tj];
-        }
-        let mut axes = [Profile {
-            end: [0.0; 7],
-            state: [[0.0; 3]; 7],
-            jerk: 0.0,
-        }; D];
-        for axis in 0..D {
-            axes[axis].jerk = jerk[axis];
+            for (i, d) in [tj, cruise_a, tj, tv * stretch, tj, cruise_a, tj]
+                .into_iter()
+                .enumerate()
+            {
+                durations[i][axis] = d;
+            }
         }
         let mut x = start;
         let (mut v, mut a, mut t) = ([0.0; D], [0.0; D], [0.0; D]);
         for i in 0..7 {
+            out.state[i] = [x, v, a];
             for axis in 0..D {
-                let (d, j) = (durations[axis][i], JERK_SIGN[i] * jerk[axis]);
-                let p = &mut axes[axis];
-                p.state[i] = [x[axis], v[axis], a[axis]];
+                let (d, j) = (durations[i][axis], JERK_SIGN[i] * out.jerk[axis]);
                 x[axis] += d * (v[axis] + d * (0.5 * a[axis] + d * j * (1.0 / 6.0)));
                 v[axis] += d * (a[axis] + 0.5 * d * j);
                 a[axis] += d * j;
                 t[axis] += d;
-                p.end[i] = t[axis];
             }
+            out.end[i] = t;
         }
-        Ok(Self { axes, duration })
+        Ok(out)
     }
 
     /// End time of each of the seven phases of `axis` (velocity and acceleration peak at
     /// these boundaries; zero-length phases repeat a time). `None` for an axis out of range.
     pub fn phase_ends(&self, axis: usize) -> Option<[f64; 7]> {
-        self.axes.get(axis).map(|p| p.end)
+        (axis < D).then(|| core::array::from_fn(|i| self.end[i][axis]))
+    }
+
+    /// Position, velocity, acceleration and jerk of one axis at `t` (clamped to the axis's
+    /// own end, which is the common end for moving axes).
+    #[inline]
+    fn eval_axis(&self, axis: usize, t: f64) -> [f64; 4] {
+        let t = clamp_time(t, self.end[6][axis]);
+        // Phase ends are sorted; scan from the first phase. In a control loop `t` advances
+        // slowly, so the exit branch is predicted (NaN stops at phase 0).
+        let mut i = 0;
+        while i < 6 && t >= self.end[i][axis] {
+            i += 1;
+        }
+        let tau = t - if i > 0 { self.end[i - 1][axis] } else { 0.0 };
+        let [x, v, a] = [0, 1, 2].map(|q| self.state[i][q][axis]);
+        let j = JERK_SIGN[i] * self.jerk[axis];
+        [
+            x + tau * (v + tau * (0.5 * a + tau * j * (1.0 / 6.0))),
+            v + tau * (a + 0.5 * tau * j),
+            a + tau * j,
+            j,
+        ]
     }
 
     /// The duration each axis would need alone (its time-optimal duration).
@@ -185,7 +170,7 @@ impl<const D: usize> Trajectory<D> for JerkLimited<D> {
     fn derivative(&self, t: f64, order: usize) -> [f64; D] {
         core::array::from_fn(|axis| {
             if order < 4 {
-                self.axes[axis].eval(t)[order]
+                self.eval_axis(axis, t)[order]
             } else {
                 0.0
             }
@@ -201,7 +186,7 @@ impl<const D: usize> Trajectory<D> for JerkLimited<D> {
             jerk: [0.0; D],
         };
         for axis in 0..D {
-            let [p, v, a, j] = self.axes[axis].eval(t);
+            let [p, v, a, j] = self.eval_axis(axis, t);
             s.position[axis] = p;
             s.velocity[axis] = v;
             s.acceleration[axis] = a;
@@ -281,7 +266,7 @@ impl RotationTrajectory for JerkLimitedRotation {
     }
 
     fn rotation(&self, t: f64) -> RotationSample {
-        let [p, v, a, _] = self.angle.axes[0].eval(t);
+        let [p, v, a, _] = self.angle.eval_axis(0, t);
         RotationSample {
             orientation: DQuat::from_axis_angle(self.axis, p) * self.start,
             angular_velocity: self.axis * v,

@@ -58,7 +58,7 @@ impl<const D: usize> Limits<D> {
     /// Every limit must be positive (NaN fails); with `finite`, also finite.
     pub(crate) fn validate(&self, finite: bool) -> Result<(), TrajectoryError> {
         let bound = if finite { f64::INFINITY } else { f64::NAN };
-        let ok = |x: f64| x > 0.0 && !(x >= bound);
+        let ok = |x: f64| (x > 0.0) & !(x >= bound);
         // Fast path without branches; the slow path names the first bad limit.
         let all_ok = (0..D).fold(true, |acc, i| {
             acc & ok(self.velocity[i]) & ok(self.acceleration[i]) & ok(self.jerk[i])
