@@ -1,7 +1,7 @@
 //! Forward dynamics by the articulated-body algorithm (ABA).
 //!
 //! `q̈ = M(q)⁻¹ (τ − C(q, q̇) − G(q))` in three sweeps without forming `M` (Featherstone,
-//! *Rigid Body Dynamics Algorithms*, Table 7.1, body coordinates). Each joint's
+//! *Rigid Body Dynamics Algorithms*, Table 7.1, here in world coordinates as Pinocchio does). Each joint's
 //! `D = Sᵀ Iᴬ S` is at most 6×6 and inverted in place. `q`: `nq`, `qd`, `tau`: `dof`;
 //! result: `dof`. O(n). Does not allocate.
 
@@ -56,27 +56,29 @@ fn run<const N: usize>(
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
     check_len("tau", tau, model.nv)?;
+    // World coordinates throughout (as Pinocchio's ABA): inertias and subspaces are brought to
+    // the world frame once, and then articulated inertias, bias forces and accelerations pass
+    // between bodies by plain addition, with no transform per edge.
     // Pass 1: velocities, bias accelerations, rigid inertias and bias forces.
     for i in 0..model.nbodies {
         body_pose(model, data, q, i);
+        let x = data.world_pose[i];
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         for k in sv..sv + model.joints[i].nv() {
-            vj += model.subspace[k] * qd[k];
+            let s = x.act_motion(&model.subspace[k]);
+            data.world_subspace[k] = s;
+            vj += s * qd[k];
         }
         let p = model.parents[i];
-        let v = if p == ROOT {
-            vj
-        } else {
-            data.parent_pose[i].inv_act_motion(&data.v[p]) + vj
-        };
+        let v = if p == ROOT { vj } else { data.v[p] + vj };
         data.v[i] = v;
         data.c[i] = v.cross_motion(&vj);
-        let inertia = &model.inertias[i];
-        data.articulated[i] = ArticulatedBodyInertia::from(*inertia);
+        let inertia = model.inertias[i].transform_to_parent(&x);
+        data.articulated[i] = ArticulatedBodyInertia::from(inertia);
         let mut pa = v.cross_force(&inertia.mul_motion(&v));
         if let Some(fext) = fext {
-            pa -= fext[i];
+            pa -= x.act_force(&fext[i]);
         }
         data.f[i] = pa;
     }
@@ -84,15 +86,37 @@ fn run<const N: usize>(
     for i in (0..model.nbodies).rev() {
         let sv = model.idx_v[i];
         let nv = model.joints[i].nv();
+        let p = model.parents[i];
+        if nv == 1 {
+            let s = data.world_subspace[sv];
+            let u = data.articulated[i].mul_motion(&s);
+            let d = s.dot(&u);
+            if !(d > 0.0) {
+                return Err(Error::NotPositiveDefinite);
+            }
+            let d_inv = 1.0 / d;
+            let bias = tau[sv] - s.dot(&data.f[i]);
+            data.u[sv] = u;
+            data.u_bias[sv] = bias;
+            data.d_inv[i][0][0] = d_inv;
+            if p != ROOT {
+                let mut ia = data.articulated[i];
+                ia.sub_rank_one(&u, d_inv);
+                let pa = data.f[i] + ia.mul_motion(&data.c[i]) + u * (d_inv * bias);
+                data.articulated[p] += ia;
+                data.f[p] += pa;
+            }
+            continue;
+        }
         let ia = data.articulated[i];
         let pa = data.f[i];
         let mut d = [[0.0; 6]; 6];
         for k in 0..nv {
-            let u = ia.mul_motion(&model.subspace[sv + k]);
+            let u = ia.mul_motion(&data.world_subspace[sv + k]);
             data.u[sv + k] = u;
-            data.u_bias[sv + k] = tau[sv + k] - model.subspace[sv + k].dot(&pa);
+            data.u_bias[sv + k] = tau[sv + k] - data.world_subspace[sv + k].dot(&pa);
             for l in 0..=k {
-                let x = model.subspace[sv + l].dot(&u);
+                let x = data.world_subspace[sv + l].dot(&u);
                 d[l][k] = x;
                 d[k][l] = x;
             }
@@ -102,7 +126,6 @@ fn run<const N: usize>(
             return Err(Error::NotPositiveDefinite);
         }
         data.d_inv[i] = d_inv;
-        let p = model.parents[i];
         if p == ROOT {
             continue;
         }
@@ -120,11 +143,8 @@ fn run<const N: usize>(
             pa_child += data.u[sv + k] * coef;
         }
         pa_child += ia_child.mul_motion(&data.c[i]);
-        let x = &data.parent_pose[i];
-        let ia_parent = ia_child.transform_to_parent(x);
-        let pa_parent = x.act_force(&pa_child);
-        data.articulated[p] += ia_parent;
-        data.f[p] += pa_parent;
+        data.articulated[p] += ia_child;
+        data.f[p] += pa_child;
     }
     // Pass 3: accelerations, root to leaves.
     let base = MotionVector::new(glam::DVec3::ZERO, -model.gravity);
@@ -132,20 +152,26 @@ fn run<const N: usize>(
         let sv = model.idx_v[i];
         let nv = model.joints[i].nv();
         let p = model.parents[i];
-        let ap = if p == ROOT { base } else { data.a[p] };
-        let mut a = data.parent_pose[i].inv_act_motion(&ap) + data.c[i];
+        let mut a = if p == ROOT { base } else { data.a[p] } + data.c[i];
+        let d_inv = &data.d_inv[i];
+        if nv == 1 {
+            let x = d_inv[0][0] * (data.u_bias[sv] - a.dot(&data.u[sv]));
+            data.qdd[sv] = x;
+            a += data.world_subspace[sv] * x;
+            data.a[i] = a;
+            continue;
+        }
         let mut rhs = [0.0; 6];
         for (k, r) in rhs.iter_mut().enumerate().take(nv) {
             *r = data.u_bias[sv + k] - a.dot(&data.u[sv + k]);
         }
-        let d_inv = &data.d_inv[i];
         for k in 0..nv {
             let mut x = 0.0;
             for (l, r) in rhs.iter().enumerate().take(nv) {
                 x += d_inv[k][l] * r;
             }
             data.qdd[sv + k] = x;
-            a += model.subspace[sv + k] * x;
+            a += data.world_subspace[sv + k] * x;
         }
         data.a[i] = a;
     }
