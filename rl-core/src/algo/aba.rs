@@ -66,7 +66,7 @@ fn run<const N: usize>(
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         for k in sv..sv + model.joints[i].nv() {
-            let s = x.act_motion(&model.subspace[k]);
+            let s = model.act_subspace(i, k, &x);
             data.world_subspace[k] = s;
             vj += s * qd[k];
         }

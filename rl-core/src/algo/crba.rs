@@ -24,7 +24,7 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
         data.composite[i] = model.inertias[i].transform_to_parent(&x);
         let sv = model.idx_v[i];
         for k in sv..sv + model.joints[i].nv() {
-            data.world_subspace[k] = x.act_motion(&model.subspace[k]);
+            data.world_subspace[k] = model.act_subspace(i, k, &x);
         }
     }
     for i in (0..model.nbodies).rev() {

@@ -21,7 +21,7 @@ fn world_subspaces<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f6
         let sv = model.idx_v[i];
         let x = data.world_pose[i];
         for k in sv..sv + model.joints[i].nv() {
-            data.world_subspace[k] = x.act_motion(&model.subspace[k]);
+            data.world_subspace[k] = model.act_subspace(i, k, &x);
         }
     }
 }

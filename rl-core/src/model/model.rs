@@ -231,6 +231,21 @@ impl<const N: usize> Model<N> {
         }
     }
 
+    /// Motion subspace column `k` (a DOF of body `i`) in the coordinates of a frame in which
+    /// body `i` sits at `x`; revolute and prismatic columns skip their zero half.
+    #[inline]
+    pub(crate) fn act_subspace(&self, i: usize, k: usize, x: &PlueckerTransform) -> MotionVector {
+        let s = &self.subspace[k];
+        match &self.joints[i] {
+            Joint::Revolute(_) => {
+                let w = x.rotation * s.angular;
+                MotionVector::new(w, x.translation.cross(w))
+            }
+            Joint::Prismatic(_) => MotionVector::new(DVec3::ZERO, x.rotation * s.linear),
+            _ => x.act_motion(s),
+        }
+    }
+
     /// `Sᵀ f` of body `i`'s joint into its entries of `out` (a velocity-sized vector).
     #[inline]
     pub(crate) fn joint_force(&self, i: usize, f: &ForceVector, out: &mut [f64]) {
