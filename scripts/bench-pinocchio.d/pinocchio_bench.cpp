@@ -1,0 +1,184 @@
+// Pinocchio's side of scripts/bench-pinocchio: times fk, jacobian, rnea, nle, gravity, crba and
+// aba on the states of a states file (written by gen_states.py) exactly as `rl model bench`
+// times rl-core: per algorithm, enough repetitions over all states for ~2 ms per round, the
+// median of `rounds` rounds, in ns per call. Prints one JSON line with the same keys.
+//
+// Usage: pinocchio_bench URDF STATES FRAME [--floating-base] [--rounds N]
+//
+// Compiled header-only (no PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION), so the algorithms are
+// instantiated here with this program's flags (-O3 -DNDEBUG, the script's -march) rather than
+// taken precompiled from libpinocchio_default; libpinocchio_parsers only loads the URDF.
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/multibody.hpp>
+#include <pinocchio/parsers/urdf.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pin = pinocchio;
+
+namespace {
+
+struct States {
+  std::vector<std::string> joints;  // joint names, Pinocchio order (root_joint first if any)
+  std::vector<Eigen::VectorXd> q, v, a;
+};
+
+// The states file: "rl-bench-states 1", "nq NQ nv NV joints J states S", J lines
+// "joint NAME NQ NV", S lines "state q... v... a...".
+States read_states(const std::string &path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open states file " + path);
+  std::string magic, k1, k2, k3, k4;
+  int version = 0, nq = 0, nv = 0, nj = 0, ns = 0;
+  in >> magic >> version;
+  if (magic != "rl-bench-states" || version != 1)
+    throw std::runtime_error(path + ": not an rl-bench-states 1 file");
+  in >> k1 >> nq >> k2 >> nv >> k3 >> nj >> k4 >> ns;
+  if (!in || k1 != "nq" || k2 != "nv" || k3 != "joints" || k4 != "states")
+    throw std::runtime_error(path + ": bad header line");
+  States s;
+  for (int j = 0; j < nj; ++j) {
+    std::string kw, name;
+    int jq, jv;
+    in >> kw >> name >> jq >> jv;
+    if (!in || kw != "joint") throw std::runtime_error(path + ": bad joint line");
+    s.joints.push_back(name);
+  }
+  for (int i = 0; i < ns; ++i) {
+    std::string kw;
+    in >> kw;
+    if (kw != "state") throw std::runtime_error(path + ": bad state line");
+    Eigen::VectorXd q(nq), v(nv), a(nv);
+    for (int k = 0; k < nq; ++k) in >> q[k];
+    for (int k = 0; k < nv; ++k) in >> v[k];
+    for (int k = 0; k < nv; ++k) in >> a[k];
+    if (!in) throw std::runtime_error(path + ": short state line");
+    s.q.push_back(q);
+    s.v.push_back(v);
+    s.a.push_back(a);
+  }
+  return s;
+}
+
+// Keeps a value alive for the optimiser (as Rust's std::hint::black_box).
+template <typename T>
+inline void keep(const T &x) {
+  asm volatile("" : : "g"(&x) : "memory");
+}
+
+// Median ns per call of f(state) over all states, over `rounds` rounds: the same method as
+// `rl model bench` (time_per_call in src/cli/model.rs).
+template <typename F>
+double time_per_call(std::size_t states, int rounds, F &&f) {
+  using clock = std::chrono::steady_clock;
+  auto start = clock::now();
+  for (std::size_t s = 0; s < states; ++s) f(s);
+  double once = std::max(std::chrono::duration<double>(clock::now() - start).count(), 1e-9);
+  std::size_t reps = std::min<std::size_t>(
+      10000, std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(2e-3 / once))));
+  std::vector<double> samples;
+  for (int r = 0; r < rounds; ++r) {
+    auto t = clock::now();
+    for (std::size_t k = 0; k < reps; ++k)
+      for (std::size_t s = 0; s < states; ++s) f(s);
+    samples.push_back(std::chrono::duration<double>(clock::now() - t).count() * 1e9 /
+                      static_cast<double>(reps * states));
+  }
+  std::sort(samples.begin(), samples.end());
+  return samples[samples.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+  if (argc < 4) {
+    std::fprintf(stderr,
+                 "usage: %s URDF STATES FRAME [--floating-base] [--rounds N]\n", argv[0]);
+    return 2;
+  }
+  const std::string urdf = argv[1], states_path = argv[2], frame = argv[3];
+  bool floating = false;
+  int rounds = 15;
+  for (int i = 4; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "--floating-base") {
+      floating = true;
+    } else if (arg == "--rounds" && i + 1 < argc) {
+      rounds = std::max(1, std::atoi(argv[++i]));
+    } else {
+      std::fprintf(stderr, "unknown argument %s\n", arg.c_str());
+      return 2;
+    }
+  }
+  try {
+    pin::Model model;
+    if (floating)
+      pin::urdf::buildModel(urdf, pin::JointModelFreeFlyer(), "root_joint", model);
+    else
+      pin::urdf::buildModel(urdf, model);
+    model.gravity.linear(Eigen::Vector3d(0.0, 0.0, -9.80665));
+    const States st = read_states(states_path);
+    // The states are in Pinocchio's joint order: check it is this model's.
+    std::vector<std::string> names(model.names.begin() + 1, model.names.end());
+    if (names != st.joints) throw std::runtime_error("joint names of the states file differ from the model's");
+    if (st.q.empty() || st.q[0].size() != model.nq || st.v[0].size() != model.nv)
+      throw std::runtime_error("state sizes differ from the model's nq/nv");
+    if (!model.existFrame(frame)) throw std::runtime_error("no frame named " + frame);
+    const pin::FrameIndex fid = model.getFrameId(frame);
+    pin::Data data(model);
+    const std::size_t n = st.q.size();
+
+    // τ for ABA: RNEA of the states' accelerations (as rl model bench does).
+    std::vector<Eigen::VectorXd> tau(n);
+    for (std::size_t s = 0; s < n; ++s) tau[s] = pin::rnea(model, data, st.q[s], st.v[s], st.a[s]);
+
+    Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.nv);
+    J.setZero();
+    double ns[7];
+    ns[0] = time_per_call(n, rounds, [&](std::size_t s) {
+      pin::forwardKinematics(model, data, st.q[s]);
+      keep(data.oMi.back());
+    });
+    ns[1] = time_per_call(n, rounds, [&](std::size_t s) {
+      pin::computeFrameJacobian(model, data, st.q[s], fid, pin::LOCAL_WORLD_ALIGNED, J);
+      keep(J);
+    });
+    ns[2] = time_per_call(n, rounds, [&](std::size_t s) {
+      keep(pin::rnea(model, data, st.q[s], st.v[s], st.a[s])[0]);
+    });
+    ns[3] = time_per_call(n, rounds, [&](std::size_t s) {
+      keep(pin::nonLinearEffects(model, data, st.q[s], st.v[s])[0]);
+    });
+    ns[4] = time_per_call(n, rounds, [&](std::size_t s) {
+      keep(pin::computeGeneralizedGravity(model, data, st.q[s])[0]);
+    });
+    ns[5] = time_per_call(n, rounds, [&](std::size_t s) {
+      keep(pin::crba(model, data, st.q[s])(0, 0));
+    });
+    ns[6] = time_per_call(n, rounds, [&](std::size_t s) {
+      keep(pin::aba(model, data, st.q[s], st.v[s], tau[s])[0]);
+    });
+    const char *keys[7] = {"fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba"};
+    std::printf("{");
+    for (int k = 0; k < 7; ++k) std::printf("\"%s_ns\": %.1f, ", keys[k], ns[k]);
+    std::printf("\"dof\": %d, \"tool\": \"%s\"}\n", model.nv, frame.c_str());
+  } catch (const std::exception &e) {
+    std::fprintf(stderr, "pinocchio_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
