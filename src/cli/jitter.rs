@@ -189,9 +189,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
     let thread = builder
         .spawn(move || looped.run(|_cycle| ControlFlow::Continue(())))
         .map_err(|e| match e {
-            rl_rt::ThreadError::InvalidPriority { .. } | rl_rt::ThreadError::InvalidCpu { .. } => {
-                CliError::usage(e.to_string())
-            }
+            rl_rt::ThreadError::InvalidPriority { .. }
+            | rl_rt::ThreadError::InvalidCpu { .. }
+            | rl_rt::ThreadError::Affinity { .. } => CliError::usage(e.to_string()),
             e @ rl_rt::ThreadError::PermissionDenied { .. } => CliError::failed(format!(
                 "{e}; or measure without real-time scheduling: --policy other"
             )),
