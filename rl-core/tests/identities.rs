@@ -216,3 +216,28 @@ fn wrong_lengths_are_named() {
         Err(rl_core::Error::UnknownTool { tool: 5 })
     );
 }
+
+/// Every model of RL's corpus (`tests/data/rlmdl`), including the 17-DOF two-arm tree and the
+/// free-flying box (six-DOF and spherical variants), over 100 random states each.
+#[cfg(feature = "std")]
+#[test]
+fn rl_example_models() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/rlmdl");
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "xml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 12, "{files:?}");
+    for (n, f) in files.iter().enumerate() {
+        let loaded = rl_core::loader::load_file::<32>(f).unwrap_or_else(|e| panic!("{e}"));
+        let model = &loaded.model;
+        assert!(
+            model.dof() > 0 && !model.tools().is_empty(),
+            "{}",
+            f.display()
+        );
+        check_identities(model, 1000 + n as u64, 100);
+    }
+}
