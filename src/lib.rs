@@ -5,6 +5,7 @@
 //! - [`rt`] (`rl-rt`): Linux real-time threads and absolute-deadline loops;
 //! - [`drivers`] (`rl-drivers`): cyclic devices, protocol codecs and fake robots.
 
+pub mod controller;
 pub use rl_core as core;
 pub use rl_drivers as drivers;
 pub use rl_rt as rt;
