@@ -1,0 +1,330 @@
+//! End-to-end tests of `rl run` against the in-process fake H7: the built binary, its report,
+//! its telemetry, Ctrl-C, and its usage errors.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::{Signal, kill};
+use nix::unistd::Pid;
+
+/// The H7's cycle.
+const PERIOD_S: f64 = 0.00711;
+/// The fake's filter time constant in cycles (`FakeH7Config::loopback`).
+const FAKE_FILTER_CYCLES: f64 = 2.0;
+/// Fraction of the model's speed limits the tests plan with.
+const SPEED: f64 = 0.25;
+
+fn rl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rl"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("rl-run-test-{}-{name}", std::process::id()))
+}
+
+/// Runs to completion, at most `limit`; kills the child and fails beyond it.
+fn run_bounded(mut cmd: Command, limit: Duration) -> Output {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    let start = Instant::now();
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            return child.wait_with_output().expect("output");
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("output");
+            panic!(
+                "rl did not finish within {limit:?}; stderr:\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not JSON ({e}):\n{}\nstderr:\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+/// Speed limits of the embedded model, independent of the binary.
+fn rv6sl_speed_limits() -> Vec<f64> {
+    let model = rl::controller::rv6sl().expect("embedded model").model;
+    (0..model.dof()).map(|k| model.limits(k).velocity).collect()
+}
+
+/// `rl run --duration 3s --json`: the full cycle count, no lost packets, and a tracking error
+/// within what the fake's filter allows.
+///
+/// The bound: the fake moves each joint a fraction `α = 1/(1+f)` (f = 2 filter cycles) of the
+/// way to its target per packet. With `e_k` = commanded − measured and a trajectory that moves
+/// at most `v·T` per cycle (v: planned speed ≤ SPEED × the model's speed limit), `e_{k+1} =
+/// (1−α)(e_k + Δ)`, so `|e| ≤ (1−α)/α · v·T = f·v·T` for every cycle (no approximation; the
+/// fake's speed clamp never engages because the per-packet motion `α(e+Δ) ≤ v·T`). The wire
+/// carries f32, which adds well under 1e-6 rad.
+#[test]
+fn three_second_run_reports_full_cycles_no_loss_and_bounded_tracking() {
+    let mut cmd = rl();
+    cmd.args(["run", "--duration", "3s", "--json", "--speed", "0.25"]);
+    let out = run_bounded(cmd, Duration::from_secs(60));
+    assert!(
+        out.status.success(),
+        "exit {:?}; stderr:\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&out);
+    let cycles = v["cycles"].as_f64().expect("cycles");
+    let expected = 3.0 / PERIOD_S;
+    assert!(
+        (cycles - expected).abs() <= 1.0,
+        "cycles {cycles}, expected {expected:.1}"
+    );
+    assert_eq!(v["lost_packets"], 0, "{v}");
+    assert_eq!(v["limit_violations"], 0, "{v}");
+    assert_eq!(v["fake_end_packets"], 1, "{v}");
+    assert_eq!(v["fake_servo_on"], false, "{v}");
+    assert!(v["overruns"].is_u64());
+    for key in ["min", "mean", "p99", "p999", "max"] {
+        assert!(v["latency_us"][key].is_f64(), "latency_us.{key} in {v}");
+    }
+    let lat = &v["latency_us"];
+    let ordered: Vec<f64> = ["min", "p99", "p999", "max"]
+        .iter()
+        .map(|k| lat[*k].as_f64().expect("number"))
+        .collect();
+    assert!(ordered.windows(2).all(|w| w[0] <= w[1]), "{lat}");
+
+    let per_joint = v["tracking_error_rad"]["max_per_joint"]
+        .as_array()
+        .expect("per joint");
+    let speeds = rv6sl_speed_limits();
+    assert_eq!(per_joint.len(), speeds.len());
+    for (k, (e, speed)) in per_joint.iter().zip(&speeds).enumerate() {
+        let e = e.as_f64().expect("number");
+        let bound = FAKE_FILTER_CYCLES * SPEED * speed * PERIOD_S + 1e-6;
+        assert!(
+            e <= bound,
+            "joint {k}: tracking error {e} above the bound {bound}"
+        );
+    }
+    let max = v["tracking_error_rad"]["max"].as_f64().expect("max");
+    let rms = v["tracking_error_rad"]["rms"].as_f64().expect("rms");
+    // The arm really moved (and lagged): a motionless run would show zero error.
+    assert!(max > 1e-3 && rms > 0.0 && rms <= max, "max {max} rms {rms}");
+    // Brought to rest on the last cycle: the final error is the filter's residue only.
+    assert!(
+        v["end"].as_str().is_some_and(|e| e.contains("duration")),
+        "{}",
+        v["end"]
+    );
+}
+
+/// Ctrl-C mid-run: the arm is brought to rest, the fake sees the end packet, the report is
+/// printed, and the exit code says the run was interrupted.
+#[test]
+fn sigint_mid_run_stops_the_device_and_prints_the_report() {
+    let mut child: Child = rl()
+        .arg("run")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    // Wait for the loop to run (its first progress line), then interrupt it.
+    let stderr = child.stderr.take().expect("stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut lines = BufReader::new(stderr).lines();
+        let mut all = String::new();
+        let mut told = false;
+        while let Some(Ok(line)) = lines.next() {
+            if !told && line.contains("cycle") {
+                let _ = tx.send(());
+                told = true;
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    rx.recv_timeout(Duration::from_secs(30))
+        .expect("progress line within 30 s");
+    std::thread::sleep(Duration::from_millis(1000));
+    kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).expect("send SIGINT");
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(10) {
+            let _ = child.kill();
+            panic!("rl did not stop within 10 s of SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut stdout = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut stdout)
+        .expect("read stdout");
+    assert_eq!(status.code(), Some(130), "stdout:\n{stdout}");
+    assert!(
+        stdout.contains("stopped on request"),
+        "report says how it ended:\n{stdout}"
+    );
+    assert!(
+        stdout.contains("fake H7 saw 1 end packet, servo off"),
+        "the fake saw the end packet:\n{stdout}"
+    );
+    assert!(
+        stdout.contains("tracking error max"),
+        "report printed:\n{stdout}"
+    );
+    assert!(stdout.contains("result: ok"), "{stdout}");
+}
+
+/// `--telemetry`: a CSV with the documented columns and one row per cycle, in order.
+#[test]
+fn telemetry_csv_has_one_row_per_cycle() {
+    let path = temp("telemetry.csv");
+    let mut cmd = rl();
+    cmd.args(["run", "--duration", "1s", "--json", "--telemetry"])
+        .arg(&path);
+    let out = run_bounded(cmd, Duration::from_secs(60));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = json(&out);
+    let cycles = v["cycles"].as_u64().expect("cycles");
+    let mut reader = csv::Reader::from_path(&path).expect("csv written");
+    let headers = reader.headers().expect("header").clone();
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(headers.len(), 2 + 3 * 6 + 2, "{headers:?}");
+    assert_eq!(&headers[0], "cycle");
+    assert_eq!(&headers[2], "cmd_joint0");
+    assert_eq!(&headers[8], "meas_joint0");
+    assert_eq!(&headers[headers.len() - 1], "step_us");
+    let mut rows = 0u64;
+    for (i, record) in reader.records().enumerate() {
+        let record = record.expect("row parses");
+        assert_eq!(record.len(), headers.len());
+        let values: Vec<f64> = record
+            .iter()
+            .map(|f| f.parse().expect("every field is a number"))
+            .collect();
+        assert_eq!(values[0], i as f64, "cycle column counts up");
+        rows += 1;
+    }
+    assert_eq!(rows, cycles);
+    assert_eq!(v["telemetry_rows"], cycles);
+    assert_eq!(v["telemetry_dropped"], 0);
+}
+
+/// Bad flags and files: one clear line on standard error, exit code 2, nothing started.
+#[test]
+fn bad_flags_and_files_exit_with_code_2() {
+    let bad_csv = temp("bad-waypoints.csv");
+    std::fs::write(&bad_csv, "a,b,c,d,e,f\n0,0,0,0,0,0\n0,9,0,0,0,0\n").expect("write");
+    let short_csv = temp("short-waypoints.csv");
+    std::fs::write(&short_csv, "a,b\n0,0\n").expect("write");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["--device".into(), "tcp://1.2.3.4".into()], "--device"),
+        (
+            vec!["--model".into(), "/nonexistent/robot.urdf".into()],
+            "--model",
+        ),
+        (
+            vec!["--waypoints".into(), bad_csv.display().to_string()],
+            ":3: joint joint1",
+        ),
+        (
+            vec!["--waypoints".into(), short_csv.display().to_string()],
+            "2 columns",
+        ),
+        (vec!["--rate".into(), "0".into()], "--rate"),
+        (vec!["--speed".into(), "2".into()], "--speed"),
+        (vec!["--priority".into(), "150".into()], "priority"),
+        (vec!["--duration".into(), "soon".into()], "duration"),
+        (
+            vec![
+                "--device".into(),
+                "h7://127.0.0.1".into(),
+                "--rate".into(),
+                "500".into(),
+            ],
+            "7.11 ms",
+        ),
+    ];
+    for (flags, expect) in cases {
+        let mut cmd = rl();
+        cmd.arg("run").args(&flags);
+        let out = run_bounded(cmd, Duration::from_secs(30));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flags:?}: {stderr}");
+        assert!(stderr.contains(expect), "{flags:?}: {stderr}");
+        assert!(out.stdout.is_empty(), "{flags:?} printed a report");
+    }
+    let _ = std::fs::remove_file(&bad_csv);
+    let _ = std::fs::remove_file(&short_csv);
+}
+
+/// Without the right to SCHED_FIFO the run falls back to SCHED_OTHER with one warning naming
+/// the fix. As root the right is taken away with `setpriv` (bounding set without
+/// CAP_SYS_NICE); a non-root user normally lacks it already.
+#[test]
+fn without_sched_fifo_it_warns_once_and_still_runs() {
+    // /proc/self belongs to the effective user.
+    let root =
+        std::os::unix::fs::MetadataExt::uid(&std::fs::metadata("/proc/self").expect("procfs")) == 0;
+    let mut cmd = if root {
+        if Command::new("setpriv").arg("--version").output().is_err() {
+            println!("SKIP without_sched_fifo: running as root and setpriv is not installed");
+            return;
+        }
+        let mut c = Command::new("setpriv");
+        c.args([
+            "--bounding-set=-sys_nice,-ipc_lock",
+            "--inh-caps=-sys_nice,-ipc_lock",
+        ])
+        .arg(env!("CARGO_BIN_EXE_rl"));
+        c
+    } else {
+        rl()
+    };
+    cmd.args(["run", "--duration", "0.5s", "--json"]);
+    let out = run_bounded(cmd, Duration::from_secs(60));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let v = json(&out);
+    let scheduling = v["scheduling"].as_str().expect("scheduling");
+    if scheduling.contains("SCHED_FIFO") {
+        println!("SKIP without_sched_fifo: this user may use SCHED_FIFO ({scheduling})");
+        return;
+    }
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("warning") && l.contains("SCHED_FIFO"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].contains("CAP_SYS_NICE"),
+        "names the fix: {}",
+        warnings[0]
+    );
+    assert!(warnings[0].contains("SCHED_OTHER"), "{}", warnings[0]);
+}
