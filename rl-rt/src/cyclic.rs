@@ -387,7 +387,7 @@ impl CyclicLoop {
                 deadline_index = next;
                 continue;
             }
-            stats.overruns += 1;
+            stats.record_overrun(cycle.index, done.nanos_since(next_deadline));
             match self.policy {
                 OverrunPolicy::Stop => {
                     return Err(LoopError::Overrun {

@@ -52,7 +52,7 @@ pub mod thread;
 
 pub use clock::MonoTime;
 pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy, StopFlag};
-pub use stats::{Histogram, LoopStats, Summary};
+pub use stats::{Histogram, LoopStats, Overrun, Summary};
 pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadCounters, ThreadError};
 
 /// The crate README's examples, compiled as doc tests so they cannot rot.

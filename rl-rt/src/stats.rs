@@ -275,6 +275,18 @@ impl fmt::Display for Summary {
     }
 }
 
+/// How many overruns a [`LoopStats`] remembers individually (the first ones); all are counted.
+pub const OVERRUN_LOG_LEN: usize = 16;
+
+/// One overrun: which cycle, and how far past the next deadline its step returned.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrun {
+    /// Index of the cycle (0-based, counting cycles run).
+    pub cycle: u64,
+    /// Lateness of the step's return after the next deadline, ns.
+    pub late_by_ns: u64,
+}
+
 /// What a periodic loop measured: wake-up latency and step duration per cycle, overruns and
 /// deadlines skipped. Mergeable, so per-run or per-thread statistics can be combined.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -289,6 +301,8 @@ pub struct LoopStats {
     pub overruns: u64,
     /// Deadlines passed over without a cycle (overrun policy `Skip`).
     pub missed_deadlines: u64,
+    overrun_log: [Overrun; OVERRUN_LOG_LEN],
+    overrun_logged: usize,
 }
 
 impl LoopStats {
@@ -300,7 +314,29 @@ impl LoopStats {
             step: Histogram::new(range_us),
             overruns: 0,
             missed_deadlines: 0,
+            overrun_log: [Overrun::default(); OVERRUN_LOG_LEN],
+            overrun_logged: 0,
         }
+    }
+
+    /// Counts an overrun of `cycle` and remembers it if the log has room. Allocation-free.
+    #[inline]
+    pub fn record_overrun(&mut self, cycle: u64, late_by_ns: u64) {
+        self.overruns += 1;
+        self.log_overrun(Overrun { cycle, late_by_ns });
+    }
+
+    fn log_overrun(&mut self, overrun: Overrun) {
+        if let Some(slot) = self.overrun_log.get_mut(self.overrun_logged) {
+            *slot = overrun;
+            self.overrun_logged += 1;
+        }
+    }
+
+    /// The first [`OVERRUN_LOG_LEN`] overruns recorded with
+    /// [`record_overrun`](Self::record_overrun): which cycles overran and by how much.
+    pub fn overrun_log(&self) -> &[Overrun] {
+        &self.overrun_log[..self.overrun_logged]
     }
 
     /// Cycles run (each has one wake-up and one step sample).
@@ -321,6 +357,7 @@ impl LoopStats {
         self.step.clear();
         self.overruns = 0;
         self.missed_deadlines = 0;
+        self.overrun_logged = 0;
     }
 
     /// Adds another loop's statistics (same histogram range).
@@ -329,6 +366,9 @@ impl LoopStats {
         self.step.merge(&other.step)?;
         self.overruns += other.overruns;
         self.missed_deadlines += other.missed_deadlines;
+        for &o in other.overrun_log() {
+            self.log_overrun(o);
+        }
         if self.period_ns != other.period_ns {
             self.period_ns = 0;
         }
@@ -336,15 +376,28 @@ impl LoopStats {
     }
 
     /// The whole record as JSON: `period_ns`, `cycles`, `overruns`, `missed_deadlines`,
-    /// `wakeup` and `step` (each a [`Summary::to_json`] object).
+    /// `overrun_log` (`[{cycle, late_by_us}]`), `wakeup` and `step` (each a
+    /// [`Summary::to_json`] object).
     pub fn to_json(&self) -> String {
+        let log: Vec<String> = self
+            .overrun_log()
+            .iter()
+            .map(|o| {
+                format!(
+                    "{{\"cycle\":{},\"late_by_us\":{:.3}}}",
+                    o.cycle,
+                    us(o.late_by_ns)
+                )
+            })
+            .collect();
         format!(
             "{{\"period_ns\":{},\"cycles\":{},\"overruns\":{},\"missed_deadlines\":{},\
-             \"wakeup\":{},\"step\":{}}}",
+             \"overrun_log\":[{}],\"wakeup\":{},\"step\":{}}}",
             self.period_ns,
             self.cycles(),
             self.overruns,
             self.missed_deadlines,
+            log.join(","),
             self.wakeup.summary().to_json(),
             self.step.summary().to_json()
         )
@@ -362,7 +415,17 @@ impl fmt::Display for LoopStats {
             self.missed_deadlines
         )?;
         writeln!(f, "wake-up latency: {}", self.wakeup.summary())?;
-        write!(f, "step duration:   {}", self.step.summary())
+        write!(f, "step duration:   {}", self.step.summary())?;
+        if !self.overrun_log().is_empty() {
+            write!(f, "\noverran (cycle: late by):")?;
+            for o in self.overrun_log() {
+                write!(f, " {}: {:.1} µs", o.cycle, us(o.late_by_ns))?;
+            }
+            if self.overruns > self.overrun_log().len() as u64 {
+                write!(f, " ... ({} in all)", self.overruns)?;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -456,10 +519,30 @@ mod tests {
     }
 
     #[test]
+    fn overrun_log_keeps_the_first_and_counts_all() {
+        let mut s = LoopStats::new(1_000_000, 10);
+        for cycle in 0..(OVERRUN_LOG_LEN as u64 + 4) {
+            s.record_overrun(cycle * 10, 1_000);
+        }
+        assert_eq!(s.overruns, OVERRUN_LOG_LEN as u64 + 4);
+        assert_eq!(s.overrun_log().len(), OVERRUN_LOG_LEN);
+        assert_eq!(
+            s.overrun_log()[3],
+            Overrun {
+                cycle: 30,
+                late_by_ns: 1_000
+            }
+        );
+        assert!(s.to_string().contains("(20 in all)"), "{s}");
+        s.clear();
+        assert!(s.overrun_log().is_empty());
+    }
+
+    #[test]
     fn loop_stats_merge_and_json() {
         let mut a = LoopStats::new(1_000_000, 100);
         a.record_cycle(5_000, 1_000);
-        a.overruns = 1;
+        a.record_overrun(0, 1_500);
         let mut b = LoopStats::new(1_000_000, 100);
         b.record_cycle(7_000, 2_000);
         b.missed_deadlines = 3;
@@ -471,6 +554,10 @@ mod tests {
         );
         let json = a.to_json();
         assert!(json.starts_with("{\"period_ns\":1000000,\"cycles\":2,\"overruns\":1,"));
+        assert!(
+            json.contains("\"overrun_log\":[{\"cycle\":0,\"late_by_us\":1.500}]"),
+            "{json}"
+        );
         assert!(json.contains("\"wakeup\":{\"count\":2,\"overflow\":0,\"min_us\":5.000,"));
         assert!(json.contains("\"max_us\":7.000"));
     }

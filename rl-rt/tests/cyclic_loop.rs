@@ -187,6 +187,11 @@ fn overrun_skip_jumps_to_the_next_future_deadline() {
         "resumed on a deadline still ahead"
     );
     assert!(stats.missed_deadlines >= 3);
+    assert!(
+        stats.overrun_log().iter().any(|o| o.cycle == 5),
+        "{:?}",
+        stats.overrun_log()
+    );
     assert!(after.latency_ns < PERIOD_10MS.as_nanos() as u64 || stats.overruns > 1);
 }
 
@@ -235,6 +240,13 @@ fn overrun_stop_ends_with_an_error_and_keeps_the_stats() {
         "the overrunning cycle is in the statistics"
     );
     assert_eq!(stats.overruns, 1);
+    assert_eq!(stats.overrun_log().len(), 1);
+    assert_eq!(
+        stats.overrun_log()[0].cycle,
+        5,
+        "the log names the cycle that overran"
+    );
+    assert!(stats.overrun_log()[0].late_by_ns >= 25_000_000);
 }
 
 #[test]

@@ -267,6 +267,7 @@ fn jitter_json(
         "p9999_us": us(w.p9999_ns),
         "max_us": us(w.max_ns),
         "missed_deadlines": stats.missed_deadlines,
+        "overrun_cycles": stats.overrun_log().iter().map(|o| o.cycle).collect::<Vec<_>>(),
         "histogram_overflows": w.overflow,
         "histogram_range_us": stats.wakeup.range_us(),
         "interval_us": args.interval_us,
