@@ -129,3 +129,5 @@ impl fmt::Display for Discontinuity {
 }
 
 impl core::error::Error for TrajectoryError {}
+
+impl core::error::Error for Discontinuity {}
