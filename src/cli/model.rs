@@ -643,3 +643,71 @@ fn bench(a: BenchArgs) -> CliResult {
     }
     Ok(ExitCode::SUCCESS)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two branches under the base: file order `j_b`, `j_a`; Pinocchio's order `j_a`, `j_b`.
+    const URDF: &str = r#"<robot name="fork">
+      <link name="base"/>
+      <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      <link name="a"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      <joint name="j_b" type="revolute"><parent link="base"/><child link="b"/><axis xyz="0 0 1"/>
+        <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+      <joint name="j_a" type="prismatic"><parent link="base"/><child link="a"/><axis xyz="1 0 0"/>
+        <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    </robot>"#;
+
+    fn model(order: JointOrder) -> Box<Model<CAPACITY>> {
+        let options = UrdfOptions {
+            joint_order: order,
+            ..UrdfOptions::default()
+        };
+        Box::new(
+            loader::load_urdf_str::<CAPACITY>(URDF, &options)
+                .expect("test URDF loads")
+                .model,
+        )
+    }
+
+    const STATES: &str = "rl-bench-states 1\nnq 2 nv 2 joints 2 states 2\n\
+        joint j_a 1 1\njoint j_b 1 1\n\
+        state 0.1 0.2 1.1 1.2 2.1 2.2\nstate 0.3 0.4 1.3 1.4 2.3 2.4\n";
+
+    #[test]
+    fn states_map_by_joint_name() {
+        let pin = BenchStates::parse(&model(JointOrder::Pinocchio), STATES).unwrap();
+        assert_eq!(pin.n, 2);
+        assert_eq!(pin.q, [0.1, 0.2, 0.3, 0.4]);
+        assert_eq!(pin.qd, [1.1, 1.2, 1.3, 1.4]);
+        assert_eq!(pin.qdd, [2.1, 2.2, 2.3, 2.4]);
+        let file = model(JointOrder::File);
+        assert_eq!(file.joint_name(0), "j_b");
+        let s = BenchStates::parse(&file, STATES).unwrap();
+        assert_eq!(s.q, [0.2, 0.1, 0.4, 0.3]);
+        assert_eq!(s.qd, [1.2, 1.1, 1.4, 1.3]);
+        assert_eq!(s.qdd, [2.2, 2.1, 2.4, 2.3]);
+    }
+
+    #[test]
+    fn bad_states_files_name_the_problem() {
+        let m = model(JointOrder::Pinocchio);
+        let err = |text: &str| BenchStates::parse(&m, text).unwrap_err();
+        assert!(err("hello").contains("rl-bench-states 1"));
+        assert!(err(&STATES.replace("j_b 1 1", "j_c 1 1")).contains("no joint named j_c"));
+        assert!(err(&STATES.replace("j_b 1 1", "j_b 2 1")).contains("nq 2, nv 1"));
+        assert!(err(&STATES.replace("0.4 1.3", "0.4")).contains("line 6: 5 numbers, expected 6"));
+        assert!(err(&STATES.replace("2.4", "nan")).contains("not a finite number"));
+        assert!(err(&STATES.replace("states 2", "states 3")).contains("ends before"));
+    }
+
+    #[test]
+    fn bench_states_times_every_algorithm() {
+        let m = model(JointOrder::Pinocchio);
+        let s = BenchStates::parse(&m, STATES).unwrap();
+        let ns = bench_states(&m, &s, 1, 0).unwrap();
+        assert!(ns.iter().all(|&t| t.is_finite() && t > 0.0), "{ns:?}");
+        assert!(bench_states(&m, &s, 1, m.tools().len()).is_err());
+    }
+}
