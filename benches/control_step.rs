@@ -1,2 +1,102 @@
-//! Cost of one full control step (issue 7; being built).
-fn main() {}
+//! Cost of one full control step of `rl run` for the 6-axis RV-6SL: read the measured joints,
+//! evaluate the jerk-limited trajectory, inverse dynamics (RNEA) feed-forward, command the next
+//! position, and step the H7 device against the in-process fake on loopback (one UDP round
+//! trip). The parts are measured alone too, so the network's share is visible. This is the
+//! number that tells how fast a loop the library supports on a machine.
+//!
+//! `cargo bench --bench control_step`
+
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use rl::controller::{Controller, MotionLimits, Plan, default_waypoints, rv6sl};
+use rl::core::traj::Trajectory;
+use rl::core::{Data, algo};
+use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
+
+fn started_h7(fake: &FakeH7, dof: usize) -> MitsubishiH7 {
+    let mut robot = MitsubishiH7::new(MitsubishiH7Config::new(
+        dof,
+        fake.udp_addr(),
+        fake.r3_addr(),
+    ))
+    .expect("device");
+    robot.open().expect("open");
+    robot.start().expect("start");
+    robot.step().expect("first exchange");
+    robot
+}
+
+fn control_step(c: &mut Criterion) {
+    let loaded = rv6sl().expect("embedded model");
+    let model = loaded.model;
+    let dof = model.dof();
+    let fake = FakeH7::spawn(FakeH7Config::loopback(dof)).expect("fake H7");
+    let robot = started_h7(&fake, dof);
+    let mut start = vec![0.0; dof];
+    robot.joint_position(&mut start).expect("joints");
+    let limits = MotionLimits::from_model(&model, 0.25).expect("limits");
+    let plan =
+        Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
+    let trajectory = plan.trajectory().clone();
+    let duration = plan.duration_s();
+    let mut control = Box::new(
+        Controller::new(robot, model.clone(), plan, Duration::from_micros(7110))
+            .expect("controller"),
+    );
+
+    let mut group = c.benchmark_group("control_step");
+    group.measurement_time(Duration::from_secs(3));
+    group.bench_function("full cycle, 6 axes, H7 fake on loopback", |b| {
+        b.iter(|| {
+            let out = control.cycle();
+            if out.finished {
+                // The tour returns to its start, so restarting keeps the command continuous.
+                control.rewind();
+            }
+            black_box(out.record.feed_forward)
+        })
+    });
+    assert_eq!(
+        control.failed_steps(),
+        0,
+        "lost replies during the benchmark"
+    );
+
+    let mut t = 0.0;
+    group.bench_function("trajectory sample", |b| {
+        b.iter(|| {
+            t = if t > duration { 0.0 } else { t + 0.00711 };
+            black_box(trajectory.sample(black_box(t)))
+        })
+    });
+    let mut data = Box::new(Data::new());
+    let s = trajectory.sample(0.3 * duration);
+    group.bench_function("RNEA feed-forward", |b| {
+        b.iter(|| {
+            let tau = algo::rnea(
+                &model,
+                &mut data,
+                black_box(&s.position[..dof]),
+                black_box(&s.velocity[..dof]),
+                black_box(&s.acceleration[..dof]),
+            )
+            .expect("lengths");
+            black_box(tau[0])
+        })
+    });
+    let mut robot = control.into_robot();
+    group.bench_function("H7 device step (UDP round trip)", |b| {
+        b.iter(|| robot.step().expect("step"))
+    });
+    group.finish();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}
+
+criterion_group!(benches, control_step);
+criterion_main!(benches);
