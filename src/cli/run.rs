@@ -161,8 +161,8 @@ pub fn run(args: RunArgs) -> CliResult {
                 .and_then(|c| c.with_speed_limits(&speed))
                 .map_err(|e| CliError::failed(format!("fake H7 from the model: {e}")))?;
             let home = setup.loaded.home_or_neutral();
-            for k in 0..dof {
-                config.initial_rad[k] = model.limits(k).clamp(home[k]);
+            for (k, (initial, h)) in config.initial_rad.iter_mut().zip(&home).enumerate() {
+                *initial = model.limits(k).clamp(*h);
             }
             let fake = FakeH7::spawn(config)
                 .map_err(|e| CliError::failed(format!("cannot start the fake H7: {e}")))?;
@@ -599,7 +599,6 @@ fn drive<R: JointRobot + Send + 'static>(
     drain(&mut rx, setup);
     let dropped = rx.as_ref().map_or(0, |rx| rx.dropped());
     display.finish();
-    drop(drain);
     if let Some(w) = &mut setup.telemetry_file {
         if let Err(e) = w.flush() {
             write_error.get_or_insert(e.to_string());

@@ -172,7 +172,7 @@ impl<R: JointRobot> Controller<R> {
             });
         }
         let period_s = period.as_secs_f64();
-        if !(period_s > 0.0) {
+        if period_s.is_nan() || period_s <= 0.0 {
             return Err(PlanError::Trajectory(
                 rl_core::traj::TrajectoryError::BadDuration,
             ));
@@ -328,9 +328,8 @@ impl<R: JointRobot> Controller<R> {
         for k in 0..self.dof {
             let l = self.model.limits(k);
             let q = self.measured[k];
-            if !l.wraparound
-                && !(q >= l.lower - POSITION_TOLERANCE && q <= l.upper + POSITION_TOLERANCE)
-            {
+            let inside = q >= l.lower - POSITION_TOLERANCE && q <= l.upper + POSITION_TOLERANCE;
+            if !(l.wraparound || inside) {
                 self.tracking.record_violation(Violation {
                     cycle,
                     joint: k,

@@ -325,7 +325,7 @@ impl Plan {
                 nq: model.nq(),
                 dof,
             })?;
-            for k in 0..dof {
+            for (k, tau_k) in tau.iter().enumerate().take(dof) {
                 let l = model.limits(k);
                 let exceeds = |quantity, value: f64, limit: f64| PlanError::Exceeds {
                     quantity,
@@ -343,7 +343,7 @@ impl Plan {
                 if v > l.velocity * (1.0 + 1e-9) {
                     return Err(exceeds("speed", v, l.velocity));
                 }
-                let e = tau[k].abs();
+                let e = tau_k.abs();
                 if e > l.effort {
                     return Err(exceeds("effort", e, l.effort));
                 }

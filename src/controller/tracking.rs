@@ -61,8 +61,8 @@ impl Tracking {
     /// Records the feed-forward torques of one cycle.
     #[inline]
     pub fn record_feed_forward(&mut self, tau: &[f64]) {
-        for k in 0..self.dof {
-            self.peak_feed_forward[k] = self.peak_feed_forward[k].max(tau[k].abs());
+        for (peak, t) in self.peak_feed_forward[..self.dof].iter_mut().zip(tau) {
+            *peak = peak.max(t.abs());
         }
     }
 

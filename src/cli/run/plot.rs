@@ -26,7 +26,7 @@ pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(),
             hi = hi.max(r.commanded[k]).max(r.measured[k]);
         }
     }
-    if !(lo < hi) {
+    if !lo.is_finite() || !hi.is_finite() || lo >= hi {
         (lo, hi) = (-1.0, 1.0);
     }
     let pad = 0.05 * (hi - lo);
