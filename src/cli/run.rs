@@ -177,7 +177,7 @@ pub fn run(args: RunArgs) -> CliResult {
                 fake.udp_addr(),
                 fake.r3_addr()
             );
-            drive(robot, name, &mut setup, &signals, Some(&fake))
+            drive(robot, name, &mut setup, &signals, Some(&fake), None)
         }
         DeviceSpec::H7 { server, r3 } => {
             let robot = MitsubishiH7::new(MitsubishiH7Config::new(
@@ -187,7 +187,7 @@ pub fn run(args: RunArgs) -> CliResult {
             ))
             .map_err(|e| CliError::usage(format!("--device: {e}")))?;
             let name = format!("H7 at {server} (R3 {r3})");
-            drive(robot, name, &mut setup, &signals, None)
+            drive(robot, name, &mut setup, &signals, None, None)
         }
         DeviceSpec::Coach { server } => {
             let mut config = CoachConfig::new(setup.loaded.model.dof());
@@ -195,13 +195,14 @@ pub fn run(args: RunArgs) -> CliResult {
             config.update_period = period_for(&setup, config.update_period);
             let robot =
                 Coach::new(config).map_err(|e| CliError::usage(format!("--device: {e}")))?;
-            drive(
-                robot,
-                format!("Coach at {server}"),
-                &mut setup,
-                &signals,
-                None,
-            )
+            // A visualiser shows what it is sent: start it at the model's home position.
+            let model = &setup.loaded.model;
+            let home: Vec<f64> = (0..model.dof())
+                .zip(setup.loaded.home_or_neutral())
+                .map(|(k, h)| model.limits(k).clamp(h))
+                .collect();
+            let name = format!("Coach at {server}");
+            drive(robot, name, &mut setup, &signals, None, Some(home))
         }
     }
 }
@@ -408,6 +409,7 @@ fn drive<R: JointRobot + Send + 'static>(
     setup: &mut Setup,
     signals: &Signals,
     fake: Option<&FakeH7>,
+    initial_command: Option<Vec<f64>>,
 ) -> CliResult {
     let model = setup.loaded.model.clone();
     let dof = model.dof();
@@ -419,9 +421,14 @@ fn drive<R: JointRobot + Send + 'static>(
         let _ = robot.close();
         return Err(CliError::failed(format!("cannot start {device_name}: {e}")));
     }
-    // The first exchange tells where the arm is; the plan starts there.
+    // The first exchange tells where the arm is; the plan starts there. (A robot is never
+    // sent a position before that; a visualiser is sent its initial one.)
     let mut start = vec![0.0; dof];
-    if let Err(e) = robot.step().and_then(|()| robot.joint_position(&mut start)) {
+    if let Err(e) = initial_command
+        .map_or(Ok(()), |q| robot.set_joint_position(&q))
+        .and_then(|()| robot.step())
+        .and_then(|()| robot.joint_position(&mut start))
+    {
         let _ = shut_down(&mut robot, fake);
         return Err(CliError::failed(format!(
             "no joint positions from {device_name}: {e}"
@@ -675,7 +682,10 @@ fn drive<R: JointRobot + Send + 'static>(
 /// Stops and closes the device (for the H7: end packet, program stop, servo off), and reads
 /// what the in-process fake saw.
 fn shut_down<R: JointRobot>(robot: &mut R, fake: Option<&FakeH7>) -> Shutdown {
-    let mut shutdown = Shutdown::default();
+    let mut shutdown = Shutdown {
+        detail: robot.stop_detail().to_owned(),
+        ..Shutdown::default()
+    };
     match robot.stop() {
         Ok(()) => shutdown.stopped = true,
         Err(e) => shutdown.error = Some(e.to_string()),

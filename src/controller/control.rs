@@ -45,6 +45,9 @@ pub trait JointRobot:
 {
     /// The link's packet counts so far.
     fn link_counters(&self) -> LinkCounters;
+
+    /// What a successful `stop()` does on this device, in a few words for a report.
+    fn stop_detail(&self) -> &'static str;
 }
 
 impl JointRobot for MitsubishiH7 {
@@ -58,6 +61,10 @@ impl JointRobot for MitsubishiH7 {
             rejected: c.foreign + c.wrong_length + c.corrupt,
         }
     }
+
+    fn stop_detail(&self) -> &'static str {
+        "end packet sent, program stopped, servo off"
+    }
 }
 
 impl JointRobot for Coach {
@@ -70,6 +77,10 @@ impl JointRobot for Coach {
             late: c.late,
             rejected: c.bad_lines,
         }
+    }
+
+    fn stop_detail(&self) -> &'static str {
+        "nothing to switch off: a visualiser"
     }
 }
 

@@ -14,6 +14,8 @@ use super::tracking::Tracking;
 pub struct Shutdown {
     /// `stop()` succeeded (for the H7: end packet sent, program stopped, servo off).
     pub stopped: bool,
+    /// What a clean stop meant for this device (shown in the report).
+    pub detail: String,
     /// Why `stop()` or `close()` failed.
     pub error: Option<String>,
     /// What the in-process fake controller saw, if there is one: end packets received.
@@ -230,11 +232,14 @@ impl fmt::Display for RunReport {
             out,
             "device: {}",
             if sd.stopped {
-                "stopped (end packet sent, servo off)"
+                "stopped cleanly"
             } else {
                 "NOT stopped cleanly"
             }
         );
+        if sd.stopped && !sd.detail.is_empty() {
+            let _ = write!(out, " ({})", sd.detail);
+        }
         if let Some(e) = &sd.error {
             let _ = write!(out, " ({e})");
         }
