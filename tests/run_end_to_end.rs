@@ -196,13 +196,17 @@ fn sigint_mid_run_stops_the_device_and_prints_the_report() {
     assert!(stdout.contains("result: ok"), "{stdout}");
 }
 
-/// `--telemetry`: a CSV with the documented columns and one row per cycle, in order.
+/// `--telemetry`: a CSV with the documented columns and one row per cycle, in order; and
+/// `--plot` draws every joint (measured, commanded, error) and the latency histogram.
 #[test]
 fn telemetry_csv_has_one_row_per_cycle() {
     let path = temp("telemetry.csv");
+    let svg = temp("plot.svg");
     let mut cmd = rl();
     cmd.args(["run", "--duration", "1s", "--json", "--telemetry"])
-        .arg(&path);
+        .arg(&path)
+        .arg("--plot")
+        .arg(&svg);
     let out = run_bounded(cmd, Duration::from_secs(60));
     assert!(
         out.status.success(),
@@ -231,6 +235,14 @@ fn telemetry_csv_has_one_row_per_cycle() {
         rows += 1;
     }
     assert_eq!(rows, cycles);
+    let picture = std::fs::read_to_string(&svg).expect("plot written");
+    let _ = std::fs::remove_file(&svg);
+    assert!(picture.starts_with("<svg"), "an SVG file");
+    assert!(
+        picture.matches("<polyline").count() >= 3 * 6,
+        "measured, commanded and error lines for 6 joints"
+    );
+    assert!(picture.contains("wake-up latency ("), "histogram caption");
     assert_eq!(v["telemetry_rows"], cycles);
     assert_eq!(v["telemetry_dropped"], 0);
 }
