@@ -271,6 +271,7 @@ fn bad_flags_and_files_exit_with_code_2() {
         (vec!["--rate".into(), "0".into()], "--rate"),
         (vec!["--speed".into(), "2".into()], "--speed"),
         (vec!["--priority".into(), "150".into()], "priority"),
+        (vec!["--cpu".into(), "999".into()], "CPU"),
         (vec!["--duration".into(), "soon".into()], "duration"),
         (
             vec![

@@ -138,7 +138,7 @@ struct Setup {
     joints: Vec<String>,
     waypoints: Option<Vec<Vec<f64>>>,
     limits: MotionLimits,
-    priority: i32,
+    thread: RtThreadBuilder,
     telemetry_file: Option<BufWriter<File>>,
 }
 
@@ -239,9 +239,19 @@ fn check(args: RunArgs) -> Result<Setup, CliError> {
     if let Some(cpu) = args.cpu {
         probe = probe.cpus([cpu]);
     }
-    probe
-        .validate()
-        .map_err(|e| CliError::usage(format!("--priority/--cpu: {e}")))?;
+    // Try the scheduling on a throw-away thread before anything starts: a bad CPU is a usage
+    // error, a missing privilege a fallback to SCHED_OTHER with one warning.
+    let thread = match probe.clone().spawn(|| ()).map(|t| t.join()) {
+        Ok(_) => probe,
+        Err(e @ ThreadError::PermissionDenied { .. }) => {
+            eprintln!(
+                "rl run: warning: {e}; running the loop at SCHED_OTHER, so its latency is not \
+                 bounded"
+            );
+            probe.policy(Policy::Other).priority(0)
+        }
+        Err(e) => return Err(CliError::usage(format!("--priority/--cpu: {e}"))),
+    };
 
     let (loaded, model_name) = match &args.model {
         None => (
@@ -294,7 +304,7 @@ fn check(args: RunArgs) -> Result<Setup, CliError> {
         joints,
         waypoints,
         limits,
-        priority,
+        thread,
         telemetry_file,
     })
 }
@@ -469,26 +479,7 @@ fn drive<R: JointRobot + Send + 'static>(
                 false
             }
         };
-    let mut builder = RtThreadBuilder::new("rl-control")
-        .policy(Policy::Fifo)
-        .priority(setup.priority);
-    if let Some(cpu) = setup.args.cpu {
-        builder = builder.cpus([cpu]);
-    }
-    match builder.clone().spawn(|| ()).map(|t| t.join()) {
-        Ok(_) => {}
-        Err(e @ ThreadError::PermissionDenied { .. }) => {
-            eprintln!(
-                "rl run: warning: {e}; running the loop at SCHED_OTHER, so its latency is not bounded"
-            );
-            builder = builder.policy(Policy::Other).priority(0);
-        }
-        Err(e) => {
-            let mut robot = controller.into_robot();
-            let _ = shut_down(&mut robot, fake);
-            return Err(CliError::usage(format!("--priority/--cpu: {e}")));
-        }
-    }
+    let builder = setup.thread.clone();
 
     let collect = setup.telemetry_file.is_some() || setup.args.plot.is_some();
     let (tx, mut rx) = if collect {
