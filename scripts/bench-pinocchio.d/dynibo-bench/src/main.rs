@@ -26,6 +26,9 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 const NO_LOADS: &[IndexedLoad] = &[];
 
+/// A Pinocchio free-flyer state: q (x y z qx qy qz qw), v and a ([linear; angular], local).
+type FreeFlyerState = ([f64; 7], [f64; 6], [f64; 6]);
+
 /// States as read from the file, already in dynibo's joint order.
 struct States {
     n: usize,
@@ -34,7 +37,7 @@ struct States {
     qd: Vec<Vec<f64>>,
     qdd: Vec<Vec<f64>>,
     /// The floating base: (q[7], v[6], a[6]) in Pinocchio's layout, when the file has one.
-    base: Vec<Option<([f64; 7], [f64; 6], [f64; 6])>>,
+    base: Vec<Option<FreeFlyerState>>,
 }
 
 fn parse_states(text: &str, dynibo_names: &[String], floating: bool) -> Result<States, String> {
@@ -122,10 +125,7 @@ fn parse_states(text: &str, dynibo_names: &[String], floating: bool) -> Result<S
 
 /// dynibo's `BaseState` for a Pinocchio free-flyer state; `with_acceleration = false` gives
 /// zero base acceleration (for nle).
-fn base_state(
-    (q, v, a): &([f64; 7], [f64; 6], [f64; 6]),
-    with_acceleration: bool,
-) -> Result<BaseState, String> {
+fn base_state((q, v, a): &FreeFlyerState, with_acceleration: bool) -> Result<BaseState, String> {
     let rot = UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2]));
     let frame: Frame = Isometry3::from_parts(Translation3::new(q[0], q[1], q[2]), rot);
     let (vl, wl) = (
@@ -253,9 +253,9 @@ fn bench_floating(
         bases0.push(base_state(b, false)?);
     }
     let mut taus = Vec::with_capacity(s.n);
-    for i in 0..s.n {
+    for (i, base) in bases.iter().enumerate() {
         robot
-            .inverse_dynamics(&bases[i], &s.q[i], &s.qd[i], &s.qdd[i], NO_LOADS, &mut out)
+            .inverse_dynamics(base, &s.q[i], &s.qd[i], &s.qdd[i], NO_LOADS, &mut out)
             .map_err(e)?;
         taus.push(out.clone());
     }
