@@ -25,7 +25,9 @@ pub struct Limit {
 
 fn limit(resource: Resource) -> Result<Limit, Errno> {
     let (soft, hard) = getrlimit(resource)?;
-    let finite = |v: libc::rlim_t| (v != RLIM_INFINITY).then_some(v);
+    // rlim_t is u32 on 32-bit targets (armv7), u64 on 64-bit ones: the cast is needed there.
+    #[allow(clippy::unnecessary_cast)]
+    let finite = |v: libc::rlim_t| (v != RLIM_INFINITY).then_some(v as u64);
     Ok(Limit {
         soft: finite(soft),
         hard: finite(hard),
