@@ -3,7 +3,7 @@
 //! step forward kinematics, RNEA and ABA. `no_std` except when compiled for the host's tests.
 #![cfg_attr(not(test), no_std)]
 
-use core::f64::consts::FRAC_PI_2;
+use core::f64::consts::{FRAC_PI_2, PI, TAU};
 use glam::{DMat3, DQuat, DVec3};
 use rl_core::joint::{Joint, Revolute};
 use rl_core::model::{JointLimits, ROOT};
@@ -36,12 +36,12 @@ pub struct Link {
 /// A UR5-class arm (DH lengths and masses of the UR5), fixed at compile time.
 #[rustfmt::skip]
 pub const ARM: [Link; DOF] = [
-    Link { alpha: 0.0, a: 0.0, d: 0.089159, mass: 3.7, com: [0.0, -0.02561, 0.00193], inertia: [0.0084, 0.0064, 0.0084], limits: [6.28, 3.15, 150.0] },
-    Link { alpha: FRAC_PI_2, a: 0.0, d: 0.0, mass: 8.393, com: [0.2125, 0.0, 0.11336], inertia: [0.0078, 0.2100, 0.2100], limits: [6.28, 3.15, 150.0] },
-    Link { alpha: 0.0, a: -0.425, d: 0.0, mass: 2.275, com: [0.15, 0.0, 0.0265], inertia: [0.0016, 0.0462, 0.0462], limits: [3.14, 3.15, 150.0] },
-    Link { alpha: 0.0, a: -0.39225, d: 0.10915, mass: 1.219, com: [0.0, -0.0018, 0.01634], inertia: [0.0016, 0.0016, 0.0009], limits: [6.28, 3.2, 28.0] },
-    Link { alpha: FRAC_PI_2, a: 0.0, d: 0.09465, mass: 1.219, com: [0.0, 0.0018, 0.01634], inertia: [0.0016, 0.0016, 0.0009], limits: [6.28, 3.2, 28.0] },
-    Link { alpha: -FRAC_PI_2, a: 0.0, d: 0.0823, mass: 0.1879, com: [0.0, 0.0, -0.001159], inertia: [0.0001, 0.0001, 0.0001], limits: [6.28, 3.2, 28.0] },
+    Link { alpha: 0.0, a: 0.0, d: 0.089159, mass: 3.7, com: [0.0, -0.02561, 0.00193], inertia: [0.0084, 0.0064, 0.0084], limits: [TAU, 3.15, 150.0] },
+    Link { alpha: FRAC_PI_2, a: 0.0, d: 0.0, mass: 8.393, com: [0.2125, 0.0, 0.11336], inertia: [0.0078, 0.2100, 0.2100], limits: [TAU, 3.15, 150.0] },
+    Link { alpha: 0.0, a: -0.425, d: 0.0, mass: 2.275, com: [0.15, 0.0, 0.0265], inertia: [0.0016, 0.0462, 0.0462], limits: [PI, 3.15, 150.0] },
+    Link { alpha: 0.0, a: -0.39225, d: 0.10915, mass: 1.219, com: [0.0, -0.0018, 0.01634], inertia: [0.0016, 0.0016, 0.0009], limits: [TAU, 3.2, 28.0] },
+    Link { alpha: FRAC_PI_2, a: 0.0, d: 0.09465, mass: 1.219, com: [0.0, 0.0018, 0.01634], inertia: [0.0016, 0.0016, 0.0009], limits: [TAU, 3.2, 28.0] },
+    Link { alpha: -FRAC_PI_2, a: 0.0, d: 0.0823, mass: 0.1879, com: [0.0, 0.0, -0.001159], inertia: [0.0001, 0.0001, 0.0001], limits: [TAU, 3.2, 28.0] },
 ];
 
 /// Start and goal of the trajectory (rad).
