@@ -75,7 +75,7 @@ fn unknown_format() {
 #[test]
 fn unknown_joint_type() {
     let text = String::from(
-        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"ball\" type=\"spherical\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>"
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"ball\" type=\"spherical\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>",
     );
     let e = urdf_err(&text);
     assert!(
@@ -156,7 +156,7 @@ fn invalid_value() {
     assert!(e.to_string().contains("not a number"), "{e}");
     // A zero axis on a moving joint.
     let text = String::from(
-        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"j\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>\n<axis xyz=\"0 0 0\"/></joint></robot>"
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>\n<joint name=\"j\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>\n<axis xyz=\"0 0 0\"/></joint></robot>",
     );
     let e = urdf_err(&text);
     assert!(e.to_string().contains("zero axis"), "{e}");
