@@ -143,8 +143,14 @@ int main(int argc, char **argv) {
     const std::size_t n = st.q.size();
 
     // τ for ABA: RNEA of the states' accelerations (as rl model bench does).
+    // rnea_check: Σ τ over states and one-DoF joints (see `rl model bench --states-file`).
     std::vector<Eigen::VectorXd> tau(n);
-    for (std::size_t s = 0; s < n; ++s) tau[s] = pin::rnea(model, data, st.q[s], st.v[s], st.a[s]);
+    double check = 0.0;
+    for (std::size_t s = 0; s < n; ++s) {
+      tau[s] = pin::rnea(model, data, st.q[s], st.v[s], st.a[s]);
+      for (pin::JointIndex j = 1; j < model.joints.size(); ++j)
+        if (model.joints[j].nv() == 1) check += tau[s][model.joints[j].idx_v()];
+    }
 
     Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.nv);
     J.setZero();
@@ -175,7 +181,8 @@ int main(int argc, char **argv) {
     const char *keys[7] = {"fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba"};
     std::printf("{");
     for (int k = 0; k < 7; ++k) std::printf("\"%s_ns\": %.1f, ", keys[k], ns[k]);
-    std::printf("\"dof\": %d, \"tool\": \"%s\"}\n", model.nv, frame.c_str());
+    std::printf("\"dof\": %d, \"tool\": \"%s\", \"rnea_check\": %.17g}\n", model.nv,
+                frame.c_str(), check);
   } catch (const std::exception &e) {
     std::fprintf(stderr, "pinocchio_bench: %s\n", e.what());
     return 1;

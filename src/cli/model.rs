@@ -521,6 +521,31 @@ impl BenchStates {
     }
 }
 
+/// The sum of RNEA's τ over all states and all one-DOF joints: programs that time the same
+/// states with other libraries print the same number (to ~1e-9 relative), which checks that the
+/// states were mapped onto each library's joint order correctly. Multi-DOF joints (a floating
+/// base) are left out because libraries express their forces in different frames.
+pub fn rnea_check(model: &Model<CAPACITY>, states: &BenchStates) -> Result<f64, CliError> {
+    let (nq, nv) = (model.nq(), model.dof());
+    let mut d = Box::new(Data::<CAPACITY>::new());
+    let mut sum = 0.0;
+    for s in 0..states.n {
+        let tau = algo::rnea(
+            model,
+            &mut d,
+            &states.q[s * nq..(s + 1) * nq],
+            &states.qd[s * nv..(s + 1) * nv],
+            &states.qdd[s * nv..(s + 1) * nv],
+        )
+        .map_err(|e| CliError::failed(e.to_string()))?;
+        sum += (0..model.body_count())
+            .filter(|&i| model.joint(i).nv() == 1)
+            .map(|i| tau[model.v_index(i)])
+            .sum::<f64>();
+    }
+    Ok(sum)
+}
+
 /// Median ns per call for each of [`BENCH_KEYS`] on `model` over `states`, with the
 /// Jacobian of tool index `tool`.
 pub fn bench_states(
@@ -627,6 +652,9 @@ fn bench(a: BenchArgs) -> CliResult {
         obj.insert("dof".into(), json!(m.dof()));
         obj.insert("tool".into(), json!(m.tools()[tool].name.as_str()));
         obj.insert("states".into(), json!(states.n));
+        if a.states_file.is_some() {
+            obj.insert("rnea_check".into(), json!(rnea_check(m, &states)?));
+        }
         println!("{}", serde_json::Value::Object(obj));
     } else {
         println!(
@@ -707,6 +735,11 @@ mod tests {
         let m = model(JointOrder::Pinocchio);
         let s = BenchStates::parse(&m, STATES).unwrap();
         let ns = bench_states(&m, &s, 1, 0).unwrap();
+        // The same states seen through the other joint order give the same check.
+        let check = rnea_check(&m, &s).unwrap();
+        let file = model(JointOrder::File);
+        let other = rnea_check(&file, &BenchStates::parse(&file, STATES).unwrap()).unwrap();
+        assert!(check.abs() > 1e-3 && (check - other).abs() <= 1e-12 * check.abs());
         assert!(ns.iter().all(|&t| t.is_finite() && t > 0.0), "{ns:?}");
         assert!(bench_states(&m, &s, 1, m.tools().len()).is_err());
     }

@@ -126,7 +126,7 @@ fn parse_states(text: &str, dynibo_names: &[String], floating: bool) -> Result<S
 /// dynibo's `BaseState` for a Pinocchio free-flyer state; `with_acceleration = false` gives
 /// zero base acceleration (for nle).
 fn base_state((q, v, a): &FreeFlyerState, with_acceleration: bool) -> Result<BaseState, String> {
-    let rot = UnitQuaternion::from_quaternion(Quaternion::new(q[3], q[0], q[1], q[2]));
+    let rot = UnitQuaternion::from_quaternion(Quaternion::new(q[6], q[3], q[4], q[5]));
     let frame: Frame = Isometry3::from_parts(Translation3::new(q[0], q[1], q[2]), rot);
     let (vl, wl) = (
         Vector3::new(v[0], v[1], v[2]),
@@ -168,12 +168,15 @@ fn time_per_call(states: usize, rounds: usize, mut f: impl FnMut(usize)) -> f64 
     samples[samples.len() / 2]
 }
 
+/// Median ns per algorithm and the RNEA check (Σ τ of the joints over all states).
+type Timings = ([f64; 7], f64);
+
 fn bench_fixed(
     robot: &mut Robot,
     link: LinkId,
     s: &States,
     rounds: usize,
-) -> Result<[f64; 7], String> {
+) -> Result<Timings, String> {
     let g = robot.generalized_count();
     let e = |e: dynibo::Error| e.to_string();
     let mut frames = vec![Frame::identity(); robot.link_count()];
@@ -188,8 +191,9 @@ fn bench_fixed(
             .map_err(e)?;
         taus.push(out.clone());
     }
+    let check = taus.iter().flatten().sum();
     let r = rounds;
-    Ok([
+    let ns = [
         time_per_call(s.n, r, |i| {
             let _ = black_box(robot.forward_kinematics_all(black_box(&s.q[i]), &mut frames));
         }),
@@ -229,7 +233,8 @@ fn bench_fixed(
                 &mut out,
             ));
         }),
-    ])
+    ];
+    Ok((ns, check))
 }
 
 fn bench_floating(
@@ -237,7 +242,7 @@ fn bench_floating(
     link: LinkId,
     s: &States,
     rounds: usize,
-) -> Result<[f64; 7], String> {
+) -> Result<Timings, String> {
     let g = robot.generalized_count();
     let e = |e: dynibo::Error| e.to_string();
     let mut frames = vec![Frame::identity(); robot.link_count()];
@@ -259,8 +264,10 @@ fn bench_floating(
             .map_err(e)?;
         taus.push(out.clone());
     }
+    // The six base entries are a world-frame wrench: left out of the check.
+    let check = taus.iter().map(|t| t[6..].iter().sum::<f64>()).sum();
     let r = rounds;
-    Ok([
+    let ns = [
         time_per_call(s.n, r, |i| {
             let _ =
                 black_box(robot.forward_kinematics_all(&bases[i], black_box(&s.q[i]), &mut frames));
@@ -304,7 +311,8 @@ fn bench_floating(
                 &mut out,
             ));
         }),
-    ])
+    ];
+    Ok((ns, check))
 }
 
 fn run() -> Result<(), String> {
@@ -330,7 +338,7 @@ fn run() -> Result<(), String> {
     let rounds = rounds.max(1);
     let text = std::fs::read_to_string(states_path).map_err(|e| format!("{states_path}: {e}"))?;
     let e = |e: dynibo::Error| format!("{urdf}: {e}");
-    let (ns, dof) = if floating {
+    let ((ns, check), dof) = if floating {
         let mut robot = FloatingRobot::from_urdf(urdf).map_err(e)?;
         let names = (0..robot.joint_count())
             .map(|k| robot.joint_name(k).map(String::from))
@@ -362,7 +370,7 @@ fn run() -> Result<(), String> {
         .map(|(k, v)| format!("\"{k}_ns\": {:.1}", v))
         .collect();
     println!(
-        "{{{}, \"dof\": {dof}, \"tool\": \"{link_name}\"}}",
+        "{{{}, \"dof\": {dof}, \"tool\": \"{link_name}\", \"rnea_check\": {check:e}}}",
         fields.join(", ")
     );
     Ok(())
