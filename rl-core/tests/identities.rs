@@ -2,6 +2,7 @@
 //! RNEA = M q̈ + C + G, ABA inverts RNEA, the sparse solve inverts M, J q̇ = tool velocity,
 //! J q̈ + J̇ q̇ = tool acceleration, J and J̇ q̇ against finite differences, and the
 //! operational-space inverse inertia against its definition.
+#![allow(clippy::needless_range_loop)]
 
 mod support;
 

@@ -117,7 +117,6 @@ fn options(fx: &Value) -> UrdfOptions {
             .iter()
             .map(|f| f["name"].as_str().unwrap().to_string())
             .collect(),
-        ..UrdfOptions::default()
     }
 }
 

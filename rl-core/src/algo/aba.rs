@@ -91,7 +91,7 @@ fn run<const N: usize>(
             let s = data.world_subspace[sv];
             let u = data.articulated[i].mul_motion(&s);
             let d = s.dot(&u);
-            if !(d > 0.0) {
+            if d.is_nan() || d <= 0.0 {
                 return Err(Error::NotPositiveDefinite);
             }
             let d_inv = 1.0 / d;

@@ -55,7 +55,10 @@ fn fill<const N: usize>(
     Ok(())
 }
 
-/// The world Jacobian of tool `tool` at configuration `q` (forward position included).
+/// The world Jacobian of tool `tool` at configuration `q` (forward position included). Only the
+/// bodies between the root and the tool are visited, so on a branched robot this costs one
+/// branch, not the whole tree; the world poses of the other bodies in `data` are left as they
+/// were.
 pub fn jacobian<const N: usize>(
     model: &Model<N>,
     data: &mut Data<N>,
@@ -67,7 +70,23 @@ pub fn jacobian<const N: usize>(
     if tool >= model.ntools {
         return Err(Error::UnknownTool { tool });
     }
-    world_subspaces(model, data, q);
+    // The tool's ancestors, leaf first.
+    let mut chain = [0usize; N];
+    let mut len = 0;
+    let mut b = model.tools[tool].body;
+    while b != ROOT {
+        chain[len] = b;
+        len += 1;
+        b = model.parents[b];
+    }
+    for &i in chain[..len].iter().rev() {
+        body_pose(model, data, q, i);
+        let sv = model.idx_v[i];
+        let x = data.world_pose[i];
+        for k in sv..sv + model.joints[i].nv() {
+            data.world_subspace[k] = model.act_subspace(i, k, &x);
+        }
+    }
     fill(model, data, tool, out)
 }
 

@@ -44,12 +44,12 @@ pub(crate) fn sym_outer(a: DVec3, b: DVec3) -> DMat3 {
 /// `R S Rᵀ` for a symmetric `S`.
 #[inline]
 pub(crate) fn rotate_symmetric(r: &DMat3, s: &DMat3) -> DMat3 {
-    let rs = *r * *s;
-    // Only the upper triangle of (R S) Rᵀ is computed; the rest mirrors it.
-    let (r0, r1, r2) = (r.row(0), r.row(1), r.row(2));
-    let (a0, a1, a2) = (rs.row(0), rs.row(1), rs.row(2));
-    let (m00, m01, m02) = (a0.dot(r0), a0.dot(r1), a0.dot(r2));
-    let (m11, m12, m22) = (a1.dot(r1), a1.dot(r2), a2.dot(r2));
+    // A = R S, then only the upper triangle of A Rᵀ: (A Rᵀ)ᵢⱼ = Σₖ Aᵢₖ Rⱼₖ (column-major arrays).
+    let a = (*r * *s).to_cols_array();
+    let r = r.to_cols_array();
+    let e = |i: usize, j: usize| a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
+    let (m00, m01, m02) = (e(0, 0), e(0, 1), e(0, 2));
+    let (m11, m12, m22) = (e(1, 1), e(1, 2), e(2, 2));
     DMat3::from_cols(
         DVec3::new(m00, m01, m02),
         DVec3::new(m01, m11, m12),
