@@ -74,7 +74,7 @@ fn run<const N: usize>(
         let v = if p == ROOT { vj } else { data.v[p] + vj };
         data.v[i] = v;
         data.c[i] = v.cross_motion(&vj);
-        let inertia = model.inertias[i].transform_to_parent(&x);
+        let inertia = model.world_inertia(i, &x);
         data.articulated[i] = ArticulatedBodyInertia::from(inertia);
         let mut pa = v.cross_force(&inertia.mul_motion(&v));
         if let Some(fext) = fext {

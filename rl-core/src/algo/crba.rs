@@ -14,14 +14,15 @@ use super::forward_position::body_pose;
 /// Computes `M(q)` into `data` (read it with [`Data::mass_matrix`]).
 pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> Result<(), Error> {
     check_len("q", q, model.nq)?;
-    // Entries between DOFs on different branches are zero and never written below.
-    for row in &mut data.mass_matrix[..model.nv] {
-        row[..model.nv].fill(0.0);
+    // Only the upper triangle is kept. Entries between DOFs on different branches are zero
+    // and never written below.
+    for (r, row) in data.mass_matrix[..model.nv].iter_mut().enumerate() {
+        row[r..model.nv].fill(0.0);
     }
     for i in 0..model.nbodies {
         body_pose(model, data, q, i);
         let x = data.world_pose[i];
-        data.composite[i] = model.inertias[i].transform_to_parent(&x);
+        data.composite[i] = model.world_inertia(i, &x);
         let sv = model.idx_v[i];
         for k in sv..sv + model.joints[i].nv() {
             data.world_subspace[k] = model.act_subspace(i, k, &x);
@@ -34,15 +35,11 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
             let f = ic.mul_motion(&data.world_subspace[k]);
             // This joint's own block, then every ancestor's DOFs.
             for l in sv..=k {
-                let m = data.world_subspace[l].dot(&f);
-                data.mass_matrix[k][l] = m;
-                data.mass_matrix[l][k] = m;
+                data.mass_matrix[l][k] = data.world_subspace[l].dot(&f);
             }
             let mut l = model.dof_parent[sv];
             while l != ROOT {
-                let m = data.world_subspace[l].dot(&f);
-                data.mass_matrix[k][l] = m;
-                data.mass_matrix[l][k] = m;
+                data.mass_matrix[l][k] = data.world_subspace[l].dot(&f);
                 l = model.dof_parent[l];
             }
         }

@@ -14,8 +14,14 @@ pub fn factor_mass_matrix<const N: usize>(
 ) -> Result<(), Error> {
     let n = model.nv;
     let h = &mut data.factor;
-    for (r, row) in h.iter_mut().enumerate().take(n) {
-        row[..n].copy_from_slice(&data.mass_matrix[r][..n]);
+    for r in 0..n {
+        for c in 0..n {
+            h[r][c] = if r <= c {
+                data.mass_matrix[r][c]
+            } else {
+                data.mass_matrix[c][r]
+            };
+        }
     }
     for k in (0..n).rev() {
         if h[k][k] <= 0.0 || !h[k][k].is_finite() {

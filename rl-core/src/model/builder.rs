@@ -202,7 +202,12 @@ impl<const N: usize> ModelBuilder<N> {
     }
 
     /// The finished model.
-    pub fn build(self) -> Model<N> {
+    pub fn build(mut self) -> Model<N> {
+        let m = &mut self.model;
+        for i in 0..m.nbodies {
+            m.coms[i] = m.inertias[i].com();
+            m.inertias_com[i] = m.inertias[i].inertia_com();
+        }
         self.model
     }
 }

@@ -38,7 +38,8 @@ pub struct Data<const N: usize> {
     pub(crate) tau: [f64; N],
     /// Joint accelerations (ABA).
     pub(crate) qdd: [f64; N],
-    /// Joint-space mass matrix (CRBA), full and symmetric.
+    /// Joint-space mass matrix (CRBA): the upper triangle `[r][c]`, `r ≤ c`, is kept (the lower
+    /// one is not written; read through [`Data::mass_matrix`]).
     pub(crate) mass_matrix: [[f64; N]; N],
     /// Scratch matrix for factorisations.
     pub(crate) factor: [[f64; N]; N],
@@ -89,13 +90,19 @@ impl<const N: usize> Data<N> {
         &self.a[i]
     }
 
-    /// Row `r` of the mass matrix from the last [`crate::algo::crba`] call.
-    pub fn mass_matrix_row(&self, r: usize) -> &[f64; N] {
-        &self.mass_matrix[r]
+    /// Row `r` of the mass matrix from the last [`crate::algo::crba`] call, into `out[..n]`.
+    pub fn mass_matrix_row(&self, r: usize, out: &mut [f64]) {
+        for (c, x) in out.iter_mut().enumerate() {
+            *x = self.mass_matrix(r, c);
+        }
     }
 
     /// Element `(r, c)` of the mass matrix from the last [`crate::algo::crba`] call.
     pub fn mass_matrix(&self, r: usize, c: usize) -> f64 {
-        self.mass_matrix[r][c]
+        if r <= c {
+            self.mass_matrix[r][c]
+        } else {
+            self.mass_matrix[c][r]
+        }
     }
 }

@@ -1,6 +1,6 @@
 //! The immutable description of a tree of rigid bodies.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 use super::{JointLimits, Name};
 use crate::joint::{Joint, Revolute};
@@ -35,6 +35,10 @@ pub struct Model<const N: usize> {
     pub(crate) joints: [Joint; N],
     pub(crate) placements: [PlueckerTransform; N],
     pub(crate) inertias: [RigidBodyInertia; N],
+    /// Each body's centre of mass and rotational inertia about it (body axes), kept beside
+    /// `inertias` because rotating an inertia about its centre of mass is the cheap way.
+    pub(crate) coms: [DVec3; N],
+    pub(crate) inertias_com: [DMat3; N],
     pub(crate) idx_q: [usize; N],
     pub(crate) idx_v: [usize; N],
     pub(crate) joint_names: [Name; N],
@@ -78,6 +82,8 @@ impl<const N: usize> Model<N> {
             joints: [Joint::Revolute(Revolute { axis: DVec3::Z }); N],
             placements: [PlueckerTransform::IDENTITY; N],
             inertias: [RigidBodyInertia::ZERO; N],
+            coms: [DVec3::ZERO; N],
+            inertias_com: [DMat3::ZERO; N],
             idx_q: [0; N],
             idx_v: [0; N],
             joint_names: [Name::EMPTY; N],
@@ -212,6 +218,24 @@ impl<const N: usize> Model<N> {
             b = self.parents[b];
         }
         false
+    }
+
+    /// Body `i`'s inertia in the coordinates of a frame in which the body sits at `x` (e.g. the
+    /// world): the centre of mass moves, the inertia about it rotates, and the parallel-axis
+    /// term is added once (cheaper than transforming the inertia about the body's origin).
+    #[inline]
+    pub(crate) fn world_inertia(&self, i: usize, x: &PlueckerTransform) -> RigidBodyInertia {
+        let m = self.inertias[i].mass;
+        let c = x.transform_point(self.coms[i]);
+        let ic = crate::spatial::rotate_symmetric(&x.rotation, &self.inertias_com[i]);
+        let mc = c * m;
+        let diag = DMat3::from_diagonal(DVec3::splat(mc.dot(c)));
+        let outer = DMat3::from_cols(c * mc.x, c * mc.y, c * mc.z);
+        RigidBodyInertia {
+            mass: m,
+            first_moment: mc,
+            rotational: ic + diag - outer,
+        }
     }
 
     /// `S q̇` of body `i`'s joint, with `x` a full velocity-sized vector.

@@ -41,9 +41,9 @@ pub(crate) fn sym_outer(a: DVec3, b: DVec3) -> DMat3 {
     DMat3::from_cols(a * b.x + b * a.x, a * b.y + b * a.y, a * b.z + b * a.z)
 }
 
-/// `R S Rᵀ` for a symmetric `S`.
+/// `R S Rᵀ` for a symmetric `S` (only the upper triangle is computed).
 #[inline]
-pub(crate) fn rotate_symmetric(r: &DMat3, s: &DMat3) -> DMat3 {
+pub fn rotate_symmetric(r: &DMat3, s: &DMat3) -> DMat3 {
     // A = R S, then only the upper triangle of A Rᵀ: (A Rᵀ)ᵢⱼ = Σₖ Aᵢₖ Rⱼₖ (column-major arrays).
     let a = (*r * *s).to_cols_array();
     let r = r.to_cols_array();
