@@ -33,9 +33,13 @@ pub struct H7Args {
     /// TCP address of the R3 command responder.
     #[arg(long, default_value = "127.0.0.1:10001")]
     pub r3_bind: SocketAddr,
-    /// Number of simulated joints (1 to 8).
+    /// Number of simulated joints (1 to 8; taken from --model when one is given).
     #[arg(long, default_value_t = 6)]
     pub dof: usize,
+    /// A robot model (URDF or RL XML) whose joint count and position and speed limits the
+    /// simulated arm takes.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
     /// Time constant of the controller's filter, in 7.11 ms cycles.
     #[arg(long, default_value_t = 2)]
     pub filter_cycles: u32,
@@ -112,13 +116,42 @@ fn joints(q: &[f64]) -> String {
 }
 
 fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
-    if args.dof == 0 || args.dof > 8 {
-        return Err(CliError::usage(format!(
-            "--dof {}: must be 1 to 8",
-            args.dof
-        )));
+    let mut limits = None;
+    let mut dof = args.dof;
+    if let Some(path) = &args.model {
+        let file = super::model::ModelFile {
+            file: path.clone(),
+            floating_base: false,
+            joint_order: super::model::Order::File,
+            mimic_independent: false,
+        };
+        let loaded = super::model::load(&file)?;
+        let m = &loaded.model;
+        if m.nq() != m.dof() {
+            return Err(CliError::usage(format!(
+                "--model {}: the fake H7 simulates plain joints; this model has quaternion joints",
+                path.display()
+            )));
+        }
+        dof = m.dof();
+        let lower: Vec<f64> = (0..dof).map(|k| m.limits(k).lower).collect();
+        let upper: Vec<f64> = (0..dof).map(|k| m.limits(k).upper).collect();
+        // A model without a speed limit (RL writes 0 for "none") leaves the joint unlimited.
+        let speed: Vec<f64> = (0..dof)
+            .map(|k| m.limits(k).velocity)
+            .map(|v| if v > 0.0 { v } else { f64::INFINITY })
+            .collect();
+        limits = Some((lower, upper, speed));
     }
-    let mut config = FakeH7Config::loopback(args.dof);
+    if dof == 0 || dof > 8 {
+        return Err(CliError::usage(format!("--dof {dof}: must be 1 to 8")));
+    }
+    let mut config = FakeH7Config::loopback(dof);
+    if let Some((lower, upper, speed)) = limits {
+        let bad = |e: std::io::Error| CliError::usage(format!("--model: {e}"));
+        config = config.with_limits(&lower, &upper).map_err(bad)?;
+        config = config.with_speed_limits(&speed).map_err(bad)?;
+    }
     config.udp_bind = args.bind;
     config.r3_bind = Some(args.r3_bind);
     config.filter_cycles = args.filter_cycles;
@@ -127,7 +160,7 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     })?;
     println!(
         "fake H7 controller ({} joints): real-time UDP on {}, R3 on {}; Ctrl-C to stop",
-        args.dof,
+        dof,
         fake.udp_addr(),
         fake.r3_addr()
     );
