@@ -15,7 +15,7 @@ use rl_rt::{
     StopFlag,
 };
 
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, parse_duration};
 
 /// Scheduling policy of the measuring thread.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -89,31 +89,6 @@ pub struct PreflightArgs {
     /// Exit with code 1 if any finding is a warning or a failure (for scripts and CI).
     #[arg(long)]
     pub strict: bool,
-}
-
-/// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.
-fn parse_duration(text: &str) -> Result<Duration, String> {
-    let t = text.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| format!("`{text}` is not a duration: expected e.g. 500ms, 30s, 2m"))?;
-    let seconds = match unit.trim() {
-        "" | "s" => value,
-        "us" | "µs" => value / 1e6,
-        "ms" => value / 1e3,
-        "m" | "min" => value * 60.0,
-        "h" => value * 3600.0,
-        other => {
-            return Err(format!(
-                "unknown unit `{other}` in `{text}`: use us, ms, s, m or h"
-            ));
-        }
-    };
-    Duration::try_from_secs_f64(seconds).map_err(|e| format!("`{text}`: {e}"))
 }
 
 /// Runs `rl jitter`.

@@ -7,6 +7,7 @@ pub mod run;
 pub mod traj;
 
 use std::fmt;
+use std::time::Duration;
 
 /// A command's failure: a message for the user and the process exit code.
 ///
@@ -48,3 +49,28 @@ impl fmt::Display for CliError {
 
 /// What a subcommand returns.
 pub type CliResult = Result<std::process::ExitCode, CliError>;
+
+/// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.
+pub fn parse_duration(text: &str) -> Result<Duration, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a duration: expected e.g. 500ms, 30s, 2m"))?;
+    let seconds = match unit.trim() {
+        "" | "s" => value,
+        "us" | "µs" => value / 1e6,
+        "ms" => value / 1e3,
+        "m" | "min" => value * 60.0,
+        "h" => value * 3600.0,
+        other => {
+            return Err(format!(
+                "unknown unit `{other}` in `{text}`: use us, ms, s, m or h"
+            ));
+        }
+    };
+    Duration::try_from_secs_f64(seconds).map_err(|e| format!("`{text}`: {e}"))
+}

@@ -44,6 +44,14 @@ use self::device::DeviceSpec;
 use self::progress::{Progress, ProgressDisplay};
 use super::{CliError, CliResult};
 
+/// A positive duration: the shared [`super::parse_duration`] units, zero refused.
+fn parse_duration(text: &str) -> Result<Duration, String> {
+    match super::parse_duration(text)? {
+        d if d.is_zero() => Err(format!("`{text}`: the duration must be positive")),
+        d => Ok(d),
+    }
+}
+
 /// Default real-time priority of the control thread.
 const DEFAULT_PRIORITY: i32 = 80;
 /// Default fraction of the model's speed limits the plan uses.
@@ -99,34 +107,6 @@ pub struct RunArgs {
     /// Do not lock memory (mlockall).
     #[arg(long)]
     pub no_mlock: bool,
-}
-
-/// Parses `500ms`, `3s`, `2m`, `250us`, or a bare number of seconds.
-fn parse_duration(text: &str) -> Result<Duration, String> {
-    let t = text.trim();
-    let split = t
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| format!("`{text}` is not a duration: expected e.g. 500ms, 3s, 2m"))?;
-    let seconds = match unit.trim() {
-        "" | "s" => value,
-        "us" | "µs" => value / 1e6,
-        "ms" => value / 1e3,
-        "m" | "min" => value * 60.0,
-        "h" => value * 3600.0,
-        other => {
-            return Err(format!(
-                "unknown unit `{other}` in `{text}`: use us, ms, s, m or h"
-            ));
-        }
-    };
-    match Duration::try_from_secs_f64(seconds) {
-        Ok(d) if !d.is_zero() => Ok(d),
-        _ => Err(format!("`{text}`: the duration must be positive")),
-    }
 }
 
 /// Everything checked before anything starts.
