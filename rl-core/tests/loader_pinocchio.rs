@@ -6,9 +6,10 @@
 //! Needs example-robot-data: `$RL_ROBOT_DATA` or `scripts/robot-data`; skips with the reason
 //! printed when neither is available.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 
-use glam::{DMat3, DVec3};
 use rl_core::Data;
 use rl_core::algo;
 use rl_core::joint::JointKind;
@@ -16,6 +17,7 @@ use rl_core::loader::{self, JointOrder, LoadedModel, MimicJoints, UrdfOptions};
 use rl_core::model::ROOT;
 use rl_core::spatial::{MotionVector, PlueckerTransform};
 use serde_json::Value;
+use support::fixture::{f64s, mat3, pose, vec3};
 
 const N: usize = 64;
 
@@ -47,28 +49,6 @@ fn fixtures() -> Vec<(String, Value)> {
     out.sort_by(|a, b| a.0.cmp(&b.0));
     assert!(out.len() >= 4, "fixtures missing in {}", dir.display());
     out
-}
-
-fn f64s(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-fn vec3(v: &Value) -> DVec3 {
-    let a = f64s(v);
-    DVec3::new(a[0], a[1], a[2])
-}
-
-/// Row-major 3×3.
-fn mat3(v: &Value) -> DMat3 {
-    DMat3::from_cols_array(&<[f64; 9]>::try_from(f64s(v)).unwrap()).transpose()
-}
-
-fn pose(v: &Value) -> PlueckerTransform {
-    PlueckerTransform::new(mat3(&v["rotation"]), vec3(&v["translation"]))
 }
 
 fn close(what: &str, a: f64, b: f64, tol: f64) {

@@ -9,14 +9,15 @@
 
 mod support;
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use rl_core::algo;
 use rl_core::joint::{Joint, Prismatic, Revolute, SixDof};
 use rl_core::model::ROOT;
-use rl_core::spatial::{PlueckerTransform, RigidBodyInertia};
+use rl_core::spatial::RigidBodyInertia;
 use rl_core::{Data, Model, ModelBuilder};
 use serde_json::Value;
 use support::assert_close;
+use support::fixture::{f64s, mat3, pose, vec3};
 
 const N: usize = 64;
 const TOL: f64 = 1e-9;
@@ -28,28 +29,6 @@ fn fixture(name: &str) -> Value {
     );
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
     serde_json::from_str(&text).unwrap()
-}
-
-fn f64s(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-fn vec3(v: &Value) -> DVec3 {
-    let a = f64s(v);
-    DVec3::new(a[0], a[1], a[2])
-}
-
-/// Row-major 3×3 from JSON.
-fn mat3(v: &Value) -> DMat3 {
-    DMat3::from_cols_array(&<[f64; 9]>::try_from(f64s(v)).unwrap()).transpose()
-}
-
-fn pose(v: &Value) -> PlueckerTransform {
-    PlueckerTransform::new(mat3(&v["rotation"]), vec3(&v["translation"]))
 }
 
 /// The model Pinocchio described, joint for joint (continuous joints as plain revolute ones;

@@ -1,6 +1,8 @@
 //! Shared helpers for rl-core's integration tests.
 #![allow(dead_code)]
 
+pub mod fixture;
+
 use glam::{DMat3, DQuat, DVec3};
 use rl_core::joint::{Cylindrical, Helical, Joint, Planar, Prismatic, Revolute, SixDof, Spherical};
 use rl_core::model::{JointLimits, ROOT};
