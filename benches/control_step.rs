@@ -7,6 +7,9 @@
 //! `cargo bench --bench control_step`
 
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -15,28 +18,14 @@ use rl::controller::{Controller, MotionLimits, Plan, default_waypoints, rv6sl};
 use rl::core::traj::Trajectory;
 use rl::core::{Data, algo};
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
-
-fn started_h7(fake: &FakeH7, dof: usize) -> MitsubishiH7 {
-    let mut robot = MitsubishiH7::new(MitsubishiH7Config::new(
-        dof,
-        fake.udp_addr(),
-        fake.r3_addr(),
-    ))
-    .expect("device");
-    robot.open().expect("open");
-    robot.start().expect("start");
-    robot.step().expect("first exchange");
-    robot
-}
 
 fn control_step(c: &mut Criterion) {
     let loaded = rv6sl().expect("embedded model");
     let model = loaded.model;
     let dof = model.dof();
     let fake = FakeH7::spawn(FakeH7Config::loopback(dof)).expect("fake H7");
-    let robot = started_h7(&fake, dof);
+    let robot = common::started_h7(&fake, dof);
     let mut start = vec![0.0; dof];
     robot.joint_position(&mut start).expect("joints");
     let limits = MotionLimits::from_model(&model, 0.25).expect("limits");
@@ -44,10 +33,8 @@ fn control_step(c: &mut Criterion) {
         Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
     let trajectory = plan.trajectory().clone();
     let duration = plan.duration_s();
-    let mut control = Box::new(
-        Controller::new(robot, model.clone(), plan, Duration::from_micros(7110))
-            .expect("controller"),
-    );
+    let mut control =
+        Box::new(Controller::new(robot, model.clone(), plan, common::PERIOD).expect("controller"));
 
     let mut group = c.benchmark_group("control_step");
     group.measurement_time(Duration::from_secs(3));

@@ -2,34 +2,13 @@
 //! request brings the arm to rest along its path within the planned speed and (at most twice)
 //! the planned acceleration, and a cycle limit ends at rest on its last cycle.
 
-use std::time::Duration;
+mod common;
 
-use rl::controller::{Controller, MotionLimits, Plan, RunEnd, default_waypoints, rv6sl};
+use common::PERIOD;
+use rl::controller::{Controller, RunEnd};
+use rl::drivers::Device;
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
-use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
-
-const PERIOD: Duration = Duration::from_micros(7110);
-
-fn controller(fake: &FakeH7) -> Controller<MitsubishiH7> {
-    let model = rv6sl().expect("embedded model").model;
-    let dof = model.dof();
-    let mut robot = MitsubishiH7::new(MitsubishiH7Config::new(
-        dof,
-        fake.udp_addr(),
-        fake.r3_addr(),
-    ))
-    .expect("device");
-    robot.open().expect("open");
-    robot.start().expect("start");
-    robot.step().expect("first exchange");
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
-    let limits = MotionLimits::from_model(&model, 0.25).expect("limits");
-    let plan =
-        Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
-    Controller::new(robot, model, plan, PERIOD).expect("controller")
-}
+use rl::drivers::mitsubishi_h7::MitsubishiH7;
 
 /// Commanded positions, one per cycle, until the run ends (bounded).
 fn run(control: &mut Controller<MitsubishiH7>, halt_at: Option<u64>) -> Vec<[f64; 8]> {
@@ -50,7 +29,7 @@ fn run(control: &mut Controller<MitsubishiH7>, halt_at: Option<u64>) -> Vec<[f64
 #[test]
 fn a_stop_request_brings_the_arm_to_rest_within_the_planned_limits() {
     let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake");
-    let mut control = controller(&fake);
+    let mut control = common::demo_controller(&fake);
     let limits = *control.plan().limits();
     // Cycle 120 is mid-motion (the first move takes about 1.6 s = 230 cycles).
     let commanded = run(&mut control, Some(120));
@@ -97,7 +76,7 @@ fn a_stop_request_brings_the_arm_to_rest_within_the_planned_limits() {
 #[test]
 fn a_cycle_limit_ends_at_rest_on_its_last_cycle() {
     let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake");
-    let mut control = controller(&fake);
+    let mut control = common::demo_controller(&fake);
     control.limit_cycles(300);
     let commanded = run(&mut control, None);
     assert_eq!(commanded.len(), 300);

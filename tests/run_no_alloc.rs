@@ -2,14 +2,15 @@
 //! device step against the fake H7, telemetry queue and progress mailbox, counted by a global
 //! allocator that counts only on the thread under test (the fake runs its own threads).
 
+mod common;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::time::Duration;
 
-use rl::controller::{Controller, CycleRecord, MotionLimits, Plan, default_waypoints, rv6sl};
+use rl::controller::{Controller, CycleRecord, rv6sl};
+use rl::drivers::Device;
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
-use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
+use rl::drivers::mitsubishi_h7::MitsubishiH7;
 use rl::rt::exchange::{mailbox, queue};
 
 struct Counting;
@@ -63,26 +64,9 @@ fn steady_state_control_cycle_allocates_nothing() {
     // The counter sees allocations (so a zero below means something).
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
-    let model = rv6sl().expect("embedded model").model;
-    let dof = model.dof();
+    let dof = rv6sl().expect("embedded model").model.dof();
     let fake = FakeH7::spawn(FakeH7Config::loopback(dof)).expect("fake H7");
-    let mut robot = MitsubishiH7::new(MitsubishiH7Config::new(
-        dof,
-        fake.udp_addr(),
-        fake.r3_addr(),
-    ))
-    .expect("device");
-    robot.open().expect("open");
-    robot.start().expect("start");
-    robot.step().expect("first exchange");
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
-    let limits = MotionLimits::from_model(&model, 0.25).expect("limits");
-    let plan =
-        Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
-    let mut control = Box::new(
-        Controller::new(robot, model, plan, Duration::from_micros(7110)).expect("controller"),
-    );
+    let mut control = Box::new(common::demo_controller(&fake));
     let (mut telemetry, mut sink) = queue::<CycleRecord>(1024);
     let (mut progress, _reader) = mailbox((0u64, 0.0f64));
 
