@@ -79,13 +79,16 @@ impl<const N: usize> Data<N> {
         &self.world_pose[i]
     }
 
-    /// Spatial velocity of body `i` in its own coordinates, from the last velocity sweep.
+    /// Spatial velocity of body `i` in its own coordinates, from the last
+    /// [`crate::algo::forward_velocity`], [`crate::algo::forward_acceleration`] or RNEA call
+    /// (ABA reuses this storage for world-frame velocities).
     pub fn velocity(&self, i: usize) -> &MotionVector {
         &self.v[i]
     }
 
-    /// Spatial acceleration of body `i` in its own coordinates, from the last acceleration
-    /// sweep (without gravity).
+    /// Spatial acceleration of body `i` in its own coordinates, from the last
+    /// [`crate::algo::forward_acceleration`] (without gravity); RNEA and ABA reuse this storage
+    /// (with gravity as a base acceleration, ABA in world coordinates).
     pub fn acceleration(&self, i: usize) -> &MotionVector {
         &self.a[i]
     }
