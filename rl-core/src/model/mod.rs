@@ -19,4 +19,4 @@ pub use data::Data;
 pub use error::ModelError;
 pub use limits::JointLimits;
 pub use model::{Model, ROOT, Tool};
-pub use name::Name;
+pub use name::{NAME_CAPACITY, Name};
