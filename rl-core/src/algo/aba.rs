@@ -10,7 +10,7 @@ use crate::math::invert_spd;
 use crate::model::{Data, Model, ROOT};
 use crate::spatial::{ArticulatedBodyInertia, ForceVector, MotionVector};
 
-use super::forward_position::body_pose;
+use super::forward_position::world_pose;
 
 /// `q̈ = ABA(q, q̇, τ)`, with the model's gravity.
 pub fn aba<'d, const N: usize>(
@@ -61,8 +61,7 @@ fn run<const N: usize>(
     // between bodies by plain addition, with no transform per edge.
     // Pass 1: velocities, bias accelerations, rigid inertias and bias forces.
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
-        let x = data.world_pose[i];
+        let x = world_pose(model, data, q, i);
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         for k in sv..sv + model.joints[i].nv() {

@@ -9,7 +9,7 @@
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
 
-use super::forward_position::body_pose;
+use super::forward_position::world_pose;
 
 /// Computes `M(q)` into `data` (read it with [`Data::mass_matrix`]).
 pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> Result<(), Error> {
@@ -20,8 +20,7 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
         row[r..model.nv].fill(0.0);
     }
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
-        let x = data.world_pose[i];
+        let x = world_pose(model, data, q, i);
         data.composite[i] = model.world_inertia(i, &x);
         let sv = model.idx_v[i];
         for k in sv..sv + model.joints[i].nv() {

@@ -14,12 +14,20 @@ pub fn forward_position<const N: usize>(
 ) -> Result<(), Error> {
     check_len("q", q, model.nq)?;
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
+        world_pose(model, data, q, i);
     }
     Ok(())
 }
 
-/// Body `i`'s pose in its parent, `placement · X_J(q)`, into `data`.
+/// Body `i`'s pose in its parent, `placement · X_J(q)`.
+#[inline(always)]
+fn joint_pose<const N: usize>(model: &Model<N>, q: &[f64], i: usize) -> PlueckerTransform {
+    let joint = &model.joints[i];
+    let sq = model.idx_q[i];
+    joint.placed_transform(&model.placements[i], &q[sq..sq + joint.nq()])
+}
+
+/// Body `i`'s pose in its parent into `data` (for the sweeps that work in body coordinates).
 #[inline]
 pub(crate) fn local_pose<const N: usize>(
     model: &Model<N>,
@@ -27,9 +35,23 @@ pub(crate) fn local_pose<const N: usize>(
     q: &[f64],
     i: usize,
 ) {
-    let joint = &model.joints[i];
-    let sq = model.idx_q[i];
-    data.parent_pose[i] = joint.placed_transform(&model.placements[i], &q[sq..sq + joint.nq()]);
+    data.parent_pose[i] = joint_pose(model, q, i);
+}
+
+/// Body `i`'s pose in the world into `data` (its parent's must be there), returned too. The
+/// pose in the parent is not kept: the world-frame algorithms do not need it.
+#[inline]
+pub(crate) fn world_pose<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    i: usize,
+) -> PlueckerTransform {
+    let x = joint_pose(model, q, i);
+    let p = model.parents[i];
+    let w = if p == ROOT { x } else { data.world_pose[p] * x };
+    data.world_pose[i] = w;
+    w
 }
 
 /// Body `i`'s pose in its parent and in the world, into `data`.

@@ -6,27 +6,19 @@
 //! columns from its own ancestors only — one sweep for all tools, where RL runs `n` velocity
 //! sweeps. `q`: `nq`. O(n + tools·depth). Does not allocate.
 
+use glam::DVec3;
+
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
 
-use super::forward_position::{body_pose, tool_pose};
+use super::forward_position::{tool_pose, world_pose};
 
 /// A 6 × `N` Jacobian, rows `[linear xyz; angular xyz]`; columns past `model.dof()` unused.
 pub type Jacobian<const N: usize> = [[f64; N]; 6];
 
-/// Forward position plus every DOF's motion subspace in world coordinates.
-fn world_subspaces<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
-    for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
-        let sv = model.idx_v[i];
-        let x = data.world_pose[i];
-        for k in sv..sv + model.joints[i].nv() {
-            data.world_subspace[k] = model.act_subspace(i, k, &x);
-        }
-    }
-}
-
-/// Fills `out` with tool `tool`'s Jacobian from the world subspaces in `data`.
+/// Fills `out` with tool `tool`'s Jacobian from the world poses of its ancestors in `data`
+/// (the last forward sweep). Every column is written once: the ancestors' from their world
+/// motion subspaces, the others zero.
 fn fill<const N: usize>(
     model: &Model<N>,
     data: &Data<N>,
@@ -34,23 +26,33 @@ fn fill<const N: usize>(
     out: &mut Jacobian<N>,
 ) -> Result<(), Error> {
     let p = tool_pose(model, data, tool)?.translation;
-    for row in out.iter_mut() {
-        row[..model.nv].fill(0.0);
-    }
+    let mut zero_from = model.nv;
+    let mut set = |k: usize, lin: DVec3, ang: DVec3| {
+        for (row, v) in out
+            .iter_mut()
+            .zip([lin.x, lin.y, lin.z, ang.x, ang.y, ang.z])
+        {
+            row[k] = v;
+        }
+    };
+    // Leaf to root, so DOF indices fall; the gap above each ancestor's DOFs is zero.
     let mut b = model.tools[tool].body;
     while b != ROOT {
         let sv = model.idx_v[b];
-        for k in sv..sv + model.joints[b].nv() {
-            let s = &data.world_subspace[k];
-            let lin = s.linear + s.angular.cross(p);
-            out[0][k] = lin.x;
-            out[1][k] = lin.y;
-            out[2][k] = lin.z;
-            out[3][k] = s.angular.x;
-            out[4][k] = s.angular.y;
-            out[5][k] = s.angular.z;
+        let end = sv + model.joints[b].nv();
+        for k in end..zero_from {
+            set(k, DVec3::ZERO, DVec3::ZERO);
         }
+        let x = &data.world_pose[b];
+        for k in sv..end {
+            let s = model.act_subspace(b, k, x);
+            set(k, s.linear + s.angular.cross(p), s.angular);
+        }
+        zero_from = sv;
         b = model.parents[b];
+    }
+    for k in 0..zero_from {
+        set(k, DVec3::ZERO, DVec3::ZERO);
     }
     Ok(())
 }
@@ -80,12 +82,7 @@ pub fn jacobian<const N: usize>(
         b = model.parents[b];
     }
     for &i in chain[..len].iter().rev() {
-        body_pose(model, data, q, i);
-        let sv = model.idx_v[i];
-        let x = data.world_pose[i];
-        for k in sv..sv + model.joints[i].nv() {
-            data.world_subspace[k] = model.act_subspace(i, k, &x);
-        }
+        world_pose(model, data, q, i);
     }
     fill(model, data, tool, out)
 }
@@ -106,7 +103,9 @@ pub fn jacobians<const N: usize>(
             got: out.len(),
         });
     }
-    world_subspaces(model, data, q);
+    for i in 0..model.nbodies {
+        world_pose(model, data, q, i);
+    }
     for (t, j) in out.iter_mut().enumerate().take(model.ntools) {
         fill(model, data, t, j)?;
     }
