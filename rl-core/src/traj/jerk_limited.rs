@@ -13,9 +13,6 @@ use super::{
     check_finite_points, clamp_time,
 };
 
-/// Jerk pattern of the seven phases.
-const JERK_SIGN: [f64; 7] = [1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0];
-
 /// Phase durations `(Tj, Ta, Tv)` of the time-optimal rest-to-rest profile over distance
 /// `h ≥ 0` (Biagiotti & Melchiorri eqs. 3.30-3.33 with zero boundary velocities).
 fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
@@ -43,16 +40,30 @@ fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
 }
 
 /// Jerk-limited rest-to-rest motion of `D` axes, synchronised to the slowest axis.
+///
+/// The seven phases are symmetric about the midpoint `T/2`: `p(T - t) = start + goal - p(t)`,
+/// velocity and jerk are even, acceleration is odd. So only the four phases of the first half
+/// are stored (jerk up, constant acceleration, jerk down, cruise) and the second half is
+/// evaluated mirrored: construction integrates three phases, evaluation picks one of four.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JerkLimited<const D: usize> {
-    /// Phase end times, `[phase][axis]`; phase `i` starts at `end[i - 1]` (the first at 0).
-    /// Stored axis-minor so construction runs over all axes at once.
-    end: [[f64; D]; 7],
-    /// Position, velocity and acceleration at each phase start, `[phase][quantity][axis]`.
-    state: [[[f64; D]; 3]; 7],
-    /// Jerk of the first phase of each axis; phase `i` has `JERK_SIGN[i]` times it.
-    jerk: [f64; D],
+    start: [f64; D],
+    goal: [f64; D],
+    /// The first-half phases in order.
+    phases: [Phase<D>; 4],
     duration: f64,
+}
+
+/// One first-half phase of every axis: its start time and the state there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Phase<const D: usize> {
+    begin: [f64; D],
+    /// Displacement from the start.
+    displacement: [f64; D],
+    velocity: [f64; D],
+    acceleration: [f64; D],
+    /// Constant jerk of the phase.
+    jerk: [f64; D],
 }
 
 impl<const D: usize> JerkLimited<D> {
@@ -81,71 +92,127 @@ impl<const D: usize> JerkLimited<D> {
             return Err(TrajectoryError::Unreachable);
         }
         // Phase durations stretched by 1/k (k = own duration / common duration ≤ 1) and
-        // jerks scaled by k³, then the seven phases integrated for all axes at once.
+        // jerks scaled by k³; the cruise takes up what the common duration leaves.
+        let zero = [0.0; D];
         let mut out = Self {
-            end: [[0.0; D]; 7],
-            state: [[[0.0; D]; 3]; 7],
-            jerk: [0.0; D],
+            start,
+            goal,
+            phases: [Phase {
+                begin: zero,
+                displacement: zero,
+                velocity: zero,
+                acceleration: zero,
+                jerk: zero,
+            }; 4],
             duration,
         };
-        let mut durations = [[0.0; D]; 7];
+        let phases = &mut out.phases;
+        let mut lengths = [zero; 3];
         for axis in 0..D {
             let (tj, ta, tv) = times[axis];
             let own = 2.0 * ta + tv;
             let k = if duration > 0.0 { own / duration } else { 1.0 };
             let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
             let sign = if goal[axis] >= start[axis] { 1.0 } else { -1.0 };
-            out.jerk[axis] = sign * limits.jerk[axis] * k * k * k;
-            let (tj, cruise_a) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
-            for (i, d) in [tj, cruise_a, tj, tv * stretch, tj, cruise_a, tj]
-                .into_iter()
-                .enumerate()
-            {
-                durations[i][axis] = d;
+            let jerk = sign * limits.jerk[axis] * k * k * k;
+            phases[0].jerk[axis] = jerk;
+            phases[2].jerk[axis] = -jerk;
+            let (tj, tc) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
+            lengths[0][axis] = tj;
+            lengths[1][axis] = tc;
+            lengths[2][axis] = tj;
+        }
+        // Integrate the first three phases, all axes at once.
+        for i in 0..3 {
+            let (done, rest) = phases.split_at_mut(i + 1);
+            let (now, next) = (&done[i], &mut rest[0]);
+            for axis in 0..D {
+                let d = lengths[i][axis];
+                let (x, v, a) = (
+                    now.displacement[axis],
+                    now.velocity[axis],
+                    now.acceleration[axis],
+                );
+                let j = now.jerk[axis];
+                next.begin[axis] = now.begin[axis] + d;
+                next.displacement[axis] = x + d * (v + d * (0.5 * a + d * j * (1.0 / 6.0)));
+                next.velocity[axis] = v + d * (a + 0.5 * d * j);
+                next.acceleration[axis] = a + d * j;
             }
         }
-        let mut x = start;
-        let (mut v, mut a, mut t) = ([0.0; D], [0.0; D], [0.0; D]);
-        for i in 0..7 {
-            out.state[i] = [x, v, a];
-            for axis in 0..D {
-                let (d, j) = (durations[i][axis], JERK_SIGN[i] * out.jerk[axis]);
-                x[axis] += d * (v[axis] + d * (0.5 * a[axis] + d * j * (1.0 / 6.0)));
-                v[axis] += d * (a[axis] + 0.5 * d * j);
-                a[axis] += d * j;
-                t[axis] += d;
-            }
-            out.end[i] = t;
+        // The cruise starts by the midpoint, also after rounding, so the phase ends are sorted.
+        for begin in phases[3].begin.iter_mut() {
+            *begin = begin.min(0.5 * duration);
         }
         Ok(out)
     }
 
     /// End time of each of the seven phases of `axis` (velocity and acceleration peak at
-    /// these boundaries; zero-length phases repeat a time). `None` for an axis out of range.
+    /// these boundaries; zero-length phases repeat a time, an axis that does not move cruises
+    /// at rest from 0 to the end). `None` for an axis out of range.
     pub fn phase_ends(&self, axis: usize) -> Option<[f64; 7]> {
-        (axis < D).then(|| core::array::from_fn(|i| self.end[i][axis]))
+        (axis < D).then(|| {
+            let t = self.duration;
+            let [e1, e2, e3] = [1, 2, 3].map(|i| self.phases[i].begin[axis]);
+            [e1, e2, e3, t - e3, t - e2, t - e1, t]
+        })
     }
 
-    /// Position, velocity, acceleration and jerk of one axis at `t` (clamped to the axis's
-    /// own end, which is the common end for moving axes).
-    #[inline]
-    fn eval_axis(&self, axis: usize, t: f64) -> [f64; 4] {
-        let t = clamp_time(t, self.end[6][axis]);
-        // Phase ends are sorted; scan from the first phase. In a control loop `t` advances
-        // slowly, so the exit branch is predicted (NaN stops at phase 0).
-        let mut i = 0;
-        while i < 6 && t >= self.end[i][axis] {
-            i += 1;
+    /// Samples `t` (clamped) in the first half, or with `MIRRORED` in the second half, where
+    /// `u = T - t` is the time to the end. At a phase boundary (a time [`Self::phase_ends`]
+    /// returns) the jerk is that of the phase starting there, in both halves.
+    #[inline(always)]
+    fn half<const MIRRORED: bool>(&self, t: f64, u: f64) -> Sample<D> {
+        // Whether first-half phase `begin` has been reached; in the second half, compared
+        // with the phase end exactly as `phase_ends` computes it.
+        let duration = self.duration;
+        let after = |begin: f64| {
+            if MIRRORED {
+                t < duration - begin
+            } else {
+                t >= begin
+            }
+        };
+        let mut s = Sample {
+            position: [0.0; D],
+            velocity: [0.0; D],
+            acceleration: [0.0; D],
+            jerk: [0.0; D],
+        };
+        let [p0, p1, p2, p3] = &self.phases;
+        for axis in 0..D {
+            // In a control loop `u` moves slowly, so these branches are predicted.
+            let (phase, jerk) = if !after(p1.begin[axis]) {
+                (p0, p0.jerk[axis])
+            } else if !after(p2.begin[axis]) {
+                (p1, p1.jerk[axis])
+            } else if !after(p3.begin[axis]) {
+                (p2, p2.jerk[axis])
+            } else {
+                // A cruise of zero length ends at the midpoint, where phase 5 starts.
+                let cruise_over = !MIRRORED && t >= duration - p3.begin[axis];
+                (p3, if cruise_over { p2.jerk[axis] } else { 0.0 })
+            };
+            let tau = u - phase.begin[axis];
+            let (x, v, a, j) = (
+                phase.displacement[axis],
+                phase.velocity[axis],
+                phase.acceleration[axis],
+                phase.jerk[axis],
+            );
+            let x = x + tau * (v + tau * (0.5 * a + tau * j * (1.0 / 6.0)));
+            let a_now = a + tau * j;
+            if MIRRORED {
+                s.position[axis] = self.goal[axis] - x;
+                s.acceleration[axis] = -a_now;
+            } else {
+                s.position[axis] = self.start[axis] + x;
+                s.acceleration[axis] = a_now;
+            }
+            s.velocity[axis] = v + tau * (a + 0.5 * tau * j);
+            s.jerk[axis] = jerk;
         }
-        let tau = t - if i > 0 { self.end[i - 1][axis] } else { 0.0 };
-        let [x, v, a] = [0, 1, 2].map(|q| self.state[i][q][axis]);
-        let j = JERK_SIGN[i] * self.jerk[axis];
-        [
-            x + tau * (v + tau * (0.5 * a + tau * j * (1.0 / 6.0))),
-            v + tau * (a + 0.5 * tau * j),
-            a + tau * j,
-            j,
-        ]
+        s
     }
 
     /// The duration each axis would need alone (its time-optimal duration).
@@ -168,31 +235,26 @@ impl<const D: usize> Trajectory<D> for JerkLimited<D> {
     }
 
     fn derivative(&self, t: f64, order: usize) -> [f64; D] {
-        core::array::from_fn(|axis| {
-            if order < 4 {
-                self.eval_axis(axis, t)[order]
-            } else {
-                0.0
-            }
-        })
+        let s = self.sample(t);
+        match order {
+            0 => s.position,
+            1 => s.velocity,
+            2 => s.acceleration,
+            3 => s.jerk,
+            _ => [0.0; D],
+        }
     }
 
     #[inline]
     fn sample(&self, t: f64) -> Sample<D> {
-        let mut s = Sample {
-            position: [0.0; D],
-            velocity: [0.0; D],
-            acceleration: [0.0; D],
-            jerk: [0.0; D],
-        };
-        for axis in 0..D {
-            let [p, v, a, j] = self.eval_axis(axis, t);
-            s.position[axis] = p;
-            s.velocity[axis] = v;
-            s.acceleration[axis] = a;
-            s.jerk[axis] = j;
+        let t = clamp_time(t, self.duration);
+        // Exact for t ≥ T/2 (Sterbenz), where it is used.
+        let rest = self.duration - t;
+        if t > rest {
+            self.half::<true>(t, rest)
+        } else {
+            self.half::<false>(t, t)
         }
-        s
     }
 }
 
@@ -266,11 +328,11 @@ impl RotationTrajectory for JerkLimitedRotation {
     }
 
     fn rotation(&self, t: f64) -> RotationSample {
-        let [p, v, a, _] = self.angle.eval_axis(0, t);
+        let s = self.angle.sample(t);
         RotationSample {
-            orientation: DQuat::from_axis_angle(self.axis, p) * self.start,
-            angular_velocity: self.axis * v,
-            angular_acceleration: self.axis * a,
+            orientation: DQuat::from_axis_angle(self.axis, s.position[0]) * self.start,
+            angular_velocity: self.axis * s.velocity[0],
+            angular_acceleration: self.axis * s.acceleration[0],
         }
     }
 }
