@@ -9,6 +9,7 @@
 use glam::DVec3;
 
 use crate::error::{Error, check_len};
+use crate::joint::Joint;
 use crate::model::{Data, Model, ROOT};
 
 use super::forward_position::{tool_pose, world_pose};
@@ -44,9 +45,22 @@ fn fill<const N: usize>(
             set(k, DVec3::ZERO, DVec3::ZERO);
         }
         let x = &data.world_pose[b];
-        for k in sv..end {
-            let s = model.act_subspace(b, k, x);
-            set(k, s.linear + s.angular.cross(p), s.angular);
+        match model.joints[b] {
+            // Columns that are unit vectors in body coordinates are columns of the rotation:
+            // translations along x, y, z, then rotations about them.
+            Joint::SixDof(_) => {
+                for j in 0..3 {
+                    let w = x.rotation.col(j);
+                    set(sv + j, w, DVec3::ZERO);
+                    set(sv + 3 + j, w.cross(p - x.translation), w);
+                }
+            }
+            _ => {
+                for k in sv..end {
+                    let s = model.act_subspace(b, k, x);
+                    set(k, s.linear + s.angular.cross(p), s.angular);
+                }
+            }
         }
         zero_from = sv;
         b = model.parents[b];
@@ -73,16 +87,15 @@ pub fn jacobian<const N: usize>(
         return Err(Error::UnknownTool { tool });
     }
     // The tool's ancestors, leaf first.
-    let mut chain = [0usize; N];
     let mut len = 0;
     let mut b = model.tools[tool].body;
     while b != ROOT {
-        chain[len] = b;
+        data.chain[len] = b;
         len += 1;
         b = model.parents[b];
     }
-    for &i in chain[..len].iter().rev() {
-        world_pose(model, data, q, i);
+    for c in (0..len).rev() {
+        world_pose(model, data, q, data.chain[c]);
     }
     fill(model, data, tool, out)
 }

@@ -152,6 +152,8 @@ impl Joint {
                 placement.rotation,
                 placement.translation + placement.rotation * (j.axis * q[0]),
             ),
+            // A floating base is usually placed at the identity: skip the product.
+            Joint::SixDof(j) if *placement == PlueckerTransform::IDENTITY => j.transform(q),
             _ => *placement * self.transform(q),
         }
     }

@@ -36,6 +36,9 @@ pub struct Data<const N: usize> {
     pub(crate) world_subspace: [MotionVector; N],
     /// Joint torques (RNEA and friends).
     pub(crate) tau: [f64; N],
+    /// A path of bodies (the Jacobian's branch, leaf first), kept here so that no call has to
+    /// zero an `N`-long array of its own.
+    pub(crate) chain: [usize; N],
     /// Joint accelerations (ABA).
     pub(crate) qdd: [f64; N],
     /// Joint-space mass matrix (CRBA): the upper triangle `[r][c]`, `r ≤ c`, is kept (the lower
@@ -68,6 +71,7 @@ impl<const N: usize> Data<N> {
             u_bias: [0.0; N],
             world_subspace: [MotionVector::ZERO; N],
             tau: [0.0; N],
+            chain: [0; N],
             qdd: [0.0; N],
             mass_matrix: [[0.0; N]; N],
             factor: [[0.0; N]; N],
