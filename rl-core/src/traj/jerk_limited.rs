@@ -13,30 +13,61 @@ use super::{
     check_finite_points, clamp_time,
 };
 
-/// Phase durations `(Tj, Ta, Tv)` of the time-optimal rest-to-rest profile over distance
-/// `h ≥ 0` (Biagiotti & Melchiorri eqs. 3.30-3.33 with zero boundary velocities).
-fn phase_times(h: f64, v: f64, a: f64, j: f64) -> (f64, f64, f64) {
-    if h == 0.0 {
-        return (0.0, 0.0, 0.0);
+/// Phase durations `(Tj, Ta, Tv)` of the time-optimal rest-to-rest profile of every axis
+/// (Biagiotti & Melchiorri eqs. 3.30-3.33 with zero boundary velocities). The quotients of
+/// distance and limits come first, for all axes at once, so the divisions vectorise; the case
+/// distinctions follow per axis.
+fn phase_times<const D: usize>(
+    start: &[f64; D],
+    goal: &[f64; D],
+    limits: &Limits<D>,
+) -> [(f64, f64, f64); D] {
+    let (mut h, mut a_j, mut v_a, mut v_j) = ([0.0; D], [0.0; D], [0.0; D], [0.0; D]);
+    let (mut h_v, mut h_a, mut h_2j, mut short) = ([0.0; D], [0.0; D], [0.0; D], [0.0; D]);
+    for axis in 0..D {
+        let (v, a, j) = (
+            limits.velocity[axis],
+            limits.acceleration[axis],
+            limits.jerk[axis],
+        );
+        h[axis] = libm::fabs(goal[axis] - start[axis]);
+        a_j[axis] = a / j;
+        v_a[axis] = v / a;
+        v_j[axis] = v / j;
+        h_v[axis] = h[axis] / v;
+        h_a[axis] = h[axis] / a;
+        h_2j[axis] = h[axis] / (2.0 * j);
+        // Below this distance the acceleration limit is not reached.
+        short[axis] = 2.0 * a * a * a / (j * j);
     }
-    let (mut tj, mut ta) = if v * j >= a * a {
-        (a / j, a / j + v / a)
-    } else {
-        let tj = libm::sqrt(v / j);
-        (tj, 2.0 * tj)
-    };
-    let mut tv = h / v - ta;
-    if tv < 0.0 {
-        tv = 0.0;
-        if h >= 2.0 * a * a * a / (j * j) {
-            tj = a / j;
-            ta = 0.5 * tj + libm::sqrt(0.25 * tj * tj + h / a);
-        } else {
-            tj = libm::cbrt(h / (2.0 * j));
-            ta = 2.0 * tj;
+    core::array::from_fn(|axis| {
+        if h[axis] == 0.0 {
+            return (0.0, 0.0, 0.0);
         }
-    }
-    (tj, ta, tv)
+        let (v, a, j) = (
+            limits.velocity[axis],
+            limits.acceleration[axis],
+            limits.jerk[axis],
+        );
+        let (mut tj, mut ta) = if v * j >= a * a {
+            (a_j[axis], a_j[axis] + v_a[axis])
+        } else {
+            let tj = libm::sqrt(v_j[axis]);
+            (tj, 2.0 * tj)
+        };
+        let mut tv = h_v[axis] - ta;
+        if tv < 0.0 {
+            tv = 0.0;
+            if h[axis] >= short[axis] {
+                tj = a_j[axis];
+                ta = 0.5 * tj + libm::sqrt(0.25 * tj * tj + h_a[axis]);
+            } else {
+                tj = libm::cbrt(h_2j[axis]);
+                ta = 2.0 * tj;
+            }
+        }
+        (tj, ta, tv)
+    })
 }
 
 /// Jerk-limited rest-to-rest motion of `D` axes, synchronised to the slowest axis.
@@ -75,19 +106,10 @@ impl<const D: usize> JerkLimited<D> {
     ) -> Result<Self, TrajectoryError> {
         limits.validate(true)?;
         check_finite_points(&[start, goal])?;
-        let mut times = [(0.0, 0.0, 0.0); D];
-        let mut duration: f64 = 0.0;
-        for axis in 0..D {
-            let h = libm::fabs(goal[axis] - start[axis]);
-            times[axis] = phase_times(
-                h,
-                limits.velocity[axis],
-                limits.acceleration[axis],
-                limits.jerk[axis],
-            );
-            let (_, ta, tv) = times[axis];
-            duration = duration.max(2.0 * ta + tv);
-        }
+        let times = phase_times(&start, &goal, limits);
+        let duration = times
+            .iter()
+            .fold(0.0, |d: f64, (_, ta, tv)| d.max(2.0 * ta + tv));
         if !duration.is_finite() {
             return Err(TrajectoryError::Unreachable);
         }
@@ -217,15 +239,7 @@ impl<const D: usize> JerkLimited<D> {
 
     /// The duration each axis would need alone (its time-optimal duration).
     pub fn axis_durations(start: [f64; D], goal: [f64; D], limits: &Limits<D>) -> [f64; D] {
-        core::array::from_fn(|axis| {
-            let (_, ta, tv) = phase_times(
-                libm::fabs(goal[axis] - start[axis]),
-                limits.velocity[axis],
-                limits.acceleration[axis],
-                limits.jerk[axis],
-            );
-            2.0 * ta + tv
-        })
+        phase_times(&start, &goal, limits).map(|(_, ta, tv)| 2.0 * ta + tv)
     }
 }
 
