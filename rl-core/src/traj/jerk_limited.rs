@@ -97,6 +97,34 @@ struct Phase<const D: usize> {
     jerk: [f64; D],
 }
 
+impl<const D: usize> Phase<D> {
+    /// The phase that starts when this one has lasted `length` (per axis), with `jerk`.
+    #[inline]
+    fn then(&self, length: &[f64; D], jerk: [f64; D]) -> Self {
+        let mut next = Self {
+            begin: [0.0; D],
+            displacement: [0.0; D],
+            velocity: [0.0; D],
+            acceleration: [0.0; D],
+            jerk,
+        };
+        for axis in 0..D {
+            let d = length[axis];
+            let (x, v, a, j) = (
+                self.displacement[axis],
+                self.velocity[axis],
+                self.acceleration[axis],
+                self.jerk[axis],
+            );
+            next.begin[axis] = self.begin[axis] + d;
+            next.displacement[axis] = x + d * (v + d * (0.5 * a + d * j * (1.0 / 6.0)));
+            next.velocity[axis] = v + d * (a + 0.5 * d * j);
+            next.acceleration[axis] = a + d * j;
+        }
+        next
+    }
+}
+
 impl<const D: usize> JerkLimited<D> {
     /// The time-optimal motion from `start` to `goal` at rest under finite, positive limits.
     pub fn new(
@@ -116,57 +144,37 @@ impl<const D: usize> JerkLimited<D> {
         // Phase durations stretched by 1/k (k = own duration / common duration ≤ 1) and
         // jerks scaled by k³; the cruise takes up what the common duration leaves.
         let zero = [0.0; D];
-        let mut out = Self {
-            start,
-            goal,
-            phases: [Phase {
-                begin: zero,
-                displacement: zero,
-                velocity: zero,
-                acceleration: zero,
-                jerk: zero,
-            }; 4],
-            duration,
-        };
-        let phases = &mut out.phases;
-        let mut lengths = [zero; 3];
+        let (mut jerk, mut jerk_time, mut accel_time) = (zero, zero, zero);
         for axis in 0..D {
             let (tj, ta, tv) = times[axis];
             let own = 2.0 * ta + tv;
             let k = if duration > 0.0 { own / duration } else { 1.0 };
             let stretch = if k > 0.0 { 1.0 / k } else { 0.0 };
             let sign = if goal[axis] >= start[axis] { 1.0 } else { -1.0 };
-            let jerk = sign * limits.jerk[axis] * k * k * k;
-            phases[0].jerk[axis] = jerk;
-            phases[2].jerk[axis] = -jerk;
-            let (tj, tc) = (tj * stretch, (ta - 2.0 * tj).max(0.0) * stretch);
-            lengths[0][axis] = tj;
-            lengths[1][axis] = tc;
-            lengths[2][axis] = tj;
+            jerk[axis] = sign * limits.jerk[axis] * k * k * k;
+            jerk_time[axis] = tj * stretch;
+            accel_time[axis] = (ta - 2.0 * tj).max(0.0) * stretch;
         }
-        // Integrate the first three phases, all axes at once.
-        for i in 0..3 {
-            let (done, rest) = phases.split_at_mut(i + 1);
-            let (now, next) = (&done[i], &mut rest[0]);
-            for axis in 0..D {
-                let d = lengths[i][axis];
-                let (x, v, a) = (
-                    now.displacement[axis],
-                    now.velocity[axis],
-                    now.acceleration[axis],
-                );
-                let j = now.jerk[axis];
-                next.begin[axis] = now.begin[axis] + d;
-                next.displacement[axis] = x + d * (v + d * (0.5 * a + d * j * (1.0 / 6.0)));
-                next.velocity[axis] = v + d * (a + 0.5 * d * j);
-                next.acceleration[axis] = a + d * j;
-            }
-        }
+        let rising = Phase {
+            begin: zero,
+            displacement: zero,
+            velocity: zero,
+            acceleration: zero,
+            jerk,
+        };
+        let constant = rising.then(&jerk_time, zero);
+        let falling = constant.then(&accel_time, jerk.map(|j| -j));
+        let mut cruise = falling.then(&jerk_time, zero);
         // The cruise starts by the midpoint, also after rounding, so the phase ends are sorted.
-        for begin in phases[3].begin.iter_mut() {
+        for begin in cruise.begin.iter_mut() {
             *begin = begin.min(0.5 * duration);
         }
-        Ok(out)
+        Ok(Self {
+            start,
+            goal,
+            phases: [rising, constant, falling, cruise],
+            duration,
+        })
     }
 
     /// End time of each of the seven phases of `axis` (velocity and acceleration peak at
