@@ -4,7 +4,10 @@ use core::ops::{Add, AddAssign};
 
 use glam::{DMat3, DVec3};
 
-use super::{ForceVector, MotionVector, PlueckerTransform, rotate_symmetric, skew, sym_outer};
+use super::{
+    ForceVector, MotionVector, PlueckerTransform, rotate_symmetric_upper, shift_upper, skew,
+    symmetric_from_upper,
+};
 
 /// The spatial inertia of a rigid body about a frame's origin, in that frame's coordinates.
 ///
@@ -78,13 +81,12 @@ impl RigidBodyInertia {
         let r = &a_b.rotation;
         let p = a_b.translation;
         let h = *r * self.first_moment;
-        // Ī_A = R Ī Rᵀ − ([h]×[p]× + [p]×[h]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1.
+        // Ī_A = R Ī Rᵀ − ([h]×[p]× + [p]×[h]×) − m [p]×², with [a]×[b]× = b aᵀ − (a·b) 1,
+        // = R Ī Rᵀ − (p gᵀ + g pᵀ) + 2 (g·p) 1 with g = h + m p / 2.
         let m = self.mass;
-        let diag = 2.0 * h.dot(p) + m * p.length_squared();
-        let rotational = rotate_symmetric(r, &self.rotational)
-            - sym_outer(h, p)
-            - DMat3::from_cols(p * (m * p.x), p * (m * p.y), p * (m * p.z))
-            + DMat3::from_diagonal(DVec3::splat(diag));
+        let g = h + p * (0.5 * m);
+        let e = rotate_symmetric_upper(r, &self.rotational);
+        let rotational = symmetric_from_upper(shift_upper(e, p, g, 2.0 * g.dot(p)));
         Self {
             mass: m,
             first_moment: h + p * m,
