@@ -12,7 +12,7 @@ use crate::error::{Error, check_len};
 use crate::joint::Joint;
 use crate::model::{Data, Model, ROOT};
 
-use super::forward_position::{tool_pose, world_pose};
+use super::forward_position::world_pose;
 
 /// A 6 × `N` Jacobian, rows `[linear xyz; angular xyz]`; columns past `model.dof()` unused.
 pub type Jacobian<const N: usize> = [[f64; N]; 6];
@@ -26,7 +26,13 @@ fn fill<const N: usize>(
     tool: usize,
     out: &mut Jacobian<N>,
 ) -> Result<(), Error> {
-    let p = tool_pose(model, data, tool)?.translation;
+    // Only the tool's origin is needed, not its orientation.
+    let t = model.tools().get(tool).ok_or(Error::UnknownTool { tool })?;
+    let p = if t.body == ROOT {
+        t.placement.translation
+    } else {
+        data.world_pose[t.body].transform_point(t.placement.translation)
+    };
     let mut zero_from = model.nv;
     let mut set = |k: usize, lin: DVec3, ang: DVec3| {
         for (row, v) in out
