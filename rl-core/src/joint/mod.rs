@@ -144,7 +144,7 @@ impl Joint {
     /// `placement · X_J(q)`: the child frame's pose in the frame the joint is placed in,
     /// with the common joints' products written out (a rotation about a coordinate axis
     /// touches two columns).
-    #[inline]
+    #[inline(always)]
     pub fn placed_transform(&self, placement: &PlueckerTransform, q: &[f64]) -> PlueckerTransform {
         match self {
             Joint::Revolute(j) => j.placed(placement, q[0]),

@@ -242,7 +242,7 @@ impl<const N: usize> Model<N> {
     }
 
     /// `S q̇` of body `i`'s joint, with `x` a full velocity-sized vector.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn joint_motion(&self, i: usize, x: &[f64]) -> MotionVector {
         let sv = self.idx_v[i];
         match &self.joints[i] {
@@ -274,7 +274,7 @@ impl<const N: usize> Model<N> {
     }
 
     /// `Sᵀ f` of body `i`'s joint into its entries of `out` (a velocity-sized vector).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn joint_force(&self, i: usize, f: &ForceVector, out: &mut [f64]) {
         let sv = self.idx_v[i];
         match &self.joints[i] {
