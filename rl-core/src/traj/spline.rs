@@ -83,92 +83,88 @@ fn cubic<const D: usize, const MAX: usize>(
     ends: Ends<D>,
 ) -> Result<Piecewise<Polynomial<D, 4>, MAX>, TrajectoryError> {
     check_waypoints(times, points, MAX)?;
-    let n = points.len();
-    let last = n - 1;
-    // Row i: sub[i] M_{i-1} + diag[i] M_i + sup[i] M_{i+1} = rhs[i]. The forward sweep keeps
-    // c'_i and d'_i for i < last (at most MAX of them); row `last` is handled in locals.
-    let mut c_prime = [0.0; MAX];
-    let mut d_prime = [[0.0; D]; MAX];
-    let h = |i: usize| times[i + 1] - times[i];
+    let last = points.len() - 1;
+    // Interval lengths and chord slopes (`last ≤ MAX` of each).
+    let mut h = [0.0; MAX];
     let mut slopes = [[0.0; D]; MAX];
-    for i in 0..last {
-        let inv = 1.0 / h(i);
+    for ((h, slope), (t, p)) in h
+        .iter_mut()
+        .zip(slopes.iter_mut())
+        .zip(times.windows(2).zip(points.windows(2)))
+    {
+        *h = t[1] - t[0];
+        let inv = 1.0 / *h;
         for axis in 0..D {
-            slopes[i][axis] = (points[i + 1][axis] - points[i][axis]) * inv;
+            slope[axis] = (p[1][axis] - p[0][axis]) * inv;
         }
     }
-    let slope = |i: usize, axis: usize| slopes[i][axis];
-    let row = |i: usize| -> (f64, f64, f64, [f64; D]) {
-        let mut rhs = [0.0; D];
-        if i == 0 {
-            match ends {
-                Ends::Natural => (0.0, 1.0, 0.0, rhs),
-                Ends::Clamped(v0, _) => {
-                    for (axis, r) in rhs.iter_mut().enumerate() {
-                        *r = 6.0 * (slope(0, axis) - v0[axis]);
-                    }
-                    (0.0, 2.0 * h(0), h(0), rhs)
-                }
-            }
-        } else if i == last {
-            match ends {
-                Ends::Natural => (0.0, 1.0, 0.0, rhs),
-                Ends::Clamped(_, v1) => {
-                    for (axis, r) in rhs.iter_mut().enumerate() {
-                        *r = 6.0 * (v1[axis] - slope(i - 1, axis));
-                    }
-                    (h(i - 1), 2.0 * h(i - 1), 0.0, rhs)
-                }
-            }
-        } else {
-            for (axis, r) in rhs.iter_mut().enumerate() {
-                *r = 6.0 * (slope(i, axis) - slope(i - 1, axis));
-            }
-            (h(i - 1), 2.0 * (h(i - 1) + h(i)), h(i), rhs)
-        }
-    };
+    // Row i: sub_i M_{i-1} + diag_i M_i + sup_i M_{i+1} = rhs_i. Forward sweep: c'_i and d'_i
+    // for the rows before `last` go to `c_prime` and `m` (the back substitution turns d'_i
+    // into M_i); row `last` is solved in `m_last`.
+    let mut c_prime = [0.0; MAX];
+    let mut m = [[0.0; D]; MAX];
+    // Row 0: natural M_0 = 0, or clamped 2h_0 M_0 + h_0 M_1 = 6 (s_0 - v0).
     let mut prev_c = 0.0;
     let mut prev_d = [0.0; D];
-    let mut m_last = [0.0; D];
-    for i in 0..n {
-        let (sub, diag, sup, rhs) = row(i);
-        let denom = diag - sub * prev_c;
+    if let Ends::Clamped(v0, _) = ends {
+        let inv = 1.0 / (2.0 * h[0]);
+        prev_c = h[0] * inv;
+        for axis in 0..D {
+            prev_d[axis] = 6.0 * (slopes[0][axis] - v0[axis]) * inv;
+        }
+    }
+    c_prime[0] = prev_c;
+    m[0] = prev_d;
+    // Interior rows: h_{i-1} M_{i-1} + 2 (h_{i-1} + h_i) M_i + h_i M_{i+1} = 6 (s_i - s_{i-1}).
+    for i in 1..last {
+        let (sub, sup) = (h[i - 1], h[i]);
+        let denom = 2.0 * (sub + sup) - sub * prev_c;
         if denom == 0.0 || !denom.is_finite() {
             return Err(TrajectoryError::Degenerate);
         }
         let inv = 1.0 / denom;
-        let c = sup * inv;
         let mut d = [0.0; D];
         for axis in 0..D {
-            d[axis] = (rhs[axis] - sub * prev_d[axis]) * inv;
+            let rhs = 6.0 * (slopes[i][axis] - slopes[i - 1][axis]);
+            d[axis] = (rhs - sub * prev_d[axis]) * inv;
         }
-        if i < last {
-            c_prime[i] = c;
-            d_prime[i] = d;
-        } else {
-            m_last = d;
-        }
-        prev_c = c;
+        prev_c = sup * inv;
         prev_d = d;
+        c_prime[i] = prev_c;
+        m[i] = d;
     }
-    // Back substitution into d_prime: M_i = d'_i - c'_i M_{i+1}.
+    // Row `last`: natural M_last = 0, or clamped h M_{last-1} + 2h M_last = 6 (v1 - s_{last-1}).
+    let mut m_last = [0.0; D];
+    if let Ends::Clamped(_, v1) = ends {
+        let sub = h[last - 1];
+        let denom = 2.0 * sub - sub * prev_c;
+        if denom == 0.0 || !denom.is_finite() {
+            return Err(TrajectoryError::Degenerate);
+        }
+        let inv = 1.0 / denom;
+        for axis in 0..D {
+            let rhs = 6.0 * (v1[axis] - slopes[last - 1][axis]);
+            m_last[axis] = (rhs - sub * prev_d[axis]) * inv;
+        }
+    }
+    // Back substitution, M_i = d'_i - c'_i M_{i+1}, and the segments from the last one back.
     let mut next = m_last;
     for i in (0..last).rev() {
         for axis in 0..D {
-            d_prime[i][axis] -= c_prime[i] * next[axis];
+            m[i][axis] -= c_prime[i] * next[axis];
         }
-        next = d_prime[i];
+        next = m[i];
     }
     let mut spline = Piecewise::new();
     for i in 0..last {
-        let hi = h(i);
-        let m0 = d_prime[i];
-        let m1 = if i + 1 < last { d_prime[i + 1] } else { m_last };
+        let hi = h[i];
+        let m0 = m[i];
+        let m1 = if i + 1 < last { m[i + 1] } else { m_last };
         let mut c = [[0.0; D]; 4];
         let inv6h = 1.0 / (6.0 * hi);
         for axis in 0..D {
             c[0][axis] = points[i][axis];
-            c[1][axis] = slope(i, axis) - hi * (2.0 * m0[axis] + m1[axis]) * (1.0 / 6.0);
+            c[1][axis] = slopes[i][axis] - hi * (2.0 * m0[axis] + m1[axis]) * (1.0 / 6.0);
             c[2][axis] = 0.5 * m0[axis];
             c[3][axis] = (m1[axis] - m0[axis]) * inv6h;
         }
