@@ -1,10 +1,11 @@
-//! The fast evaluation paths against straightforward formulas: the jerk-limited profile (stored
-//! as its first half, evaluated mirrored) against a plain forward integration of all seven
-//! phases, at every phase boundary and at random times.
+//! The fast paths against straightforward formulas: the jerk-limited profile (stored as its
+//! first half, evaluated mirrored) against a plain forward integration of all seven phases, and
+//! the cubic splines (Thomas algorithm) against the textbook linear system solved densely, at
+//! every boundary and at random times.
 
 mod traj_support;
 
-use rl_core::traj::{JerkLimited, Limits, Trajectory};
+use rl_core::traj::{JerkLimited, Limits, Piecewise, Polynomial, Trajectory, spline};
 use traj_support::Rng;
 
 /// Jerk of the seven phases in units of the first phase's jerk.
@@ -207,5 +208,195 @@ fn jerk_limited_matches_forward_integration_of_seven_phases() {
             b[3] = a[3];
         }
         check(a, b, &l, &mut rng);
+    }
+}
+
+/// Coefficients `[segment][a, b, c, d]` of `a + b τ + c τ² + d τ³` (local time `τ`) of the cubic
+/// spline of one axis, from the 4(n-1) interpolation, continuity and end conditions solved by
+/// dense Gaussian elimination. `ends` = `None` for natural, `Some((v0, v1))` for clamped.
+fn textbook_spline(times: &[f64], y: &[f64], ends: Option<(f64, f64)>) -> Vec<[f64; 4]> {
+    let segments = times.len() - 1;
+    let n = 4 * segments;
+    let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
+    let row = |entries: &[(usize, f64)], rhs: f64| {
+        let mut r = vec![0.0; n];
+        for &(col, value) in entries {
+            r[col] = value;
+        }
+        (r, rhs)
+    };
+    for i in 0..segments {
+        let (h, k) = (times[i + 1] - times[i], 4 * i);
+        rows.push(row(&[(k, 1.0)], y[i]));
+        rows.push(row(
+            &[(k, 1.0), (k + 1, h), (k + 2, h * h), (k + 3, h * h * h)],
+            y[i + 1],
+        ));
+        if i + 1 < segments {
+            // First and second derivative continuous at the next waypoint.
+            rows.push(row(
+                &[
+                    (k + 1, 1.0),
+                    (k + 2, 2.0 * h),
+                    (k + 3, 3.0 * h * h),
+                    (k + 5, -1.0),
+                ],
+                0.0,
+            ));
+            rows.push(row(&[(k + 2, 2.0), (k + 3, 6.0 * h), (k + 6, -2.0)], 0.0));
+        }
+    }
+    let (h_last, k_last) = (times[segments] - times[segments - 1], 4 * (segments - 1));
+    match ends {
+        None => {
+            rows.push(row(&[(2, 2.0)], 0.0));
+            rows.push(row(&[(k_last + 2, 2.0), (k_last + 3, 6.0 * h_last)], 0.0));
+        }
+        Some((v0, v1)) => {
+            rows.push(row(&[(1, 1.0)], v0));
+            rows.push(row(
+                &[
+                    (k_last + 1, 1.0),
+                    (k_last + 2, 2.0 * h_last),
+                    (k_last + 3, 3.0 * h_last * h_last),
+                ],
+                v1,
+            ));
+        }
+    }
+    // Gaussian elimination with partial pivoting.
+    for col in 0..n {
+        let pivot = (col..n)
+            .max_by(|&a, &b| rows[a].0[col].abs().total_cmp(&rows[b].0[col].abs()))
+            .unwrap();
+        rows.swap(col, pivot);
+        for r in col + 1..n {
+            let f = rows[r].0[col] / rows[col].0[col];
+            if f != 0.0 {
+                for c in col..n {
+                    rows[r].0[c] -= f * rows[col].0[c];
+                }
+                rows[r].1 -= f * rows[col].1;
+            }
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|c| rows[r].0[c] * x[c]).sum();
+        x[r] = (rows[r].1 - s) / rows[r].0[r];
+    }
+    x.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]).collect()
+}
+
+fn check_spline<const D: usize>(
+    s: &Piecewise<Polynomial<D, 4>, 8>,
+    times: &[f64],
+    points: &[[f64; D]],
+    ends: Option<([f64; D], [f64; D])>,
+    rng: &mut Rng,
+) {
+    let reference: Vec<Vec<[f64; 4]>> = (0..D)
+        .map(|axis| {
+            let y: Vec<f64> = points.iter().map(|p| p[axis]).collect();
+            textbook_spline(times, &y, ends.map(|(v0, v1)| (v0[axis], v1[axis])))
+        })
+        .collect();
+    let t0 = times[0];
+    let mut at: Vec<f64> = times.to_vec();
+    at.extend(times.iter().map(|t| t * (1.0 - 1e-15) + 1e-300));
+    at.extend(times.iter().map(|t| t * (1.0 + 1e-15)));
+    at.extend((0..100).map(|_| rng.range(t0, times[times.len() - 1])));
+    // The scale of each quantity: its largest magnitude at the waypoints and in between.
+    let eval = |t: f64| -> [[f64; D]; 4] {
+        let i = (times.partition_point(|&k| k <= t).max(1) - 1).min(times.len() - 2);
+        let tau = t - times[i];
+        core::array::from_fn(|q| {
+            core::array::from_fn(|axis| {
+                let [a, b, c, d] = reference[axis][i];
+                [
+                    a + tau * (b + tau * (c + tau * d)),
+                    b + tau * (2.0 * c + 3.0 * tau * d),
+                    2.0 * c + 6.0 * tau * d,
+                    6.0 * d,
+                ][q]
+            })
+        })
+    };
+    let mut scale = [0.0f64; 4];
+    for &t in &at {
+        let r = eval(t);
+        for q in 0..4 {
+            scale[q] = r[q].iter().fold(scale[q], |m, x| m.max(x.abs()));
+        }
+    }
+    for &t in &at {
+        // Away from the waypoints the jerk is that of the segment; at a waypoint it may be
+        // either neighbour's (jerk jumps there), so it is compared only inside segments.
+        let inside = times.iter().all(|k| (t - k).abs() > 1e-9);
+        let got = s.sample(t - t0);
+        let want = eval(t);
+        for (q, got) in [got.position, got.velocity, got.acceleration, got.jerk]
+            .into_iter()
+            .enumerate()
+        {
+            if q == 3 && !inside {
+                continue;
+            }
+            for axis in 0..D {
+                assert!(
+                    (got[axis] - want[q][axis]).abs() <= 1e-10 * (1.0 + scale[q]),
+                    "order {q} axis {axis} at t={t}: {} vs {}",
+                    got[axis],
+                    want[q][axis]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn cubic_splines_match_the_textbook_system() {
+    let mut rng = Rng(0x1234_5678_9abc_def1);
+    let times = [0.0, 0.5, 1.2, 2.0, 2.4, 3.0];
+    let points = [
+        [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+        [0.5, -0.1, 0.0, 0.8, 0.1, 0.0, -0.6],
+        [1.0, 0.3, -0.4, 0.2, 0.0, 0.9, 0.2],
+        [0.2, 0.5, 0.1, -0.3, 0.6, 0.3, 0.0],
+        [-0.4, 0.0, 0.7, 0.0, 0.2, -0.2, 0.4],
+        [0.0, 0.2, 0.3, 0.1, -0.5, 0.1, 0.2],
+    ];
+    for n in 2..=6 {
+        let natural: Piecewise<Polynomial<7, 4>, 8> =
+            spline::natural_cubic(&times[..n], &points[..n]).unwrap();
+        check_spline(&natural, &times[..n], &points[..n], None, &mut rng);
+        let (v0, v1) = ([0.3; 7], [-0.2; 7]);
+        let clamped: Piecewise<Polynomial<7, 4>, 8> =
+            spline::clamped_cubic(&times[..n], &points[..n], v0, v1).unwrap();
+        check_spline(
+            &clamped,
+            &times[..n],
+            &points[..n],
+            Some((v0, v1)),
+            &mut rng,
+        );
+    }
+    for _ in 0..100 {
+        let n = 2 + (rng.next_f64() * 7.0) as usize;
+        let mut times = vec![rng.range(-1.0, 1.0)];
+        for _ in 1..n {
+            times.push(times[times.len() - 1] + rng.range(0.2, 2.0));
+        }
+        let points: Vec<[f64; 3]> = (0..n)
+            .map(|_| core::array::from_fn(|_| rng.range(-2.0, 2.0)))
+            .collect();
+        let natural: Piecewise<Polynomial<3, 4>, 8> =
+            spline::natural_cubic(&times, &points).unwrap();
+        check_spline(&natural, &times, &points, None, &mut rng);
+        let v0 = core::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let v1 = core::array::from_fn(|_| rng.range(-1.0, 1.0));
+        let clamped: Piecewise<Polynomial<3, 4>, 8> =
+            spline::clamped_cubic(&times, &points, v0, v1).unwrap();
+        check_spline(&clamped, &times, &points, Some((v0, v1)), &mut rng);
     }
 }
