@@ -100,16 +100,12 @@ pub trait Trajectory<const D: usize> {
     }
 }
 
-/// `t` clamped to `[0, duration]`; NaN stays NaN (and evaluates to NaN, never panics).
+/// `t` clamped to `[0, duration]`; NaN stays NaN (and evaluates to NaN, never panics). Written
+/// so that it compiles to one `maxsd` and one `minsd` (no branches).
 #[inline]
 pub(crate) fn clamp_time(t: f64, duration: f64) -> f64 {
-    if t > duration {
-        duration
-    } else if t < 0.0 {
-        0.0
-    } else {
-        t
-    }
+    let t = if t < 0.0 { 0.0 } else { t };
+    if duration < t { duration } else { t }
 }
 
 /// Finite check for a waypoint list, naming the first bad waypoint.
