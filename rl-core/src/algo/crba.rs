@@ -40,7 +40,7 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
 }
 
 /// The world-frame CRBA (see the module documentation); `M`'s upper triangle is zero.
-pub(crate) fn in_world_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+fn in_world_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
     for i in 0..model.nbodies {
         let x = world_pose(model, data, q, i);
         data.composite[i] = model.world_inertia(i, &x);
@@ -72,7 +72,7 @@ pub(crate) fn in_world_frame<const N: usize>(model: &Model<N>, data: &mut Data<N
 }
 
 /// The body-frame CRBA (see the module documentation); `M`'s upper triangle is zero.
-pub(crate) fn in_body_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+fn in_body_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
     for i in 0..model.nbodies {
         local_pose(model, data, q, i);
         data.composite[i] = model.inertias[i];
@@ -179,8 +179,11 @@ mod tests {
             Joint::Cylindrical(Cylindrical::new(DVec3::Z)),
             Joint::Planar(Planar),
             Joint::Revolute(Revolute::new(DVec3::Z)),
+            // A second tree, floating, after the first one's DOFs.
+            Joint::SixDof(SixDof),
+            Joint::Revolute(Revolute::new(DVec3::X)),
         ];
-        let parents = [ROOT, 0, 1, 0, 3, 1, 5, 3];
+        let parents = [ROOT, 0, 1, 0, 3, 1, 5, 3, ROOT, 8];
         let mut b = ModelBuilder::<32>::new();
         for (i, (j, p)) in joints.into_iter().zip(parents).enumerate() {
             let f = i as f64;
@@ -193,7 +196,7 @@ mod tests {
                 DVec3::new(0.02 * f, -0.03, 0.1),
                 DMat3::from_diagonal(DVec3::new(0.1, 0.2 + 0.01 * f, 0.15)),
             );
-            let name = ["b0", "b1", "b2", "b3", "b4", "b5", "b6", "b7"][i];
+            let name = ["b0", "b1", "b2", "b3", "b4", "b5", "b6", "b7", "b8", "b9"][i];
             b.add_body(p, name, j, placement, name, inertia).unwrap();
         }
         let model = b.build();
@@ -208,9 +211,15 @@ mod tests {
         model.random_configuration(&mut q[..model.nq()], &mut u);
         let q = &q[..model.nq()];
         let n = model.dof();
+        // Through the public entry point, which zeroes the triangle, for both frames: every
+        // entry must be written, left over values from an earlier call must not survive.
+        let mut world_model = model.clone();
+        world_model.has_six_dof = false;
         let (mut world, mut body) = (Data::<32>::new(), Data::<32>::new());
-        in_world_frame(&model, &mut world, q);
-        in_body_frame(&model, &mut body, q);
+        world.mass_matrix = [[f64::NAN; 32]; 32];
+        body.mass_matrix = [[f64::NAN; 32]; 32];
+        crba(&world_model, &mut world, q).unwrap();
+        crba(&model, &mut body, q).unwrap();
         for r in 0..n {
             for c in r..n {
                 let (w, b) = (world.mass_matrix[r][c], body.mass_matrix[r][c]);
