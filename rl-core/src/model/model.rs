@@ -4,7 +4,10 @@ use glam::{DMat3, DVec3};
 
 use super::{JointLimits, Name};
 use crate::joint::{Joint, Revolute};
-use crate::spatial::{ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia};
+use crate::spatial::{
+    ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia, rotate_symmetric_upper,
+    shift_upper, symmetric_from_upper,
+};
 
 /// The parent index of a body attached to the world (the fixed base).
 pub const ROOT: usize = usize::MAX;
@@ -230,14 +233,13 @@ impl<const N: usize> Model<N> {
     pub(crate) fn world_inertia(&self, i: usize, x: &PlueckerTransform) -> RigidBodyInertia {
         let m = self.inertias[i].mass;
         let c = x.transform_point(self.coms[i]);
-        let ic = crate::spatial::rotate_symmetric(&x.rotation, &self.inertias_com[i]);
+        // Ī = R I_c Rᵀ + m (|c|² 1 − c cᵀ), on the upper triangle.
+        let e = rotate_symmetric_upper(&x.rotation, &self.inertias_com[i]);
         let mc = c * m;
-        let diag = DMat3::from_diagonal(DVec3::splat(mc.dot(c)));
-        let outer = DMat3::from_cols(c * mc.x, c * mc.y, c * mc.z);
         RigidBodyInertia {
             mass: m,
             first_moment: mc,
-            rotational: ic + diag - outer,
+            rotational: symmetric_from_upper(shift_upper(e, c, mc * 0.5, mc.dot(c))),
         }
     }
 
