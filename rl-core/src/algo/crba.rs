@@ -89,23 +89,24 @@ fn in_body_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]
             if six_dof && p == ROOT {
                 break;
             }
-            let mut f = ic.mul_motion(&model.subspace[k]);
+            let mut f = match &model.joints[i] {
+                // S = (axis, 0): F = (Ī axis, axis × h).
+                Joint::Revolute(j) => ForceVector {
+                    moment: ic.rotational * j.axis,
+                    force: j.axis.cross(ic.first_moment),
+                },
+                _ => ic.mul_motion(&model.subspace[k]),
+            };
             if !six_dof {
                 // This joint's own block (upper triangle: rows sv..=k).
-                let own = subspace_dots(model, i, &f);
-                for (l, x) in (sv..=k).zip(own) {
-                    data.mass_matrix[l][k] = x;
-                }
+                write_dots(model, i, &f, k, &mut data.mass_matrix, sv..=k);
             }
             let mut b = i;
             let mut a = p;
             while a != ROOT {
                 f = data.parent_pose[b].act_force(&f);
                 let sa = model.idx_v[a];
-                let rows = subspace_dots(model, a, &f);
-                for (l, x) in (sa..sa + model.joints[a].nv()).zip(rows) {
-                    data.mass_matrix[l][k] = x;
-                }
+                write_dots(model, a, &f, k, &mut data.mass_matrix, sa..sa + 6);
                 b = a;
                 a = model.parents[b];
             }
@@ -117,28 +118,36 @@ fn in_body_frame<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]
     }
 }
 
-/// `S_lᵀ f` for the DOFs `l` of body `i`'s joint, with `f` in body `i`'s coordinates (the
-/// first `nv` entries are used).
-#[inline]
-fn subspace_dots<const N: usize>(model: &Model<N>, i: usize, f: &ForceVector) -> [f64; 6] {
+/// `M[l][k] = S_lᵀ f` for the DOFs `l` of body `i`'s joint that lie in `rows`, with `f` in
+/// body `i`'s coordinates.
+#[inline(always)]
+fn write_dots<const N: usize>(
+    model: &Model<N>,
+    i: usize,
+    f: &ForceVector,
+    k: usize,
+    m: &mut [[f64; N]; N],
+    rows: impl Iterator<Item = usize>,
+) {
     let sv = model.idx_v[i];
-    let mut out = [0.0; 6];
     match &model.joints[i] {
-        Joint::Revolute(j) => out[0] = j.axis.dot(f.moment),
-        Joint::Prismatic(j) => out[0] = j.axis.dot(f.force),
+        Joint::Revolute(j) => m[sv][k] = j.axis.dot(f.moment),
+        Joint::Prismatic(j) => m[sv][k] = j.axis.dot(f.force),
         // Translations along x, y, z, then rotations about them.
         Joint::SixDof(_) => {
-            out = [
+            let v = [
                 f.force.x, f.force.y, f.force.z, f.moment.x, f.moment.y, f.moment.z,
-            ]
+            ];
+            for (a, x) in v.into_iter().enumerate() {
+                m[sv + a][k] = x;
+            }
         }
         j => {
-            for (o, s) in out.iter_mut().zip(&model.subspace[sv..sv + j.nv()]) {
-                *o = s.dot(f);
+            for l in rows.take(j.nv()) {
+                m[l][k] = model.subspace[l].dot(f);
             }
         }
     }
-    out
 }
 
 /// The upper triangle of a six-DOF joint's own block, `Sᵀ I^c S` with `S` the identity in
