@@ -208,9 +208,6 @@ impl<const N: usize> ModelBuilder<N> {
             m.coms[i] = m.inertias[i].com();
             m.inertias_com[i] = m.inertias[i].inertia_com();
         }
-        m.has_six_dof = m.joints[..m.nbodies]
-            .iter()
-            .any(|j| matches!(j, crate::joint::Joint::SixDof(_)));
         self.model
     }
 }

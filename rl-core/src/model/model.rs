@@ -60,8 +60,6 @@ pub struct Model<const N: usize> {
     pub(crate) gravity: DVec3,
     /// Mass rigidly attached to the world (does not move; reported, never simulated).
     pub(crate) base_mass: f64,
-    /// Whether a joint is six-DOF (a floating base): the CRBA picks its frame by it.
-    pub(crate) has_six_dof: bool,
 }
 
 impl<const N: usize> Default for Model<N> {
@@ -101,7 +99,6 @@ impl<const N: usize> Model<N> {
             ntools: 0,
             gravity: DVec3::new(0.0, 0.0, -9.80665),
             base_mass: 0.0,
-            has_six_dof: false,
         }
     }
 
