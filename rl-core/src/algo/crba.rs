@@ -34,11 +34,11 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
         data.composite[i] = model.inertias[i];
     }
     for i in (0..model.nbodies).rev() {
-        let ic = data.composite[i];
+        let ic = &data.composite[i];
         let sv = model.idx_v[i];
         let six_dof = matches!(model.joints[i], Joint::SixDof(_));
         if six_dof {
-            six_dof_block(&ic, sv, &mut data.mass_matrix);
+            six_dof_block(ic, sv, &mut data.mass_matrix);
         }
         let p = model.parents[i];
         for k in sv..sv + model.joints[i].nv() {
