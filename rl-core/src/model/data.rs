@@ -78,7 +78,11 @@ impl<const N: usize> Data<N> {
         }
     }
 
-    /// Pose of body `i` in the world frame, from the last forward-kinematics sweep.
+    /// Pose of body `i` in the world frame, from the last sweep that computes world poses:
+    /// [`crate::algo::forward_position`], [`crate::algo::forward_velocity`],
+    /// [`crate::algo::forward_acceleration`] and [`crate::algo::aba`] (every body),
+    /// [`crate::algo::jacobian`] (the tool's branch). RNEA, gravity and CRBA work in body
+    /// coordinates and leave it as it was.
     pub fn world_pose(&self, i: usize) -> &PlueckerTransform {
         &self.world_pose[i]
     }
