@@ -14,15 +14,9 @@ use rl_core::traj::{
     Trajectory, spline,
 };
 
-const TIMES: [f64; 6] = [0.0, 0.5, 1.2, 2.0, 2.4, 3.0];
-const POINTS: [[f64; 7]; 6] = [
-    [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
-    [0.5, -0.1, 0.0, 0.8, 0.1, 0.0, -0.6],
-    [1.0, 0.3, -0.4, 0.2, 0.0, 0.9, 0.2],
-    [0.2, 0.5, 0.1, -0.3, 0.6, 0.3, 0.0],
-    [-0.4, 0.0, 0.7, 0.0, 0.2, -0.2, 0.4],
-    [0.0, 0.2, 0.3, 0.1, -0.5, 0.1, 0.2],
-];
+#[path = "../tests/support/waypoints.rs"]
+mod waypoints;
+use waypoints::{POINTS, TIMES};
 
 /// Walks `t` through the trajectory at 1 kHz so every call evaluates a different time. The
 /// result goes to `black_box` by reference: it must exist in memory, but returning it by

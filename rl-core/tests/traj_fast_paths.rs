@@ -5,6 +5,8 @@
 
 mod traj_support;
 
+#[path = "support/waypoints.rs"]
+mod waypoints;
 use rl_core::traj::{JerkLimited, Limits, Piecewise, Polynomial, Trajectory, spline};
 use traj_support::Rng;
 
@@ -357,15 +359,7 @@ fn check_spline<const D: usize>(
 #[test]
 fn cubic_splines_match_the_textbook_system() {
     let mut rng = Rng(0x1234_5678_9abc_def1);
-    let times = [0.0, 0.5, 1.2, 2.0, 2.4, 3.0];
-    let points = [
-        [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
-        [0.5, -0.1, 0.0, 0.8, 0.1, 0.0, -0.6],
-        [1.0, 0.3, -0.4, 0.2, 0.0, 0.9, 0.2],
-        [0.2, 0.5, 0.1, -0.3, 0.6, 0.3, 0.0],
-        [-0.4, 0.0, 0.7, 0.0, 0.2, -0.2, 0.4],
-        [0.0, 0.2, 0.3, 0.1, -0.5, 0.1, 0.2],
-    ];
+    let (times, points) = (waypoints::TIMES, waypoints::POINTS);
     for n in 2..=6 {
         let natural: Piecewise<Polynomial<7, 4>, 8> =
             spline::natural_cubic(&times[..n], &points[..n]).unwrap();

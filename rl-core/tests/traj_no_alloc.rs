@@ -58,15 +58,9 @@ fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
     (ALLOCATIONS.with(Cell::get) - before, r)
 }
 
-const TIMES: [f64; 6] = [0.0, 0.5, 1.2, 2.0, 2.4, 3.0];
-const POINTS: [[f64; 7]; 6] = [
-    [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
-    [0.5, -0.1, 0.0, 0.8, 0.1, 0.0, -0.6],
-    [1.0, 0.3, -0.4, 0.2, 0.0, 0.9, 0.2],
-    [0.2, 0.5, 0.1, -0.3, 0.6, 0.3, 0.0],
-    [-0.4, 0.0, 0.7, 0.0, 0.2, -0.2, 0.4],
-    [0.0, 0.2, 0.3, 0.1, -0.5, 0.1, 0.2],
-];
+#[path = "support/waypoints.rs"]
+mod waypoints;
+use waypoints::{POINTS, TIMES};
 
 fn sample_all<const D: usize, T: Trajectory<D>>(t: &T) -> f64 {
     let mut acc = 0.0;
