@@ -323,6 +323,11 @@ impl Stats {
             self.restarts
         );
     }
+    /// Reports, then checks that at least `min_rate` of the tries were solved.
+    fn expect(&self, what: &str, min_rate: f64) {
+        self.report(what);
+        assert!(self.rate() >= min_rate, "{what}: {self:?}");
+    }
 }
 
 /// Solves `count` random reachable pose goals for `model`'s tool 0, starting each from
@@ -383,29 +388,25 @@ fn svd() -> IkOptions {
 #[test]
 fn puma_reaches_random_poses_with_dls() {
     let stats = reach_random_poses(&puma(), dls(), 100, 1);
-    stats.report("puma 6R, DLS λ=1e-3");
-    assert!(stats.rate() >= 0.95, "{stats:?}");
+    stats.expect("puma 6R, DLS λ=1e-3", 0.95);
 }
 
 #[test]
 fn puma_reaches_random_poses_with_the_pseudo_inverse() {
     let stats = reach_random_poses(&puma(), svd(), 100, 2);
-    stats.report("puma 6R, SVD σ₀=1e-3");
-    assert!(stats.rate() >= 0.95, "{stats:?}");
+    stats.expect("puma 6R, SVD σ₀=1e-3", 0.95);
 }
 
 #[test]
 fn iiwa_reaches_random_poses_with_dls() {
     let stats = reach_random_poses(&iiwa(), dls(), 100, 3);
-    stats.report("iiwa 7R, DLS λ=1e-3");
-    assert!(stats.rate() >= 0.95, "{stats:?}");
+    stats.expect("iiwa 7R, DLS λ=1e-3", 0.95);
 }
 
 #[test]
 fn iiwa_reaches_random_poses_with_the_pseudo_inverse() {
     let stats = reach_random_poses(&iiwa(), svd(), 100, 4);
-    stats.report("iiwa 7R, SVD σ₀=1e-3");
-    assert!(stats.rate() >= 0.95, "{stats:?}");
+    stats.expect("iiwa 7R, SVD σ₀=1e-3", 0.95);
 }
 
 /// RL's "dls" is undamped (`λ = 0`, the right pseudo-inverse through `J Jᵀ`); it still
@@ -417,8 +418,7 @@ fn undamped_dls_as_rl_has_it() {
         ..IkOptions::default()
     };
     let stats = reach_random_poses(&iiwa(), options, 30, 13);
-    stats.report("iiwa 7R, DLS λ=0 (RL's dls)");
-    assert!(stats.rate() >= 0.9, "{stats:?}");
+    stats.expect("iiwa 7R, DLS λ=0 (RL's dls)", 0.9);
 }
 
 /// The transpose method converges linearly, so it gets the easy case: position-only goals
@@ -453,8 +453,7 @@ fn planar_arm_reaches_random_positions_with_the_transpose() {
             stats.iterations += s.iterations;
         }
     }
-    stats.report("planar 3R position-only, transpose");
-    assert!(stats.rate() >= 0.9, "{stats:?}");
+    stats.expect("planar 3R position-only, transpose", 0.9);
 }
 
 /// All three methods on the same position-only goals of a planar 3R arm (redundant for a
@@ -510,8 +509,7 @@ fn puma_transpose_reaches_poses_to_a_looser_tolerance() {
         ..IkOptions::default()
     };
     let stats = reach_random_poses(&puma(), options, 10, 7);
-    stats.report("puma 6R pose to 1e-4, transpose");
-    assert!(stats.rate() >= 0.8, "{stats:?}");
+    stats.expect("puma 6R pose to 1e-4, transpose", 0.8);
 }
 
 // ---------------------------------------------------------------- trees and joint types
@@ -544,10 +542,10 @@ fn two_tools_on_a_branched_tree() {
                 stats.restarts += s.restarts;
             }
         }
-        stats.report(&format!(
-            "two arms on a torso (13 DOF, 2 pose goals), {name}"
-        ));
-        assert!(stats.rate() >= 0.9, "{name}: {stats:?}");
+        stats.expect(
+            &format!("two arms on a torso (13 DOF, 2 pose goals), {name}"),
+            0.9,
+        );
     }
 }
 
@@ -642,8 +640,7 @@ fn solutions_respect_tight_limits() {
         .unwrap();
     let model = b.build();
     let stats = reach_random_poses(&model, dls(), 40, 10);
-    stats.report("iiwa with ±60° limits, DLS");
-    assert!(stats.rate() >= 0.9, "{stats:?}");
+    stats.expect("iiwa with ±60° limits, DLS", 0.9);
 }
 
 fn model_name<const N: usize>(m: &Model<N>, i: usize) -> &str {
@@ -1212,11 +1209,10 @@ fn rl_example_models_reach_random_poses() {
                 }
             }
             let name = path.file_name().unwrap().to_string_lossy();
-            stats.report(&format!(
-                "{name} ({} DOF, {tools} tools), {method}",
-                model.dof()
-            ));
-            assert!(stats.rate() >= 0.9, "{name}, {method}: {stats:?}");
+            stats.expect(
+                &format!("{name} ({} DOF, {tools} tools), {method}", model.dof()),
+                0.9,
+            );
         }
     }
 }
