@@ -127,6 +127,15 @@ fn item(name: &'static str, status: Status, found: impl Into<String>, fix: Optio
     }
 }
 
+/// `Ok` when `ok`, else `Warn` with the remedy `fix`.
+fn ok_or_warn(name: &'static str, ok: bool, found: String, fix: &str) -> Item {
+    if ok {
+        item(name, Status::Ok, found, None)
+    } else {
+        item(name, Status::Warn, found, Some(fix))
+    }
+}
+
 /// Runs every check. Spawns one short-lived probe thread to try SCHED_FIFO.
 pub fn check() -> Report {
     Report {
@@ -167,20 +176,14 @@ fn kernel_preemption() -> Item {
         "{model} ({release}{mode}); /sys/kernel/realtime = {}",
         u8::from(realtime)
     );
-    if model == "PREEMPT_RT" {
-        item(name, Status::Ok, found, None)
-    } else {
-        item(
-            name,
-            Status::Warn,
-            found,
-            Some(
-                "boot a PREEMPT_RT kernel (CONFIG_PREEMPT_RT=y; Debian: linux-image-rt-amd64 / \
-                 -rt-arm64; Raspberry Pi: build the rpi kernel with PREEMPT_RT or use a \
-                 prebuilt RT image); without it worst-case latency is unbounded (milliseconds)",
-            ),
-        )
-    }
+    ok_or_warn(
+        name,
+        model == "PREEMPT_RT",
+        found,
+        "boot a PREEMPT_RT kernel (CONFIG_PREEMPT_RT=y; Debian: linux-image-rt-amd64 / \
+         -rt-arm64; Raspberry Pi: build the rpi kernel with PREEMPT_RT or use a \
+         prebuilt RT image); without it worst-case latency is unbounded (milliseconds)",
+    )
 }
 
 fn rt_throttling() -> Item {
@@ -225,20 +228,14 @@ fn cpu_governor() -> Item {
         );
     }
     let found = governors.join(" ");
-    if governors.iter().all(|g| g.ends_with("=performance")) {
-        item(name, Status::Ok, found, None)
-    } else {
-        item(
-            name,
-            Status::Warn,
-            found,
-            Some(
-                "frequency changes add latency: `cpupower frequency-set -g performance` or write \
-                 `performance` to /sys/devices/system/cpu/cpu*/cpufreq/scaling_governor \
-                 (Raspberry Pi: also force_turbo=1 in config.txt)",
-            ),
-        )
-    }
+    ok_or_warn(
+        name,
+        governors.iter().all(|g| g.ends_with("=performance")),
+        found,
+        "frequency changes add latency: `cpupower frequency-set -g performance` or write \
+         `performance` to /sys/devices/system/cpu/cpu*/cpufreq/scaling_governor \
+         (Raspberry Pi: also force_turbo=1 in config.txt)",
+    )
 }
 
 fn cmdline_value(cmdline: &str, key: &str) -> Option<String> {
@@ -261,21 +258,15 @@ fn isolated_cpus() -> Item {
         nohz.as_deref().unwrap_or("none"),
         rcu.as_deref().unwrap_or("none")
     );
-    if isolated.is_some() {
-        item(name, Status::Ok, found, None)
-    } else {
-        item(
-            name,
-            Status::Warn,
-            found,
-            Some(
-                "reserve a CPU for the loop: add `isolcpus=3 nohz_full=3 rcu_nocbs=3` to the \
-                 kernel command line (Raspberry Pi: /boot/firmware/cmdline.txt) and pin the \
-                 loop there (`rl jitter --cpu 3`, RtThreadBuilder::cpus([3])); move IRQs away \
-                 (/proc/irq/*/smp_affinity)",
-            ),
-        )
-    }
+    ok_or_warn(
+        name,
+        isolated.is_some(),
+        found,
+        "reserve a CPU for the loop: add `isolcpus=3 nohz_full=3 rcu_nocbs=3` to the \
+         kernel command line (Raspberry Pi: /boot/firmware/cmdline.txt) and pin the \
+         loop there (`rl jitter --cpu 3`, RtThreadBuilder::cpus([3])); move IRQs away \
+         (/proc/irq/*/smp_affinity)",
+    )
 }
 
 fn clock_source() -> Item {
@@ -286,19 +277,13 @@ fn clock_source() -> Item {
             let available = read_trim(format!("{dir}/available_clocksource")).unwrap_or_default();
             let found = format!("{c} (available: {available})");
             // TSC (x86) and the arch timer (ARM) are read without a trap; hpet/acpi_pm are slow.
-            if matches!(c.as_str(), "tsc" | "arch_sys_counter" | "kvm-clock") {
-                item(name, Status::Ok, found, None)
-            } else {
-                item(
-                    name,
-                    Status::Warn,
-                    found,
-                    Some(
-                        "a slow clock source makes every clock read costly; use tsc (x86) or \
-                          arch_sys_counter (ARM) via `clocksource=` on the kernel command line",
-                    ),
-                )
-            }
+            ok_or_warn(
+                name,
+                matches!(c.as_str(), "tsc" | "arch_sys_counter" | "kvm-clock"),
+                found,
+                "a slow clock source makes every clock read costly; use tsc (x86) or \
+                 arch_sys_counter (ARM) via `clocksource=` on the kernel command line",
+            )
         }
         None => item(name, Status::Info, "not readable", None),
     }
@@ -330,21 +315,15 @@ fn idle_states() -> Item {
         return item(name, Status::Info, "no cpuidle driver", None);
     };
     let found = format!("driver {driver}; states: {}", states.join(", "));
-    if deepest_us <= 10 {
-        item(name, Status::Ok, found, None)
-    } else {
-        item(
-            name,
-            Status::Warn,
-            found,
-            Some(
-                "leaving a deep idle state adds up to its exit latency to a wake-up: hold \
-                 /dev/cpu_dma_latency at 0 while the loop runs (`rl jitter` does; in code \
-                 rl_rt::cpu_latency::CpuLatencyHint::hold(0)) or limit C-states on the kernel \
-                 command line (processor.max_cstate=1, intel_idle.max_cstate=0)",
-            ),
-        )
-    }
+    ok_or_warn(
+        name,
+        deepest_us <= 10,
+        found,
+        "leaving a deep idle state adds up to its exit latency to a wake-up: hold \
+         /dev/cpu_dma_latency at 0 while the loop runs (`rl jitter` does; in code \
+         rl_rt::cpu_latency::CpuLatencyHint::hold(0)) or limit C-states on the kernel \
+         command line (processor.max_cstate=1, intel_idle.max_cstate=0)",
+    )
 }
 
 /// Share of CPU time stolen by the hypervisor since boot, in percent, from /proc/stat.
@@ -401,21 +380,15 @@ fn memlock() -> Item {
                 l.hard.map_or("unlimited".into(), |b| format!("{b} bytes")),
                 if cap { "yes" } else { "no" }
             );
-            if cap || l.soft.is_none() {
-                item(name, Status::Ok, found, None)
-            } else {
-                item(
-                    name,
-                    Status::Warn,
-                    found,
-                    Some(
-                        "mlockall(MCL_CURRENT|MCL_FUTURE) will fail once the process outgrows \
-                         the limit: LimitMEMLOCK=infinity in a systemd unit, `ulimit -l \
-                         unlimited`, or `@realtime - memlock unlimited` in \
-                         /etc/security/limits.conf",
-                    ),
-                )
-            }
+            ok_or_warn(
+                name,
+                cap || l.soft.is_none(),
+                found,
+                "mlockall(MCL_CURRENT|MCL_FUTURE) will fail once the process outgrows \
+                 the limit: LimitMEMLOCK=infinity in a systemd unit, `ulimit -l \
+                 unlimited`, or `@realtime - memlock unlimited` in \
+                 /etc/security/limits.conf",
+            )
         }
         Err(e) => item(name, Status::Info, format!("getrlimit failed: {e}"), None),
     }
@@ -432,20 +405,14 @@ fn rtprio() -> Item {
                 l.hard.map_or("unlimited".into(), |p| p.to_string()),
                 if cap { "yes" } else { "no" }
             );
-            if cap || l.soft.is_none_or(|p| p >= 90) {
-                item(name, Status::Ok, found, None)
-            } else {
-                item(
-                    name,
-                    Status::Warn,
-                    found,
-                    Some(
-                        "real-time priorities above the limit are refused: LimitRTPRIO=99 in a \
-                         systemd unit, `@realtime - rtprio 99` in /etc/security/limits.conf, or \
-                         grant CAP_SYS_NICE (setcap cap_sys_nice+ep)",
-                    ),
-                )
-            }
+            ok_or_warn(
+                name,
+                cap || l.soft.is_none_or(|p| p >= 90),
+                found,
+                "real-time priorities above the limit are refused: LimitRTPRIO=99 in a \
+                 systemd unit, `@realtime - rtprio 99` in /etc/security/limits.conf, or \
+                 grant CAP_SYS_NICE (setcap cap_sys_nice+ep)",
+            )
         }
         Err(e) => item(name, Status::Info, format!("getrlimit failed: {e}"), None),
     }
