@@ -331,6 +331,16 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
     let (parent, child_frame) = (find("a")?, find("b")?);
     let mut lim = [JointLimits::UNLIMITED; MAX_JOINT_NV];
     let id = PlueckerTransform::IDENTITY;
+    // A moving joint sits at the frame it is attached to; `post` is its offset.
+    let moving = |joint, post, limits| {
+        let kind = EdgeKind::Moving {
+            joint,
+            post,
+            child_offset: id,
+            limits,
+        };
+        (kind, id)
+    };
     let (kind, origin) = match t {
         "fixed" => {
             let rot = match child(n, "rotation") {
@@ -351,30 +361,14 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
             lim[0] = limits(n, 1, DEG)?;
             let post = j.transform(indexed(n, "offset", 1, 0.0)? * DEG);
             let joint = Joint::Revolute(j);
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, post, lim)
         }
         "prismatic" => {
             let j = Prismatic::new(axis(n, 1, DVec3::Z)?);
             lim[0] = limits(n, 1, 1.0)?;
             let post = j.transform(indexed(n, "offset", 1, 0.0)?);
             let joint = Joint::Prismatic(j);
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, post, lim)
         }
         "helical" => {
             // RL reads helical limits without unit conversion; its rotation ignores the offset
@@ -386,15 +380,7 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
             let post =
                 PlueckerTransform::from_translation(a * pitch * indexed(n, "offset", 1, 0.0)?);
             let joint = Joint::Helical(Helical::new(a, pitch));
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, post, lim)
         }
         "cylindrical" => {
             // RL reads cylindrical limits and offsets without unit conversion (rad, m).
@@ -405,28 +391,12 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
             lim[1] = limits(n, 2, 1.0)?;
             let post = j.transform(indexed(n, "offset", 1, 0.0)?, indexed(n, "offset", 2, 0.0)?);
             let joint = Joint::Cylindrical(j);
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, post, lim)
         }
         "spherical" => {
             no_offset(n, "spherical")?;
             let joint = Joint::Spherical(Spherical);
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post: id,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, id, lim)
         }
         "sixDof" => {
             // max[k]/min[k], k = 1..3: the translation, m; speed[k], k = 1..6: [linear; angular].
@@ -443,15 +413,7 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
                 };
             }
             let joint = Joint::SixDof(SixDof);
-            (
-                EdgeKind::Moving {
-                    joint,
-                    post: id,
-                    child_offset: id,
-                    limits: lim,
-                },
-                id,
-            )
+            moving(joint, id, lim)
         }
         _ => {
             return Err(err(
