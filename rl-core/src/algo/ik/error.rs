@@ -70,16 +70,17 @@ pub enum IkError {
 impl fmt::Display for IkError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            IkError::Dimension {
+            // The same wording as the dynamics' dimension error.
+            &IkError::Dimension {
                 argument,
                 expected,
                 got,
-            } => {
-                write!(
-                    f,
-                    "`{argument}` has {got} elements, the model needs {expected}"
-                )
+            } => crate::Error::Dimension {
+                argument,
+                expected,
+                got,
             }
+            .fmt(f),
             IkError::NoGoals => f.write_str("inverse kinematics needs at least one goal"),
             IkError::TooManyGoals { got } => {
                 write!(
