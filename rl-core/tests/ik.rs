@@ -6,9 +6,6 @@
 //! Targets are forward kinematics of random configurations (so they are reachable) and every
 //! reported success is checked again here with an independent pose error.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
 use glam::{DMat3, DVec3};
 use rl_core::algo::ik::{
     IkError, IkGoal, IkMethod, IkOptions, IkSolution, IkSolver, MAX_GOALS, SplitMix64,
@@ -18,41 +15,12 @@ use rl_core::joint::{Joint, Revolute, SixDof, Spherical};
 use rl_core::model::{JointLimits, ROOT};
 use rl_core::spatial::{PlueckerTransform, RigidBodyInertia};
 use rl_core::{Data, Model, ModelBuilder};
+use rl_testkit::{CountingAllocator, allocations};
 
 // ---------------------------------------------------------------- counting allocator
 
-/// Counts allocations made by the current thread only, so tests running in parallel in this
-/// binary do not disturb each other's counts.
-struct CountingAlloc;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts.
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: CountingAlloc = CountingAlloc;
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 // ---------------------------------------------------------------- models
 
@@ -1111,9 +1079,8 @@ fn bad_input_is_refused_with_a_typed_error() {
 #[test]
 fn solving_allocates_nothing() {
     // The counter sees this thread's allocations (a check of the instrument itself).
-    let before = allocations();
-    let probe = std::hint::black_box(vec![1u8; 16]);
-    assert!(allocations() > before && probe.len() == 16);
+    let (n, probe) = allocations(|| std::hint::black_box(vec![1u8; 16]));
+    assert!(n > 0 && probe.len() == 16);
     let model = two_arms();
     let mut data = Data::<16>::new();
     let mut rng = SplitMix64::new(12);
@@ -1140,17 +1107,18 @@ fn solving_allocates_nothing() {
     let mut solvers: Vec<IkSolver<16>> = methods.iter().map(|o| IkSolver::new(*o)).collect();
     let mut results: Vec<Result<IkSolution, IkError>> = Vec::with_capacity(8);
     let mut clock = || 0.0;
-    let before = allocations();
-    for solver in solvers.iter_mut() {
-        results.push(solver.solve(&model, &mut data, &goals, &start, &mut q));
-    }
-    // The failure path with restarts and the timed variant.
-    solvers[0].options.max_iterations = 500;
-    results.push(solvers[0].solve(&model, &mut data, &unreachable, &start, &mut q));
-    results
-        .push(solvers[1].solve_within(&model, &mut data, &goals, &start, &mut q, &mut clock, 1.0));
-    let after = allocations();
-    assert_eq!(after - before, 0, "IK allocated {} times", after - before);
+    let (n, ()) = allocations(|| {
+        for solver in solvers.iter_mut() {
+            results.push(solver.solve(&model, &mut data, &goals, &start, &mut q));
+        }
+        // The failure path with restarts and the timed variant.
+        solvers[0].options.max_iterations = 500;
+        results.push(solvers[0].solve(&model, &mut data, &unreachable, &start, &mut q));
+        results.push(
+            solvers[1].solve_within(&model, &mut data, &goals, &start, &mut q, &mut clock, 1.0),
+        );
+    });
+    assert_eq!(n, 0, "IK allocated {n} times");
     assert!(results[0].is_ok() && results[1].is_ok(), "{results:?}");
     assert!(matches!(results[3], Err(IkError::NotConverged { .. })));
     assert!(results[4].is_ok());

@@ -1,54 +1,16 @@
 //! A counting global allocator proves that the algorithms allocate nothing: every call in the
-//! measured section below runs with the counter armed, and the count must stay zero.
+//! measured section below is counted, and the count must stay zero.
 
 mod support;
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 use rl_core::Data;
 use rl_core::algo;
 use rl_core::spatial::ForceVector;
+use rl_testkit::{CountingAllocator, allocations};
 use support::{Rng, every_joint_type, random_state};
 
-struct Counting;
-
-thread_local! {
-    // Per thread, so the test harness's other threads are not counted.
-    static ARMED: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count() {
-    if ARMED.with(|a| a.get()) {
-        ALLOCATIONS.with(|n| n.set(n.get() + 1));
-    }
-}
-
-fn arm(on: bool) {
-    ARMED.with(|a| a.set(on));
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|n| n.get())
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn dynamics_and_kinematics_allocate_nothing() {
@@ -60,46 +22,44 @@ fn dynamics_and_kinematics_allocate_nothing() {
     let mut jac = Box::new([[[0.0; 32]; 6]; 4]);
     let mut sink = 0.0;
 
-    arm(true);
-    for (q, qd, qdd) in &states {
-        algo::forward_position(&model, &mut data, q).unwrap();
-        sink += algo::tool_pose(&model, &data, 0).unwrap().translation.x;
-        algo::forward_velocity(&model, &mut data, q, qd).unwrap();
-        algo::forward_acceleration(&model, &mut data, q, qd, qdd).unwrap();
-        algo::jacobian(&model, &mut data, q, 0, &mut jac[0]).unwrap();
-        algo::jacobians(&model, &mut data, q, &mut jac[..]).unwrap();
-        sink += algo::jacobian_derivative_times_qd(&model, &mut data, q, qd, 1).unwrap()[0];
-        let tau: [f64; 32] = {
-            let t = algo::rnea(&model, &mut data, q, qd, qdd).unwrap();
-            let mut a = [0.0; 32];
-            a[..t.len()].copy_from_slice(t);
-            a
-        };
-        sink += algo::rnea_with_external_forces(&model, &mut data, q, qd, qdd, &fext).unwrap()[0];
-        sink += algo::gravity(&model, &mut data, q).unwrap()[0];
-        sink += algo::coriolis(&model, &mut data, q, qd).unwrap()[0];
-        sink += algo::nonlinear_effects(&model, &mut data, q, qd).unwrap()[0];
-        algo::crba(&model, &mut data, q).unwrap();
-        algo::factor_mass_matrix(&model, &mut data).unwrap();
-        let mut b = tau;
-        algo::solve_mass_matrix(&model, &data, &mut b[..model.dof()]).unwrap();
-        sink += algo::aba(&model, &mut data, q, qd, &tau[..model.dof()]).unwrap()[0];
-        sink +=
-            algo::operational_inverse_inertia(&model, &mut data, q, 0, &mut jac[0]).unwrap()[0][0];
-    }
-    arm(false);
+    let (n, ()) = allocations(|| {
+        for (q, qd, qdd) in &states {
+            algo::forward_position(&model, &mut data, q).unwrap();
+            sink += algo::tool_pose(&model, &data, 0).unwrap().translation.x;
+            algo::forward_velocity(&model, &mut data, q, qd).unwrap();
+            algo::forward_acceleration(&model, &mut data, q, qd, qdd).unwrap();
+            algo::jacobian(&model, &mut data, q, 0, &mut jac[0]).unwrap();
+            algo::jacobians(&model, &mut data, q, &mut jac[..]).unwrap();
+            sink += algo::jacobian_derivative_times_qd(&model, &mut data, q, qd, 1).unwrap()[0];
+            let tau: [f64; 32] = {
+                let t = algo::rnea(&model, &mut data, q, qd, qdd).unwrap();
+                let mut a = [0.0; 32];
+                a[..t.len()].copy_from_slice(t);
+                a
+            };
+            sink +=
+                algo::rnea_with_external_forces(&model, &mut data, q, qd, qdd, &fext).unwrap()[0];
+            sink += algo::gravity(&model, &mut data, q).unwrap()[0];
+            sink += algo::coriolis(&model, &mut data, q, qd).unwrap()[0];
+            sink += algo::nonlinear_effects(&model, &mut data, q, qd).unwrap()[0];
+            algo::crba(&model, &mut data, q).unwrap();
+            algo::factor_mass_matrix(&model, &mut data).unwrap();
+            let mut b = tau;
+            algo::solve_mass_matrix(&model, &data, &mut b[..model.dof()]).unwrap();
+            sink += algo::aba(&model, &mut data, q, qd, &tau[..model.dof()]).unwrap()[0];
+            sink += algo::operational_inverse_inertia(&model, &mut data, q, 0, &mut jac[0])
+                .unwrap()[0][0];
+        }
+    });
 
     assert!(sink.is_finite());
-    assert_eq!(allocations(), 0, "the algorithms allocated");
+    assert_eq!(n, 0, "the algorithms allocated");
 }
 
 #[test]
 fn the_counter_counts() {
-    // The allocator above must see allocations, or the test above proves nothing.
-    let before = allocations();
-    arm(true);
-    let v: Vec<u8> = Vec::with_capacity(16);
-    arm(false);
+    // The allocator must see allocations, or the test above proves nothing.
+    let (n, v) = allocations(|| Vec::<u8>::with_capacity(16));
     drop(v);
-    assert!(allocations() > before);
+    assert!(n > 0);
 }

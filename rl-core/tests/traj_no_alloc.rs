@@ -1,12 +1,8 @@
 //! A counting global allocator proves that constructing and evaluating every trajectory type
-//! allocates nothing. Flag and counter are thread-local, so tests running in parallel do not
-//! see each other's allocations.
+//! allocates nothing. The counter is per thread (rl-testkit), so tests running in parallel do
+//! not see each other's allocations.
 
-use std::{
-    alloc::{GlobalAlloc, Layout, System},
-    cell::Cell,
-    hint::black_box,
-};
+use std::hint::black_box;
 
 use glam::{DQuat, DVec3};
 use rl_core::traj::{
@@ -14,49 +10,10 @@ use rl_core::traj::{
     Limits, Piecewise, Polynomial, PoseTrajectory, RotationTrajectory, SlerpTrajectory, Trajectory,
     spline,
 };
-
-struct Counting;
-
-thread_local! {
-    static MEASURING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn record() {
-    if MEASURING.with(Cell::get) {
-        ALLOCATIONS.with(|n| n.set(n.get() + 1));
-    }
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        record();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        record();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use rl_testkit::{CountingAllocator, allocations as count};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn count<R>(f: impl FnOnce() -> R) -> (usize, R) {
-    let before = ALLOCATIONS.with(Cell::get);
-    MEASURING.with(|m| m.set(true));
-    let r = f();
-    MEASURING.with(|m| m.set(false));
-    (ALLOCATIONS.with(Cell::get) - before, r)
-}
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[path = "support/waypoints.rs"]
 mod waypoints;
@@ -78,7 +35,7 @@ fn construction_and_evaluation_allocate_nothing() {
     // Warm up lazily initialised runtime state (thread-locals) outside the measurement.
     black_box(Polynomial::quintic_at_rest(POINTS[0], POINTS[1], &limits).unwrap());
 
-    let mut report: Vec<(&str, usize)> = Vec::with_capacity(32);
+    let mut report: Vec<(&str, u64)> = Vec::with_capacity(32);
     let mut total = 0.0;
     let mut step = |name: &'static str, f: &mut dyn FnMut() -> f64| {
         let (n, v) = count(f);

@@ -2,50 +2,20 @@
 //! allocator (per thread, so the test harness's own threads do not interfere) over a
 //! steady-state 1 kHz loop.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::ops::ControlFlow;
 use std::time::Duration;
 
 use rl_rt::exchange::{mailbox, queue};
 use rl_rt::{CyclicLoop, Histogram, OverrunPolicy};
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-// SAFETY: delegates every call unchanged to the system allocator; only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use rl_testkit::{CountingAllocator, allocations};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn the_counter_sees_allocations() {
-    let before = allocations();
-    let v = std::hint::black_box(vec![1u8; 64]);
-    assert!(allocations() > before, "a Vec must be counted");
+    let (n, v) = allocations(|| std::hint::black_box(vec![1u8; 64]));
+    assert!(n > 0, "a Vec must be counted");
     drop(v);
 }
 
@@ -75,9 +45,8 @@ fn steady_state_loop_with_stats_and_exchange_allocates_nothing() {
     stats.clear();
 
     let mut checksum = 0.0;
-    let before = allocations();
-    let end = looped
-        .run_into(&mut stats, |c| {
+    let (allocated, end) = allocations(|| {
+        looped.run_into(&mut stats, |c| {
             if let Some(cmd) = cmd_rx.try_recv() {
                 checksum += cmd[0];
             }
@@ -94,8 +63,8 @@ fn steady_state_loop_with_stats_and_exchange_allocates_nothing() {
             }
             ControlFlow::Continue(())
         })
-        .expect("loop runs");
-    let allocated = allocations() - before;
+    });
+    let end = end.expect("loop runs");
     assert_eq!(
         allocated, 0,
         "the steady-state loop allocated {allocated} times"
