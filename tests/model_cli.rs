@@ -17,13 +17,24 @@ fn rl(args: &[&str]) -> std::process::Output {
         .expect("run rl")
 }
 
+/// Runs `rl` with `args`, which must succeed, and parses its JSON output.
+fn rl_json(args: &[&str]) -> Value {
+    let out = rl(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
 fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * b.abs().max(1.0)
 }
 
 #[test]
 fn eval_prints_rls_puma_values() {
-    let out = rl(&[
+    let v = rl_json(&[
         "model",
         "eval",
         PUMA,
@@ -36,12 +47,6 @@ fn eval_prints_rls_puma_values() {
         "--gravity",
         "0,0,-9.80665",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["dof"], 6);
     assert_eq!(v["nq"], 6);
     let f = |x: &Value| x.as_f64().unwrap();
@@ -84,13 +89,7 @@ fn wrong_lengths_and_non_numbers_name_the_argument() {
 
 #[test]
 fn info_lists_joints_and_tools() {
-    let out = rl(&["model", "info", PUMA, "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = rl_json(&["model", "info", PUMA, "--json"]);
     assert_eq!(v["dof"], 6);
     assert_eq!(v["joints"].as_array().unwrap().len(), 6);
     assert_eq!(v["joints"][0]["type"], "revolute");
@@ -100,15 +99,9 @@ fn info_lists_joints_and_tools() {
 
 #[test]
 fn bench_reports_every_algorithm() {
-    let out = rl(&[
+    let v = rl_json(&[
         "model", "bench", PUMA, "--json", "--states", "4", "--rounds", "3",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in [
         "fk_ns",
         "jacobian_ns",
