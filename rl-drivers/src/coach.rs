@@ -14,11 +14,12 @@ use std::time::Instant;
 
 use crate::capability::{
     JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
-    JointVelocityActuator, Pose,
+    JointTorqueFeedForward, JointVelocityActuator, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, ProtocolError, State};
+use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
 use crate::proto::coach::{CoachError, LineBuffer, MAX_VALUES, Message, Values};
 use crate::transport::TcpLink;
+use rl_core::rotation::euler;
 
 /// The port RL's visualisers listen on.
 pub const DEFAULT_PORT: u16 = 11235;
@@ -170,10 +171,7 @@ impl Coach {
     }
 
     fn bad_line(e: CoachError) -> Error {
-        Error::Protocol {
-            operation: Operation::Step,
-            error: ProtocolError::Coach(e),
-        }
+        Error::protocol(Operation::Step, "Coach line", &e)
     }
 
     /// Takes buffered lines; returns whether a joint reply for our model was among them.
@@ -192,21 +190,21 @@ impl Coach {
                         got = true;
                     } else {
                         self.counters.bad_lines += 1;
-                        failure = Some(Error::Protocol {
-                            operation: Operation::Step,
-                            error: ProtocolError::Unexpected(
-                                "reply has another number of joints than dof",
-                            ),
-                        });
+                        failure = Some(Error::protocol(
+                            Operation::Step,
+                            "Coach line",
+                            &"reply has another number of joints than dof",
+                        ));
                     }
                 }
                 Ok(Message::Request { model }) if model == self.config.model => {
                     // A server that does not know the model answers `6 <i>` without values.
                     self.counters.bad_lines += 1;
-                    failure = Some(Error::Protocol {
-                        operation: Operation::Step,
-                        error: ProtocolError::Unexpected("server does not know the model"),
-                    });
+                    failure = Some(Error::protocol(
+                        Operation::Step,
+                        "Coach line",
+                        &"the server does not know the model",
+                    ));
                 }
                 Ok(_) => self.counters.other_lines += 1,
                 Err(e) => {
@@ -294,55 +292,60 @@ impl Coach {
     }
 }
 
+/// `x y z a b c` of a pose: metres and the `Z-Y'-X''` angles.
 fn flat(p: &Pose) -> [f64; 6] {
-    let [x, y, z] = p.position_m;
-    let [a, b, c] = p.abc_rad;
+    let [x, y, z] = p.translation.to_array();
+    let [a, b, c] = euler::to_zyx(&p.rotation);
     [x, y, z, a, b, c]
+}
+
+fn lifecycle(coach: &mut Coach) -> &mut Lifecycle {
+    &mut coach.lifecycle
 }
 
 impl Device for Coach {
     type Error = Error;
 
     fn open(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Open;
-        self.lifecycle.check(OP)?;
-        let link =
-            TcpLink::connect(self.config.server, self.config.connect_timeout).map_err(|e| {
+        Lifecycle::transition(self, Operation::Open, lifecycle, |coach| {
+            const OP: Operation = Operation::Open;
+            let timeout = coach.config.connect_timeout;
+            let link = TcpLink::connect(coach.config.server, timeout).map_err(|e| {
                 if e.kind() == std::io::ErrorKind::TimedOut {
                     Error::Timeout {
                         operation: OP,
-                        waited: self.config.connect_timeout,
+                        waited: timeout,
                     }
                 } else {
                     Error::io(OP, &e)
                 }
             })?;
-        self.link = Some(link);
-        self.lines.clear();
-        self.lifecycle.complete(OP);
-        Ok(())
+            coach.link = Some(link);
+            coach.lines.clear();
+            Ok(())
+        })
     }
 
     fn start(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Start)?;
-        self.out_len = 0;
-        self.lifecycle.complete(Operation::Start);
-        Ok(())
+        Lifecycle::transition(self, Operation::Start, lifecycle, |coach| {
+            coach.out_len = 0;
+            Ok(())
+        })
     }
 
     fn stop(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Stop)?;
-        self.out_len = 0;
-        self.lifecycle.complete(Operation::Stop);
-        Ok(())
+        Lifecycle::transition(self, Operation::Stop, lifecycle, |coach| {
+            coach.out_len = 0;
+            Ok(())
+        })
     }
 
     fn close(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Close)?;
-        self.link = None;
-        self.have_joints = false;
-        self.lifecycle.complete(Operation::Close);
-        Ok(())
+        Lifecycle::transition(self, Operation::Close, lifecycle, |coach| {
+            coach.link = None;
+            coach.have_joints = false;
+            Ok(())
+        })
     }
 
     fn state(&self) -> State {
@@ -352,13 +355,16 @@ impl Device for Coach {
     fn fault(&self) -> Option<Error> {
         self.lifecycle.fault()
     }
+
+    fn stop_description(&self) -> &'static str {
+        "nothing to switch off: a visualiser"
+    }
 }
 
 impl CyclicDevice for Coach {
     /// Sends the buffered lines (and `6 <i>`) and waits at most `reply_timeout` for the reply.
     fn step(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Step)?;
-        self.exchange()
+        Lifecycle::step(self, lifecycle, Self::exchange)
     }
 
     fn update_period(&self) -> Duration {
@@ -366,9 +372,35 @@ impl CyclicDevice for Coach {
     }
 }
 
+impl LinkStatisticsSensor for Coach {
+    fn link_statistics(&self) -> LinkStatistics {
+        let c = self.counters;
+        LinkStatistics {
+            sent: c.sent,
+            received: c.replies,
+            lost: c.timeouts,
+            late: c.late,
+            rejected: c.other_lines,
+            corrupt: c.bad_lines,
+            consecutive_failures: self.lifecycle.consecutive_failures(),
+        }
+    }
+}
+
+impl JointTorqueFeedForward for Coach {
+    /// Shows the feed-forward torques in the visualiser (`5 <i> τ…`).
+    fn set_joint_torque_feed_forward(&mut self, tau: &[f64]) -> Result<(), Error> {
+        self.set_joint_torque(tau)
+    }
+}
+
 impl JointDevice for Coach {
     fn dof(&self) -> usize {
         self.config.dof
+    }
+
+    fn torque_feed_forward(&mut self) -> Option<&mut dyn JointTorqueFeedForward<Error = Error>> {
+        Some(self)
     }
 }
 
@@ -407,10 +439,11 @@ impl JointPositionSensor for Coach {
         self.lifecycle.check(Operation::Get)?;
         Error::check_len("joint vector length", self.config.dof, q.len())?;
         if !self.have_joints {
-            return Err(Error::Protocol {
-                operation: Operation::Get,
-                error: ProtocolError::Unexpected("no joint reply received yet"),
-            });
+            return Err(Error::protocol(
+                Operation::Get,
+                "Coach line",
+                &"no joint reply received yet",
+            ));
         }
         q.copy_from_slice(&self.joints[..self.config.dof]);
         Ok(())

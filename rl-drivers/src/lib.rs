@@ -54,7 +54,8 @@ pub use capability::*;
 #[cfg(feature = "std")]
 pub use coach::Coach;
 pub use device::{
-    CyclicDevice, Device, DeviceError, Error, ErrorKind, Lifecycle, Operation, ProtocolError, State,
+    CyclicDevice, Description, Device, DeviceError, Error, ErrorKind, Lifecycle, Operation,
+    ProtocolError, State,
 };
 #[cfg(feature = "std")]
 pub use mitsubishi_h7::MitsubishiH7;

@@ -27,15 +27,17 @@ use std::time::Instant;
 
 use crate::capability::{
     CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice,
-    JointPositionActuator, JointPositionSensor, Pose,
+    JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, ProtocolError, State};
+use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
 };
 use crate::proto::r3::{self, DState, EmdatChunks, R3Error, Reply, Request};
 use crate::transport::{TcpLink, UdpLink};
+use glam::DVec3;
+use rl_core::rotation::euler;
 
 /// The controller's cycle as the device's update period.
 pub const UPDATE_PERIOD: Duration = Duration::from_micros(CYCLE_US);
@@ -180,6 +182,8 @@ pub struct MitsubishiH7 {
     reply: Option<Packet>,
     c_count: u32,
     counters: H7Counters,
+    /// Foreign datagrams counted by sockets closed since (the counts survive `close`).
+    foreign_before: u64,
     tx: [u8; PACKET_LEN],
     rx: [u8; 512],
     r3_tx: [u8; 512],
@@ -198,13 +202,14 @@ impl MitsubishiH7 {
         }
         Ok(Self {
             config,
-            lifecycle: Lifecycle::new(),
+            lifecycle: Lifecycle::with_failure_limit(config.max_consecutive_failures),
             udp: None,
             r3: None,
             request: Packet::default(),
             reply: None,
             c_count: 0,
             counters: H7Counters::default(),
+            foreign_before: 0,
             tx: [0; PACKET_LEN],
             rx: [0; 512],
             r3_tx: [0; 512],
@@ -220,9 +225,8 @@ impl MitsubishiH7 {
     /// Counters of the real-time exchange.
     pub fn counters(&self) -> H7Counters {
         let mut c = self.counters;
-        if let Some(udp) = &self.udp {
-            c.foreign = udp.counters().foreign;
-        }
+        c.foreign = self.foreign_before + self.udp.as_ref().map_or(0, |u| u.counters().foreign);
+        c.consecutive_failures = self.lifecycle.consecutive_failures();
         c
     }
 
@@ -308,10 +312,9 @@ impl MitsubishiH7 {
     }
 
     fn last_reply(&self) -> Result<&Packet, Error> {
-        self.reply.as_ref().ok_or(Error::Protocol {
-            operation: Operation::Get,
-            error: ProtocolError::Unexpected("no reply received yet"),
-        })
+        self.reply
+            .as_ref()
+            .ok_or_else(|| Error::protocol(Operation::Get, "H7 packet", &"no reply received yet"))
     }
 
     fn find_shape(&self, shape: DataShape, missing: &'static str) -> Result<DataView, Error> {
@@ -322,10 +325,7 @@ impl MitsubishiH7 {
             .iter()
             .find(|(t, _)| t.shape() == shape)
             .map(|(t, d)| d.view(*t))
-            .ok_or(Error::Protocol {
-                operation: Operation::Get,
-                error: ProtocolError::Unexpected(missing),
-            })
+            .ok_or_else(|| Error::protocol(Operation::Get, "H7 packet", &missing))
     }
 
     fn read_i32s(
@@ -340,10 +340,7 @@ impl MitsubishiH7 {
                 out.copy_from_slice(&v[..self.config.dof]);
                 Ok(())
             }
-            _ => Err(Error::Protocol {
-                operation: Operation::Get,
-                error: ProtocolError::Unexpected(missing),
-            }),
+            _ => Err(Error::protocol(Operation::Get, "H7 packet", &missing)),
         }
     }
 
@@ -363,10 +360,7 @@ impl MitsubishiH7 {
         };
         let n = request
             .encode(&mut self.r3_tx)
-            .map_err(|e| Error::Protocol {
-                operation,
-                error: ProtocolError::R3(e),
-            })?;
+            .map_err(|e| Error::protocol(operation, "R3 request", &e))?;
         let timeout = self.config.r3_timeout;
         let deadline = Instant::now() + timeout;
         let link = self.r3.as_mut().ok_or(Error::State {
@@ -392,13 +386,15 @@ impl MitsubishiH7 {
                 &std::io::ErrorKind::ConnectionAborted.into(),
             ));
         }
-        let r3_err = |error| Error::Protocol {
-            operation,
-            error: ProtocolError::R3(error),
-        };
-        match Reply::parse(&self.r3_rx[..got]).map_err(r3_err)? {
+        match Reply::parse(&self.r3_rx[..got])
+            .map_err(|e| Error::protocol(operation, "R3 reply", &e))?
+        {
             Reply::Ok(payload) => Ok(payload),
-            Reply::Error(code) => Err(r3_err(R3Error::Controller { code })),
+            Reply::Error(code) => Err(Error::device(
+                operation,
+                "R3 reply",
+                &R3Error::Controller { code },
+            )),
         }
     }
 
@@ -408,10 +404,7 @@ impl MitsubishiH7 {
 
     fn dstate(&mut self, operation: Operation) -> Result<DState, Error> {
         let payload = self.r3_exchange(operation, 1, "DSTATE")?;
-        DState::parse(payload).map_err(|e| Error::Protocol {
-            operation,
-            error: ProtocolError::R3(e),
-        })
+        DState::parse(payload).map_err(|e| Error::protocol(operation, "R3 DSTATE", &e))
     }
 
     /// Polls DSTATE until the servo is `on` (or off), bounded by `servo_timeout`.
@@ -450,10 +443,7 @@ impl MitsubishiH7 {
         };
         let mut program = [0u8; 256];
         let n = r3::write_program(&mut program, client, self.config.mode, self.config.filter)
-            .map_err(|e| Error::Protocol {
-                operation: OP,
-                error: ProtocolError::R3(e),
-            })?;
+            .map_err(|e| Error::protocol(OP, "R3 program", &e))?;
         let program = core::str::from_utf8(&program[..n])
             .unwrap_or_default()
             .to_owned();
@@ -462,10 +452,7 @@ impl MitsubishiH7 {
         self.r3_command(OP, 1, &format!("LOAD={}", r3::PROGRAM_NAME))?;
         self.r3_command(OP, 9, "ECLR")?;
         for chunk in EmdatChunks::new(&program) {
-            let chunk = chunk.map_err(|e| Error::Protocol {
-                operation: OP,
-                error: ProtocolError::R3(e),
-            })?;
+            let chunk = chunk.map_err(|e| Error::protocol(OP, "R3 program", &e))?;
             self.r3_command(OP, 9, &format!("EMDAT{chunk}"))?;
         }
         self.r3_command(OP, 1, "SAVE")?;
@@ -497,15 +484,6 @@ impl MitsubishiH7 {
             self.wait_servo(OP, false)?;
         }
         Ok(())
-    }
-
-    /// Records a failed step; faults the device after too many in a row.
-    fn step_failed(&mut self, e: Error) -> Error {
-        self.counters.consecutive_failures += 1;
-        if self.counters.consecutive_failures >= self.config.max_consecutive_failures {
-            self.lifecycle.fail(e);
-        }
-        e
     }
 
     fn exchange(&mut self) -> Result<(), Error> {
@@ -552,19 +530,15 @@ impl MitsubishiH7 {
                 waited: timeout,
             });
         };
-        let protocol = |error| Error::Protocol {
-            operation: OP,
-            error,
-        };
         let reply = match Packet::decode(&self.rx[..n]) {
             Ok(p) => p,
             Err(e @ DecodeError::Length { .. }) => {
                 self.counters.wrong_length += 1;
-                return Err(protocol(ProtocolError::H7(e)));
+                return Err(Error::protocol(OP, "H7 packet", &e));
             }
             Err(e) => {
                 self.counters.corrupt += 1;
-                return Err(protocol(ProtocolError::H7(e)));
+                return Err(Error::protocol(OP, "H7 packet", &e));
             }
         };
         if [
@@ -575,13 +549,14 @@ impl MitsubishiH7 {
         ] != self.config.feedback
         {
             self.counters.corrupt += 1;
-            return Err(protocol(ProtocolError::Unexpected(
-                "reply holds other data types than requested",
-            )));
+            return Err(Error::protocol(
+                OP,
+                "H7 packet",
+                &"reply holds other data types than requested",
+            ));
         }
         self.reply = Some(reply);
         self.counters.replies += 1;
-        self.counters.consecutive_failures = 0;
         Ok(())
     }
 }
@@ -599,62 +574,56 @@ fn route_ip(server: SocketAddr) -> std::io::Result<IpAddr> {
     Ok(probe.local_addr()?.ip())
 }
 
+fn lifecycle(h7: &mut MitsubishiH7) -> &mut Lifecycle {
+    &mut h7.lifecycle
+}
+
 impl Device for MitsubishiH7 {
     type Error = Error;
 
     fn open(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Open;
-        self.lifecycle.check(OP)?;
-        let r3 = TcpLink::connect(self.config.r3, self.config.r3_timeout).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation: OP,
-                    waited: self.config.r3_timeout,
+        Lifecycle::transition(self, Operation::Open, lifecycle, |h7| {
+            const OP: Operation = Operation::Open;
+            let timeout = h7.config.r3_timeout;
+            let r3 = TcpLink::connect(h7.config.r3, timeout).map_err(|e| {
+                if e.kind() == std::io::ErrorKind::TimedOut {
+                    Error::Timeout {
+                        operation: OP,
+                        waited: timeout,
+                    }
+                } else {
+                    Error::io(OP, &e)
                 }
-            } else {
-                Error::io(OP, &e)
-            }
-        })?;
-        let udp =
-            UdpLink::bind(self.config.local, self.config.server).map_err(|e| Error::io(OP, &e))?;
-        self.r3 = Some(r3);
-        self.udp = Some(udp);
-        self.lifecycle.complete(OP);
-        Ok(())
+            })?;
+            let udp =
+                UdpLink::bind(h7.config.local, h7.config.server).map_err(|e| Error::io(OP, &e))?;
+            h7.r3 = Some(r3);
+            h7.udp = Some(udp);
+            Ok(())
+        })
     }
 
     fn start(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Start)?;
-        self.request = Packet::default();
-        self.reply = None;
-        self.c_count = 0;
-        self.counters.consecutive_failures = 0;
-        match self.start_sequence() {
-            Ok(()) => {
-                self.lifecycle.complete(Operation::Start);
-                Ok(())
-            }
-            Err(e) => Err(self.lifecycle.fail(e)),
-        }
+        Lifecycle::transition(self, Operation::Start, lifecycle, |h7| {
+            h7.request = Packet::default();
+            h7.reply = None;
+            h7.c_count = 0;
+            h7.start_sequence()
+        })
     }
 
     fn stop(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Stop)?;
-        match self.stop_sequence() {
-            Ok(()) => {
-                self.lifecycle.complete(Operation::Stop);
-                Ok(())
-            }
-            Err(e) => Err(self.lifecycle.fail(e)),
-        }
+        Lifecycle::transition(self, Operation::Stop, lifecycle, Self::stop_sequence)
     }
 
     fn close(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Close)?;
-        self.udp = None;
-        self.r3 = None;
-        self.lifecycle.complete(Operation::Close);
-        Ok(())
+        Lifecycle::transition(self, Operation::Close, lifecycle, |h7| {
+            if let Some(udp) = h7.udp.take() {
+                h7.foreign_before += udp.counters().foreign;
+            }
+            h7.r3 = None;
+            Ok(())
+        })
     }
 
     fn state(&self) -> State {
@@ -664,16 +633,34 @@ impl Device for MitsubishiH7 {
     fn fault(&self) -> Option<Error> {
         self.lifecycle.fault()
     }
+
+    fn stop_description(&self) -> &'static str {
+        "end packet sent, program stopped, servo off"
+    }
 }
 
 impl CyclicDevice for MitsubishiH7 {
     fn step(&mut self) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Step)?;
-        self.exchange().map_err(|e| self.step_failed(e))
+        Lifecycle::step(self, lifecycle, Self::exchange)
     }
 
     fn update_period(&self) -> Duration {
         UPDATE_PERIOD
+    }
+}
+
+impl LinkStatisticsSensor for MitsubishiH7 {
+    fn link_statistics(&self) -> LinkStatistics {
+        let c = self.counters();
+        LinkStatistics {
+            sent: c.sent,
+            received: c.replies,
+            lost: c.timeouts,
+            late: c.late,
+            rejected: c.foreign,
+            corrupt: c.wrong_length + c.corrupt,
+            consecutive_failures: c.consecutive_failures,
+        }
     }
 }
 
@@ -707,10 +694,11 @@ impl JointPositionSensor for MitsubishiH7 {
                 }
                 Ok(())
             }
-            _ => Err(Error::Protocol {
-                operation: Operation::Get,
-                error: ProtocolError::Unexpected("no joint data in the last reply"),
-            }),
+            _ => Err(Error::protocol(
+                Operation::Get,
+                "H7 packet",
+                &"no joint data in the last reply",
+            )),
         }
     }
 }
@@ -724,8 +712,8 @@ impl CartesianPositionActuator for MitsubishiH7 {
             _ => (0, 0),
         };
         let data = PoseData {
-            xyz_mm: pose.position_m.map(|v| (v * 1000.0) as f32),
-            abc_rad: pose.abc_rad.map(|v| v as f32),
+            xyz_mm: pose.translation.to_array().map(|v| (v * 1000.0) as f32),
+            abc_rad: euler::to_zyx(&pose.rotation).map(|v| v as f32),
             additional: [0.0; 2],
             sflg1,
             sflg2,
@@ -740,14 +728,15 @@ impl CartesianPositionActuator for MitsubishiH7 {
 impl CartesianPositionSensor for MitsubishiH7 {
     fn cartesian_position(&self) -> Result<Pose, Error> {
         match self.find_shape(DataShape::Pose, "no pose data in the last reply")? {
-            DataView::Pose(p) => Ok(Pose {
-                position_m: p.xyz_mm.map(|v| f64::from(v) / 1000.0),
-                abc_rad: p.abc_rad.map(f64::from),
-            }),
-            _ => Err(Error::Protocol {
-                operation: Operation::Get,
-                error: ProtocolError::Unexpected("no pose data in the last reply"),
-            }),
+            DataView::Pose(p) => Ok(Pose::new(
+                euler::from_zyx(p.abc_rad.map(f64::from)),
+                DVec3::from_array(p.xyz_mm.map(|v| f64::from(v) / 1000.0)),
+            )),
+            _ => Err(Error::protocol(
+                Operation::Get,
+                "H7 packet",
+                &"no pose data in the last reply",
+            )),
         }
     }
 }

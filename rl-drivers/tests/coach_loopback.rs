@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+use glam::DVec3;
+use rl_core::rotation::euler;
 use rl_drivers::coach::{Coach, CoachConfig};
 use rl_drivers::fake::coach_server::{CoachServer, CoachServerConfig, Delivery};
 use rl_drivers::{
@@ -106,18 +108,22 @@ fn several_lines_in_one_read_are_separated() {
 fn every_command_reaches_the_server() {
     let server = server(Delivery::default());
     let mut coach = client(&server);
-    let pose = Pose {
-        position_m: [0.5, -0.25, 1.0],
-        abc_rad: [0.0, 0.1, 3.25],
-    };
+    let pose = Pose::new(
+        euler::from_zyx([0.0, 0.1, 3.0]),
+        DVec3::new(0.5, -0.25, 1.0),
+    );
     coach.set_body_pose(2, &pose).unwrap();
     coach.set_shape_pose(2, 1, &pose).unwrap();
     coach.set_joint_velocity(&[0.5; DOF]).unwrap();
     coach.set_joint_torque(&[-2.0; DOF]).unwrap();
     coach.step().unwrap();
     let s = server.status();
-    assert_eq!(s.bodies[&(0, 2)], [0.5, -0.25, 1.0, 0.0, 0.1, 3.25]);
-    assert_eq!(s.shapes[&(0, 2, 1)], [0.5, -0.25, 1.0, 0.0, 0.1, 3.25]);
+    let expected = [0.5, -0.25, 1.0, 0.0, 0.1, 3.0];
+    for got in [s.bodies[&(0, 2)], s.shapes[&(0, 2, 1)]] {
+        for (g, e) in got.iter().zip(expected) {
+            assert!((g - e).abs() < 1e-12, "{got:?} != {expected:?}");
+        }
+    }
     assert_eq!(s.velocities[&0], vec![0.5; DOF]);
     assert_eq!(s.torques[&0], vec![-2.0; DOF]);
 }
@@ -135,7 +141,10 @@ fn an_unknown_model_is_a_protocol_error() {
     assert!(matches!(
         e,
         rl_drivers::Error::Protocol {
-            error: ProtocolError::Unexpected(_),
+            error: ProtocolError {
+                source: "Coach line",
+                ..
+            },
             ..
         }
     ));

@@ -3,12 +3,14 @@
 
 use std::time::{Duration, Instant};
 
+use glam::DVec3;
+use rl_core::rotation::euler;
 use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, Fault, FaultPlan};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::h7::{DecodeError, MxtType};
 use rl_drivers::{
     CyclicDevice, Device, DeviceError, Error, ErrorKind, Gripper, JointPositionActuator,
-    JointPositionSensor, ProtocolError, State,
+    JointPositionSensor, State,
 };
 
 const DOF: usize = 6;
@@ -202,19 +204,16 @@ fn a_delayed_reply_times_out_and_is_counted_late_at_the_next_step() {
 fn a_corrupted_reply_is_a_protocol_error() {
     inject_once(Fault::Corrupt, |e, c| {
         assert_eq!(e.kind(), ErrorKind::Protocol);
-        let Error::Protocol {
-            error: ProtocolError::H7(d),
-            ..
-        } = e
-        else {
-            panic!("{e:?}")
-        };
         assert_eq!(
-            *d,
-            DecodeError::UnknownType {
-                offset: 4,
-                value: 0xFFFF
-            }
+            *e,
+            Error::protocol(
+                rl_drivers::Operation::Step,
+                "H7 packet",
+                &DecodeError::UnknownType {
+                    offset: 4,
+                    value: 0xFFFF
+                }
+            )
         );
         assert_eq!((c.corrupt, c.timeouts), (1, 0));
     });
@@ -223,14 +222,14 @@ fn a_corrupted_reply_is_a_protocol_error() {
 #[test]
 fn a_truncated_reply_is_a_wrong_length() {
     inject_once(Fault::Truncate, |e, c| {
-        let Error::Protocol {
-            error: ProtocolError::H7(d),
-            ..
-        } = e
-        else {
-            panic!("{e:?}")
-        };
-        assert_eq!(*d, DecodeError::Length { got: 100 });
+        assert_eq!(
+            *e,
+            Error::protocol(
+                rl_drivers::Operation::Step,
+                "H7 packet",
+                &DecodeError::Length { got: 100 }
+            )
+        );
         assert_eq!((c.wrong_length, c.corrupt), (1, 0));
     });
 }
@@ -458,10 +457,8 @@ fn cartesian_mode_commands_poses_in_mm() {
         robot.set_joint_position(&[0.0; DOF]).unwrap_err().kind(),
         ErrorKind::InvalidArgument
     );
-    let pose = Pose {
-        position_m: [0.4, -0.1, 0.3],
-        abc_rad: [3.0, 0.1, -1.0],
-    };
+    let abc = [3.0, 0.1, -1.0];
+    let pose = Pose::new(euler::from_zyx(abc), DVec3::new(0.4, -0.1, 0.3));
     robot.set_cartesian_position(&pose).unwrap();
     let sent = robot.request().dat.pose();
     assert_eq!(sent.xyz_mm, [400.0, -100.0, 300.0]);
@@ -471,10 +468,11 @@ fn cartesian_mode_commands_poses_in_mm() {
     let got = robot.cartesian_position().unwrap();
     for k in 0..3 {
         assert!(
-            (got.position_m[k] - pose.position_m[k]).abs() < 1e-6,
+            (got.translation[k] - pose.translation[k]).abs() < 1e-6,
             "position {k}"
         );
-        assert!((got.abc_rad[k] - pose.abc_rad[k]).abs() < 1e-6, "angle {k}");
+        let got_abc = euler::to_zyx(&got.rotation);
+        assert!((got_abc[k] - abc[k]).abs() < 1e-6, "angle {k}");
     }
     robot.stop().unwrap();
 }
@@ -544,13 +542,17 @@ fn a_controller_error_during_start_faults_with_its_code() {
     let e = robot.start().unwrap_err();
     assert_eq!(
         e,
-        Error::Protocol {
-            operation: rl_drivers::Operation::Start,
-            error: ProtocolError::R3(R3Error::Controller { code: 4100 })
-        }
+        Error::device(
+            rl_drivers::Operation::Start,
+            "R3 reply",
+            &R3Error::Controller { code: 4100 }
+        )
     );
     assert_eq!((robot.state(), robot.fault()), (State::Faulted, Some(e)));
-    assert_eq!(e.to_string(), "start: R3 reply: controller error QeR4100");
+    assert_eq!(
+        e.to_string(),
+        "start: the device reported R3 reply: controller error QeR4100"
+    );
     robot.close().unwrap();
     fake.set_r3_rejection(None);
     robot.open().unwrap();

@@ -621,7 +621,7 @@ fn drive<R: JointRobot + Send + 'static>(
         trajectory_time_s: controller.clock().time_s(),
         end,
         stats,
-        link: controller.robot().link_counters(),
+        link: controller.robot().link_statistics(),
         lost_packets: controller.failed_steps(),
         tracking,
         shutdown,
@@ -654,7 +654,7 @@ fn drive<R: JointRobot + Send + 'static>(
 /// what the in-process fake saw.
 fn shut_down<R: JointRobot>(robot: &mut R, fake: Option<&FakeH7>) -> Shutdown {
     let mut shutdown = Shutdown {
-        detail: robot.stop_detail().to_owned(),
+        detail: robot.stop_description().to_owned(),
         ..Shutdown::default()
     };
     match robot.stop() {

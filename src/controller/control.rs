@@ -6,10 +6,9 @@ use std::time::Duration;
 use rl_core::Data;
 use rl_core::algo::rnea;
 use rl_core::traj::Trajectory;
-use rl_drivers::coach::Coach;
-use rl_drivers::mitsubishi_h7::MitsubishiH7;
 use rl_drivers::{
-    CyclicDevice, Error as DeviceError, JointPositionActuator, JointPositionSensor, State,
+    CyclicDevice, Error as DeviceError, JointPositionActuator, JointPositionSensor,
+    LinkStatisticsSensor, State,
 };
 
 use super::clock::{HaltReason, TrajectoryClock};
@@ -24,64 +23,23 @@ const HALT_RANGE_S: (f64, f64) = (0.1, 2.0);
 /// `f32`.
 const POSITION_TOLERANCE: f64 = 1e-5;
 
-/// Packet counts of a device's real-time link, for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct LinkCounters {
-    /// Requests sent (end packets included).
-    pub sent: u64,
-    /// Valid replies used.
-    pub replies: u64,
-    /// Steps whose reply did not come in time.
-    pub timeouts: u64,
-    /// Replies that came after their step had given up (dropped).
-    pub late: u64,
-    /// Replies refused: wrong sender, wrong length, corrupt, unparsable.
-    pub rejected: u64,
-}
-
-/// A device the controller can drive: cyclic, joint positions in and out, with link counters.
+/// A device the controller can drive: cyclic, joint positions in and out, and link statistics.
+/// Any driver with these capabilities is one; the controller names no driver.
 pub trait JointRobot:
-    CyclicDevice<Error = DeviceError> + JointPositionActuator + JointPositionSensor
+    CyclicDevice<Error = DeviceError>
+    + JointPositionActuator
+    + JointPositionSensor
+    + LinkStatisticsSensor
 {
-    /// The link's packet counts so far.
-    fn link_counters(&self) -> LinkCounters;
-
-    /// What a successful `stop()` does on this device, in a few words for a report.
-    fn stop_detail(&self) -> &'static str;
 }
 
-impl JointRobot for MitsubishiH7 {
-    fn link_counters(&self) -> LinkCounters {
-        let c = self.counters();
-        LinkCounters {
-            sent: c.sent,
-            replies: c.replies,
-            timeouts: c.timeouts,
-            late: c.late,
-            rejected: c.foreign + c.wrong_length + c.corrupt,
-        }
-    }
-
-    fn stop_detail(&self) -> &'static str {
-        "end packet sent, program stopped, servo off"
-    }
-}
-
-impl JointRobot for Coach {
-    fn link_counters(&self) -> LinkCounters {
-        let c = self.counters();
-        LinkCounters {
-            sent: c.sent,
-            replies: c.replies,
-            timeouts: c.timeouts,
-            late: c.late,
-            rejected: c.bad_lines,
-        }
-    }
-
-    fn stop_detail(&self) -> &'static str {
-        "nothing to switch off: a visualiser"
-    }
+impl<T> JointRobot for T where
+    T: CyclicDevice<Error = DeviceError>
+        + JointPositionActuator
+        + JointPositionSensor
+        + LinkStatisticsSensor
+        + ?Sized
+{
 }
 
 /// Cycles of a controlled stop: long enough that its extra deceleration, `|q'·ṙ| ≤ v·π/(2·T)`,

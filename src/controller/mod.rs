@@ -47,7 +47,7 @@ pub mod telemetry;
 pub mod tracking;
 
 pub use clock::TrajectoryClock;
-pub use control::{Controller, CycleResult, JointRobot, LinkCounters, RunEnd};
+pub use control::{Controller, CycleResult, JointRobot, RunEnd};
 pub use plan::{MotionLimits, Plan, PlanError, default_waypoints};
 pub use telemetry::CycleRecord;
 pub use tracking::Tracking;

@@ -6,7 +6,9 @@ use std::fmt::{self, Write as _};
 use rl_rt::LoopStats;
 use serde_json::json;
 
-use super::control::{LinkCounters, RunEnd};
+use rl_drivers::LinkStatistics;
+
+use super::control::RunEnd;
 use super::tracking::Tracking;
 
 /// How the device was shut down.
@@ -50,7 +52,7 @@ pub struct RunReport {
     /// Loop timing: wake-up latency, step duration, overruns, missed deadlines.
     pub stats: LoopStats,
     /// Packet counts of the link.
-    pub link: LinkCounters,
+    pub link: LinkStatistics,
     /// Steps without a usable reply.
     pub lost_packets: u64,
     /// Tracking and feed-forward statistics.
@@ -82,7 +84,7 @@ impl RunReport {
             "late_packets": self.link.late,
             "rejected_packets": self.link.rejected,
             "packets_sent": self.link.sent,
-            "replies": self.link.replies,
+            "replies": self.link.received,
             "latency_us": {
                 "min": us(w.min_ns), "mean": us(w.mean_ns), "p50": us(w.p50_ns),
                 "p99": us(w.p99_ns), "p999": us(w.p999_ns), "max": us(w.max_ns),

@@ -1,12 +1,14 @@
 //! Rotations as unit quaternions ([`glam::DQuat`], stored x, y, z, w): the quaternion exponential
 //! and logarithm, powers, angular velocity and acceleration from quaternion derivatives and back,
-//! spherical linear interpolation with its derivatives, and squad with its control points.
+//! spherical linear interpolation with its derivatives, squad with its control points, and the
+//! `Z-Y'-X''` Euler angles robot controllers use on the wire.
 //!
 //! Conventions: angular velocities and accelerations are in the world (fixed) frame unless a
 //! function's name says `body`; `q̇ = ½ ω q`. The exponential takes a pure quaternion (a vector
 //! `v`), so `exp(v)` rotates by the angle `2|v|` about `v` — as RL's `Quaternion::exp`. Nothing
 //! here allocates or panics.
 
+pub mod euler;
 pub mod quaternion;
 pub mod slerp;
 pub mod squad;

@@ -1,14 +1,12 @@
+use rl_core::spatial::PlueckerTransform;
+
 use crate::Device;
 
-/// A Cartesian pose as the robot protocols carry it: position in m and rotation as the angles
-/// `a, b, c` in rad with `R = Rz(c)·Ry(b)·Rx(a)` (the convention of MELFA and RL's Coach).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Pose {
-    /// `x, y, z` in m.
-    pub position_m: [f64; 3],
-    /// `a, b, c` in rad, `R = Rz(c)·Ry(b)·Rx(a)`.
-    pub abc_rad: [f64; 3],
-}
+/// A tool pose: rl-core's [`PlueckerTransform`] (rotation matrix and translation in m), the
+/// type forward kinematics returns, so a pose from [`rl_core::algo::tool_pose`] can be
+/// commanded as it is. Drivers convert to their protocol's form on the wire (for MELFA and
+/// Coach: millimetres or metres and the `Z-Y'-X''` angles of [`rl_core::rotation::euler`]).
+pub type Pose = PlueckerTransform;
 
 /// Commands the tool pose (RL's `CartesianPositionActuator`).
 pub trait CartesianPositionActuator: Device {

@@ -15,7 +15,9 @@ mod gripper;
 mod joint;
 mod joint_position;
 mod joint_torque;
+mod joint_torque_feed_forward;
 mod joint_velocity;
+mod link_statistics;
 mod range_sensor;
 
 pub use analog_io::{AnalogInputReader, AnalogOutputWriter};
@@ -26,5 +28,7 @@ pub use gripper::Gripper;
 pub use joint::JointDevice;
 pub use joint_position::{JointPositionActuator, JointPositionSensor};
 pub use joint_torque::{JointTorqueActuator, JointTorqueSensor};
+pub use joint_torque_feed_forward::JointTorqueFeedForward;
 pub use joint_velocity::{JointVelocityActuator, JointVelocitySensor};
+pub use link_statistics::{LinkStatistics, LinkStatisticsSensor};
 pub use range_sensor::RangeSensor;
