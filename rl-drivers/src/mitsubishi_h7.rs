@@ -701,6 +701,21 @@ impl JointPositionSensor for MitsubishiH7 {
             )),
         }
     }
+
+    /// Joints travel as `f32`: half a unit in the last place at `q`.
+    fn joint_position_resolution(&self, q: f64) -> f64 {
+        f32_half_ulp(q)
+    }
+}
+
+/// Half the spacing of `f32` values at `x`: how far a value rounded to `f32` can be off.
+fn f32_half_ulp(x: f64) -> f64 {
+    let f = (x as f32).abs();
+    if !f.is_finite() {
+        return 0.0;
+    }
+    let next = f32::from_bits(f.to_bits() + 1);
+    0.5 * f64::from(next - f)
 }
 
 impl CartesianPositionActuator for MitsubishiH7 {
@@ -755,5 +770,22 @@ impl Gripper for MitsubishiH7 {
     fn shut(&mut self) -> Result<(), Error> {
         let g = self.config.gripper;
         self.set_output(g.bit_top, g.mask, g.shut)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f32_half_ulp;
+
+    #[test]
+    fn the_resolution_covers_the_rounding_to_f32() {
+        // kinova's joint limit, as a MELFA controller would report a joint standing on it.
+        let limit = 0.331_612_557_879_f64;
+        let reported = f64::from(limit as f32);
+        assert_ne!(reported, limit);
+        assert!((reported - limit).abs() <= f32_half_ulp(limit));
+        assert!(f32_half_ulp(limit) < 2e-8);
+        assert_eq!(f32_half_ulp(0.0), 0.5 * f64::from(f32::from_bits(1)));
+        assert_eq!(f32_half_ulp(f64::NAN), 0.0);
     }
 }
