@@ -26,15 +26,13 @@
 
 use core::fmt;
 use core::ops::ControlFlow;
-use core::sync::atomic::{AtomicBool, Ordering};
 use core::time::Duration;
-use std::sync::Arc;
-
-use nix::errno::Errno;
 
 use crate::clock::{MonoTime, duration_to_nanos};
 use crate::stats::LoopStats;
+use crate::stop::StopFlag;
 use crate::thread::ThreadCounters;
+use nix::errno::Errno;
 
 /// Default histogram range of a loop's statistics: 10 ms in 1 µs bins.
 pub const DEFAULT_HISTOGRAM_RANGE_US: usize = 10_000;
@@ -60,56 +58,6 @@ impl fmt::Display for OverrunPolicy {
             Self::CatchUp => "catch-up",
             Self::Stop => "stop",
         })
-    }
-}
-
-/// A flag another thread raises to end a loop cleanly; the loop sees it on its next wake-up,
-/// so it ends within one period. Cloning shares the flag.
-#[derive(Clone, Debug, Default)]
-pub struct StopFlag(Arc<AtomicBool>);
-
-impl StopFlag {
-    /// A new, lowered flag.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Asks every loop holding this flag to stop.
-    pub fn request_stop(&self) {
-        self.0.store(true, Ordering::Release);
-    }
-
-    /// Whether a stop was requested.
-    #[inline]
-    pub fn is_stop_requested(&self) -> bool {
-        self.0.load(Ordering::Acquire)
-    }
-
-    /// Raises this flag on SIGINT or SIGTERM (Ctrl-C, `kill`, systemd stop), so a loop ends
-    /// cleanly and reports instead of dying mid-cycle.
-    ///
-    /// Blocks both signals in the calling thread, and so in every thread it spawns afterwards
-    /// (call it early in `main`, before starting the real-time thread); a small watcher thread
-    /// takes them with `sigwait`. No signal handler runs, so nothing is interrupted.
-    pub fn raise_on_termination_signals(&self) -> Result<std::thread::JoinHandle<()>, Errno> {
-        use nix::sys::signal::{SigSet, Signal};
-        let mut set = SigSet::empty();
-        set.add(Signal::SIGINT);
-        set.add(Signal::SIGTERM);
-        set.thread_block()?;
-        let flag = self.clone();
-        std::thread::Builder::new()
-            .name("rl-rt-signals".into())
-            .stack_size(64 << 10)
-            .spawn(move || {
-                if set.wait().is_ok() {
-                    flag.request_stop();
-                }
-            })
-            .map_err(|e| {
-                e.raw_os_error()
-                    .map_or(Errno::UnknownErrno, Errno::from_raw)
-            })
     }
 }
 

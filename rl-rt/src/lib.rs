@@ -6,7 +6,9 @@
 //!   affinity, stack size and prefault) with a read-back of what the kernel granted.
 //! - [`memory`]: `mlockall`, stack and heap prefault, `RLIMIT_MEMLOCK`/`RLIMIT_RTPRIO`.
 //! - [`cyclic`]: [`CyclicLoop`] on `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)`, measuring
-//!   wake-up latency and step duration, with an [`OverrunPolicy`] and a [`StopFlag`].
+//!   wake-up latency and step duration, with an [`OverrunPolicy`].
+//! - [`stop`]: the two-level [`StopFlag`] (first request: come to rest; second: stop now),
+//!   raised from SIGINT/SIGTERM without a signal handler.
 //! - [`stats`]: 1 µs-bin [`Histogram`]s (text, JSON, cyclictest's `-h` format), mergeable.
 //! - [`exchange`]: wait-free SPSC [`queue`](exchange::queue) and latest-value
 //!   [`mailbox`](exchange::mailbox), drops counted.
@@ -46,13 +48,15 @@ pub mod exchange;
 pub mod memory;
 pub mod preflight;
 pub mod stats;
+pub mod stop;
 #[allow(unsafe_code)]
 mod sys;
 pub mod thread;
 
 pub use clock::MonoTime;
-pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy, StopFlag};
+pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy};
 pub use stats::{Histogram, LoopStats, Overrun, Summary};
+pub use stop::{StopFlag, StopLevel};
 pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadCounters, ThreadError};
 
 /// The crate README's examples, compiled as doc tests so they cannot rot.
