@@ -19,9 +19,13 @@ pub enum Error {
         /// The index given.
         tool: usize,
     },
-    /// A matrix that should be positive definite is not (a massless body on a joint, or a
-    /// singular configuration).
-    NotPositiveDefinite,
+    /// The mass matrix (or a joint's block of the articulated inertia) is not positive
+    /// definite at DOF `dof`: the bodies that DOF's joint moves have no mass or inertia along
+    /// it (a massless subtree), or an inertia in the model is not physical.
+    NotPositiveDefinite {
+        /// The degree of freedom (index into `q̇`); [`crate::Model::dof_body`] gives its joint.
+        dof: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -38,7 +42,11 @@ impl fmt::Display for Error {
                 )
             }
             Error::UnknownTool { tool } => write!(f, "tool {tool} does not exist"),
-            Error::NotPositiveDefinite => f.write_str("matrix is not positive definite"),
+            Error::NotPositiveDefinite { dof } => write!(
+                f,
+                "the mass matrix is singular at degree of freedom {dof}: the bodies its joint \
+                 moves have no mass or inertia along it (a massless subtree)"
+            ),
         }
     }
 }

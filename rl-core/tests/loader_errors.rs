@@ -339,14 +339,18 @@ fn more_than_the_capacity() {
 
 #[test]
 fn unsupported_features() {
-    // A coupled (mimic) joint.
+    // A coupled (mimic) joint, when mimic joints are refused (by default they follow).
     let text = "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><link name=\"c\"/>\n"
         .to_string()
         + &revolute("j1", "a", "b")
         + "\n"
         + &revolute("j2", "b", "c").replace("</joint>", "<mimic joint=\"j1\"/></joint>")
         + "</robot>";
-    let e = urdf_err(&text);
+    let refuse = UrdfOptions {
+        mimic: loader::MimicJoints::Reject,
+        ..UrdfOptions::default()
+    };
+    let e = loader::load_urdf_str::<N>(&text, &refuse).unwrap_err();
     assert!(matches!(e.kind, LoadErrorKind::Unsupported { .. }));
     names(&e, "4:1: <joint \"j2\">");
     // RL's XSLT-parameterised models and XInclude.

@@ -7,14 +7,24 @@ use rl_core::Data;
 use rl_core::algo;
 use rl_core::spatial::ForceVector;
 use rl_testkit::{CountingAllocator, allocations};
-use support::{Rng, every_joint_type, random_state};
+use support::{Rng, every_joint_type, mimic_tree, random_state};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn dynamics_and_kinematics_allocate_nothing() {
-    let model = every_joint_type::<32>(9);
+    run_all(&every_joint_type::<32>(9));
+}
+
+/// With mimic joints every call maps between public and internal coordinates (on the stack).
+#[test]
+fn with_mimic_joints_too() {
+    run_all(&mimic_tree::<32>(4));
+}
+
+fn run_all(model: &rl_core::Model<32>) {
+    let model = model.clone();
     let mut data = Box::new(Data::<32>::new());
     let mut r = Rng(1);
     let states: Vec<_> = (0..20).map(|_| random_state(&model, &mut r)).collect();

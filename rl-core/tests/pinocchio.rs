@@ -20,6 +20,8 @@ use support::assert_close;
 use support::fixture::{f64s, mat3, pose, vec3};
 
 const N: usize = 64;
+/// For the model over 64 bodies (tiago_dual, 101).
+const BIG: usize = 128;
 const TOL: f64 = 1e-9;
 
 fn fixture(name: &str) -> Value {
@@ -32,8 +34,8 @@ fn fixture(name: &str) -> Value {
 }
 
 /// The model Pinocchio described, joint for joint (continuous joints as plain revolute ones;
-/// their states use `q_angles`).
-fn build(fx: &Value) -> Model<N> {
+/// their states use `q_angles`; mimic joints follow their leaders).
+fn build<const N: usize>(fx: &Value) -> Model<N> {
     let mut b = ModelBuilder::<N>::new();
     b.gravity(vec3(&fx["gravity"]));
     let joints = fx["joints"].as_array().unwrap();
@@ -49,7 +51,8 @@ fn build(fx: &Value) -> Model<N> {
         let joint = if ty.contains("FreeFlyer") {
             Joint::SixDof(SixDof)
         } else {
-            assert_eq!(j["nv"].as_u64(), Some(1), "{ty}");
+            let own_nv = if j["mimic"].is_null() { 1 } else { 0 };
+            assert_eq!(j["nv"].as_u64(), Some(own_nv), "{ty}");
             let col: Vec<f64> = s.iter().map(|row| row[0].as_f64().unwrap()).collect();
             let lin = DVec3::new(col[0], col[1], col[2]);
             let ang = DVec3::new(col[3], col[4], col[5]);
@@ -69,6 +72,21 @@ fn build(fx: &Value) -> Model<N> {
             .unwrap();
         names.push(name.to_string());
     }
+    for (i, j) in joints.iter().enumerate() {
+        let m = &j["mimic"];
+        if !m.is_null() {
+            let leader = names
+                .iter()
+                .position(|n| n == m["leader"].as_str().unwrap());
+            b.set_mimic(
+                i,
+                leader.unwrap(),
+                m["multiplier"].as_f64().unwrap(),
+                m["offset"].as_f64().unwrap(),
+            )
+            .unwrap();
+        }
+    }
     for f in fx["frames"].as_array().unwrap() {
         let parent = names
             .iter()
@@ -81,14 +99,20 @@ fn build(fx: &Value) -> Model<N> {
 }
 
 fn check(robot: &str) {
+    check_n::<N>(robot, 10);
+}
+
+/// `min_states`: the fixture must have at least this many (10; 3 for the 101-DOF model, whose
+/// mass matrices make a state 160 KB).
+fn check_n<const N: usize>(robot: &str, min_states: usize) {
     let fx = fixture(robot);
-    let model = build(&fx);
+    let model = build::<N>(&fx);
     assert_eq!(model.dof(), fx["nv"].as_u64().unwrap() as usize);
     let mut d = Box::new(Data::<N>::new());
     let n = model.dof();
     let mut jac = [[0.0; N]; 6];
     let states = fx["states"].as_array().unwrap();
-    assert!(states.len() >= 10);
+    assert!(states.len() >= min_states);
     for (k, s) in states.iter().enumerate() {
         let what = |x: &str| format!("{robot} state {k}: {x}");
         let q = f64s(s.get("q_angles").unwrap_or(&s["q"]));
@@ -201,4 +225,36 @@ fn anymal_c_floating_base() {
 #[test]
 fn talos_reduced_floating_base() {
     check("talos_reduced");
+}
+
+#[test]
+fn panda_mimic_finger() {
+    check("panda_mimic");
+}
+
+#[test]
+fn panda_collision_mimic_finger() {
+    check("panda_collision_mimic");
+}
+
+#[test]
+fn baxter_mimic_grippers() {
+    check("baxter_mimic");
+}
+
+#[test]
+fn tiago_pro_mimic_grippers() {
+    check("tiago_pro_mimic");
+}
+
+/// Mimic joints that are descendants of their leader, and mimic joints below mimic joints.
+#[test]
+fn pr2_mimic_grippers() {
+    check("pr2_mimic");
+}
+
+/// 101 bodies.
+#[test]
+fn tiago_dual_over_64_bodies() {
+    check_n::<BIG>("tiago_dual", 3);
 }

@@ -4,6 +4,15 @@
 //! *Rigid Body Dynamics Algorithms*, Table 7.1, here in world coordinates as Pinocchio does). Each joint's
 //! `D = Sᵀ Iᴬ S` is at most 6×6 and inverted in place. `q`: `nq`, `qd`, `tau`: `dof`;
 //! result: `dof`. O(n). Does not allocate.
+//!
+//! A mimic joint on another branch than its leader couples the branches, which the
+//! articulated-body recursion cannot express (Pinocchio 4 has no ABA for mimic joints). For a
+//! model with mimic joints, `q̈` is solved from the same equation through the mass matrix
+//! instead: CRBA, the sparse `LᵀDL` factorisation ([`super::factor_mass_matrix`], whose
+//! elimination tree covers the coupling) and RNEA with `q̈ = 0` for the bias, O(n·depth²).
+//!
+//! Errors: [`Error::NotPositiveDefinite`] names the first DOF found whose joint moves no mass
+//! or inertia (a massless subtree: its row of `M` vanishes).
 
 use crate::error::{Error, check_len};
 use crate::math::invert_spd;
@@ -56,12 +65,15 @@ fn run<const N: usize>(
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
     check_len("tau", tau, model.nv)?;
+    if model.has_mimic {
+        return through_mass_matrix(model, data, q, qd, tau, fext);
+    }
     // World coordinates throughout (as Pinocchio's ABA): inertias and subspaces are brought to
     // the world frame once, and then articulated inertias, bias forces and accelerations pass
     // between bodies by plain addition, with no transform per edge.
     // Pass 1: velocities, bias accelerations, rigid inertias and bias forces.
     for i in 0..model.nbodies {
-        let x = world_pose(model, data, q, i);
+        let x = world_pose::<false, N>(model, data, q, i);
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         for k in sv..sv + model.joints[i].nv() {
@@ -91,7 +103,7 @@ fn run<const N: usize>(
             let u = data.articulated[i].mul_motion(&s);
             let d = s.dot(&u);
             if d.is_nan() || d <= 0.0 {
-                return Err(Error::NotPositiveDefinite);
+                return Err(Error::NotPositiveDefinite { dof: sv });
             }
             let d_inv = 1.0 / d;
             let bias = tau[sv] - s.dot(&data.f[i]);
@@ -122,7 +134,7 @@ fn run<const N: usize>(
         }
         let mut d_inv = [[0.0; 6]; 6];
         if !invert_spd(&d, nv, &mut d_inv) {
-            return Err(Error::NotPositiveDefinite);
+            return Err(Error::NotPositiveDefinite { dof: sv });
         }
         data.d_inv[i] = d_inv;
         if p == ROOT {
@@ -174,5 +186,30 @@ fn run<const N: usize>(
         }
         data.a[i] = a;
     }
+    Ok(())
+}
+
+/// `q̈ = M⁻¹ (τ − RNEA(q, q̇, 0))` into `data.qdd`, for models with mimic joints (out of line:
+/// the common path stays as it was).
+#[cold]
+#[inline(never)]
+fn through_mass_matrix<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+    tau: &[f64],
+    fext: Option<&[ForceVector]>,
+) -> Result<(), Error> {
+    super::crba(model, data, q)?;
+    super::factor_mass_matrix(model, data)?;
+    super::rnea::inverse_dynamics(model, data, q, Some(qd), None, true, fext);
+    let n = model.nv;
+    let mut x = [0.0; N];
+    for k in 0..n {
+        x[k] = tau[k] - data.tau[k];
+    }
+    super::solve_mass_matrix(model, data, &mut x[..n])?;
+    data.qdd[..n].copy_from_slice(&x[..n]);
     Ok(())
 }

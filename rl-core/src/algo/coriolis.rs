@@ -15,7 +15,7 @@ pub fn coriolis<'d, const N: usize>(
 ) -> Result<&'d [f64], Error> {
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
-    super::rnea::run(model, data, q, Some(qd), None, false, None);
+    super::rnea::inverse_dynamics(model, data, q, Some(qd), None, false, None);
     Ok(&data.tau[..model.nv])
 }
 
@@ -28,6 +28,6 @@ pub fn nonlinear_effects<'d, const N: usize>(
 ) -> Result<&'d [f64], Error> {
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
-    super::rnea::run(model, data, q, Some(qd), None, true, None);
+    super::rnea::inverse_dynamics(model, data, q, Some(qd), None, true, None);
     Ok(&data.tau[..model.nv])
 }

@@ -13,6 +13,10 @@
 //!
 //! `q`: `nq`; result: the symmetric `dof × dof` matrix in [`Data::mass_matrix`] (upper
 //! triangle stored). O(n·depth). Does not allocate.
+//!
+//! With mimic joints the sweep fills the internal matrix (in `Data`'s factorisation scratch)
+//! and `M = Gᵀ M_int G` is gathered from it ([`crate::model::mimic`]): the leader's row and
+//! column collect the mimic joint's, as in Pinocchio. That last step is O(n_int²).
 
 use crate::error::{Error, check_len};
 use crate::joint::Joint;
@@ -24,21 +28,52 @@ use super::forward_position::local_pose;
 /// Computes `M(q)` into `data` (read it with [`Data::mass_matrix`]).
 pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> Result<(), Error> {
     check_len("q", q, model.nq)?;
+    if model.has_mimic {
+        run_mimic(model, data, q);
+    } else {
+        run::<false, N>(model, data, q);
+    }
+    Ok(())
+}
+
+/// `Gᵀ M_int G`, for models with mimic joints (out of line: the common path stays as it was).
+#[cold]
+#[inline(never)]
+fn run_mimic<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+    run::<true, N>(model, data, q);
+    super::mimic::contract_mass_matrix(model, data);
+}
+
+/// The sweeps over internal coordinates, into `data.mass_matrix` or, with mimic joints, into
+/// `data.factor`.
+#[inline]
+fn run<const MIMIC: bool, const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+    let n = model.nv_ext;
     // Only the upper triangle is kept. Entries between DOFs on different branches are zero
     // and never written below.
-    for (r, row) in data.mass_matrix[..model.nv].iter_mut().enumerate() {
-        row[r..model.nv].fill(0.0);
+    let target = if MIMIC {
+        &mut data.factor
+    } else {
+        &mut data.mass_matrix
+    };
+    for (r, row) in target[..n].iter_mut().enumerate() {
+        row[r..n].fill(0.0);
     }
     for i in 0..model.nbodies {
-        local_pose(model, data, q, i);
+        local_pose::<MIMIC, N>(model, data, q, i);
         data.composite[i] = model.inertias[i];
     }
+    let target = if MIMIC {
+        &mut data.factor
+    } else {
+        &mut data.mass_matrix
+    };
     for i in (0..model.nbodies).rev() {
         let ic = &data.composite[i];
         let sv = model.idx_v[i];
         let six_dof = matches!(model.joints[i], Joint::SixDof(_));
         if six_dof {
-            six_dof_block(ic, sv, &mut data.mass_matrix);
+            six_dof_block(ic, sv, target);
         }
         let p = model.parents[i];
         for k in sv..sv + model.joints[i].nv() {
@@ -55,14 +90,14 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
             };
             if !six_dof {
                 // This joint's own block (upper triangle: rows sv..=k).
-                write_dots(model, i, &f, k, &mut data.mass_matrix, sv..=k);
+                write_dots(model, i, &f, k, target, sv..=k);
             }
             let mut b = i;
             let mut a = p;
             while a != ROOT {
                 f = data.parent_pose[b].act_force(&f);
                 let sa = model.idx_v[a];
-                write_dots(model, a, &f, k, &mut data.mass_matrix, sa..sa + 6);
+                write_dots(model, a, &f, k, target, sa..sa + 6);
                 b = a;
                 a = model.parents[b];
             }
@@ -72,7 +107,6 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
             data.composite[p] += moved;
         }
     }
-    Ok(())
 }
 
 /// `M[l][k] = S_lᵀ f` for the DOFs `l` of body `i`'s joint that lie in `rows`, with `f` in

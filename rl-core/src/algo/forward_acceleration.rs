@@ -20,8 +20,42 @@ pub fn forward_acceleration<const N: usize>(
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
     check_len("qdd", qdd, model.nv)?;
+    if model.has_mimic {
+        sweep_mimic(model, data, q, qd, qdd);
+    } else {
+        sweep::<false, N>(model, data, q, qd, qdd);
+    }
+    Ok(())
+}
+
+/// The sweep for models with mimic joints (out of line: the common path stays as it was).
+#[cold]
+#[inline(never)]
+fn sweep_mimic<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) {
+    let (qd, qdd) = (
+        super::mimic::expand(model, qd),
+        super::mimic::expand(model, qdd),
+    );
+    sweep::<true, N>(model, data, q, &qd, &qdd);
+}
+
+/// The sweep over internal coordinates.
+#[inline]
+fn sweep<const MIMIC: bool, const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) {
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
+        body_pose::<MIMIC, N>(model, data, q, i);
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         let mut aj = MotionVector::ZERO;
@@ -40,7 +74,6 @@ pub fn forward_acceleration<const N: usize>(
         data.v[i] = v;
         data.a[i] = a;
     }
-    Ok(())
 }
 
 /// Tool `tool`'s classical acceleration (the second derivative of its origin's position and

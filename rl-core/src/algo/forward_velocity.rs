@@ -18,8 +18,32 @@ pub fn forward_velocity<const N: usize>(
 ) -> Result<(), Error> {
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
+    if model.has_mimic {
+        sweep_mimic(model, data, q, qd);
+    } else {
+        sweep::<false, N>(model, data, q, qd);
+    }
+    Ok(())
+}
+
+/// The sweep for models with mimic joints (out of line: the common path stays as it was).
+#[cold]
+#[inline(never)]
+fn sweep_mimic<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64], qd: &[f64]) {
+    let qd = super::mimic::expand(model, qd);
+    sweep::<true, N>(model, data, q, &qd);
+}
+
+/// The sweep over internal coordinates.
+#[inline]
+fn sweep<const MIMIC: bool, const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+) {
     for i in 0..model.nbodies {
-        body_pose(model, data, q, i);
+        body_pose::<MIMIC, N>(model, data, q, i);
         let sv = model.idx_v[i];
         let mut vj = MotionVector::ZERO;
         for k in sv..sv + model.joints[i].nv() {
@@ -32,7 +56,6 @@ pub fn forward_velocity<const N: usize>(
             data.parent_pose[i].inv_act_motion(&data.v[p]) + vj
         };
     }
-    Ok(())
 }
 
 /// Tool `tool`'s velocity in world coordinates at the tool's origin, `[linear; angular]`

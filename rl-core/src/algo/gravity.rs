@@ -5,7 +5,8 @@
 //! coordinates) and only the subtree mass `m` and first moment `h = m c` come back up; the
 //! wrench at body `i`'s origin is `(h × (−g), −m g)`, and `τ = Sᵀ` of it. About half the
 //! arithmetic of the full RNEA, whose spatial inertia products and force transforms the
-//! static case does not need. `q`: `nq`; result: `dof`. O(n). Does not allocate.
+//! static case does not need. `q`: `nq`; result: `dof` (with mimic joints `Gᵀ` of the
+//! internal torques, as RNEA). O(n). Does not allocate.
 
 use glam::DVec3;
 
@@ -22,10 +23,30 @@ pub fn gravity<'d, const N: usize>(
     q: &[f64],
 ) -> Result<&'d [f64], Error> {
     check_len("q", q, model.nq)?;
+    if model.has_mimic {
+        run_mimic(model, data, q);
+    } else {
+        run::<false, N>(model, data, q);
+    }
+    Ok(&data.tau[..model.nv])
+}
+
+/// `Gᵀ` of the internal sweeps, for models with mimic joints (out of line: the common path
+/// stays as it was).
+#[cold]
+#[inline(never)]
+fn run_mimic<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
+    run::<true, N>(model, data, q);
+    super::mimic::contract_tau(model, data);
+}
+
+/// The two sweeps, over internal coordinates.
+#[inline]
+fn run<const MIMIC: bool, const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) {
     // Down: −g in each body's coordinates, kept as the RNEA acceleration of a robot at rest;
     // the composites start as each body's own mass and first moment.
     for i in 0..model.nbodies {
-        local_pose(model, data, q, i);
+        local_pose::<MIMIC, N>(model, data, q, i);
         let p = model.parents[i];
         let up = if p == ROOT {
             -model.gravity
@@ -52,5 +73,4 @@ pub fn gravity<'d, const N: usize>(
             data.composite[p].first_moment += x.rotation * h + x.translation * m;
         }
     }
-    Ok(&data.tau[..model.nv])
 }

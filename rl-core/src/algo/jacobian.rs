@@ -5,6 +5,9 @@
 //! sweep computes every DOF's motion subspace in world coordinates; each tool then fills its
 //! columns from its own ancestors only — one sweep for all tools, where RL runs `n` velocity
 //! sweeps. `q`: `nq`. O(n + tools·depth). Does not allocate.
+//!
+//! Columns are the public DOFs: a mimic joint's column is added to its leader's, times the
+//! multiplier (`J = J_int G`, [`crate::model::mimic`]).
 
 use glam::DVec3;
 
@@ -19,7 +22,8 @@ pub type Jacobian<const N: usize> = [[f64; N]; 6];
 
 /// Fills `out` with tool `tool`'s Jacobian from the world poses of its ancestors in `data`
 /// (the last forward sweep). Every column is written once: the ancestors' from their world
-/// motion subspaces, the others zero.
+/// motion subspaces, the others zero. (With mimic joints, [`super::mimic::fill_jacobian`]
+/// adds each internal column to the public column it follows: `J = J_int G`.)
 fn fill<const N: usize>(
     model: &Model<N>,
     data: &Data<N>,
@@ -88,6 +92,9 @@ pub fn jacobian<const N: usize>(
     tool: usize,
     out: &mut Jacobian<N>,
 ) -> Result<(), Error> {
+    if model.has_mimic {
+        return jacobian_mimic(model, data, q, tool, out);
+    }
     check_len("q", q, model.nq)?;
     if tool >= model.ntools {
         return Err(Error::UnknownTool { tool });
@@ -101,9 +108,53 @@ pub fn jacobian<const N: usize>(
         b = model.parents[b];
     }
     for c in (0..len).rev() {
-        world_pose(model, data, q, data.chain[c]);
+        world_pose::<false, N>(model, data, q, data.chain[c]);
     }
     fill(model, data, tool, out)
+}
+
+/// [`jacobian`] for models with mimic joints (out of line: the common path stays as it was).
+#[cold]
+#[inline(never)]
+fn jacobian_mimic<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    tool: usize,
+    out: &mut Jacobian<N>,
+) -> Result<(), Error> {
+    check_len("q", q, model.nq)?;
+    if tool >= model.ntools {
+        return Err(Error::UnknownTool { tool });
+    }
+    let mut len = 0;
+    let mut b = model.tools[tool].body;
+    while b != ROOT {
+        data.chain[len] = b;
+        len += 1;
+        b = model.parents[b];
+    }
+    for c in (0..len).rev() {
+        world_pose::<true, N>(model, data, q, data.chain[c]);
+    }
+    fill_mimic(model, data, tool, out)
+}
+
+/// Tool `tool`'s Jacobian with mimic columns added to their leaders' ([`fill`]'s convention).
+fn fill_mimic<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    tool: usize,
+    out: &mut Jacobian<N>,
+) -> Result<(), Error> {
+    let t = model.tools().get(tool).ok_or(Error::UnknownTool { tool })?;
+    let p = if t.body == ROOT {
+        t.placement.translation
+    } else {
+        data.world_pose[t.body].transform_point(t.placement.translation)
+    };
+    super::mimic::fill_jacobian(model, data, t.body, p, out);
+    Ok(())
 }
 
 /// The world Jacobians of all tools in one sweep; `out` needs at least `tools().len()`
@@ -122,11 +173,13 @@ pub fn jacobians<const N: usize>(
             got: out.len(),
         });
     }
-    for i in 0..model.nbodies {
-        world_pose(model, data, q, i);
-    }
+    super::forward_position(model, data, q)?;
     for (t, j) in out.iter_mut().enumerate().take(model.ntools) {
-        fill(model, data, t, j)?;
+        if model.has_mimic {
+            fill_mimic(model, data, t, j)?;
+        } else {
+            fill(model, data, t, j)?;
+        }
     }
     Ok(())
 }

@@ -3,6 +3,13 @@
 //! `M = Lᵀ D L` with `L` unit lower triangular and nonzero only where one DOF is an ancestor
 //! of the other (Featherstone, *Rigid Body Dynamics Algorithms*, Tables 6.3 and 6.4, the
 //! LTDL factorisation): fill-in free, O(n·depth²). Does not allocate.
+//!
+//! With mimic joints that couple branches, "ancestor" is read on the elimination tree of `M`
+//! (worked out once when the model is built, see [`crate::model::mimic`]), whose paths cover
+//! the fill-in; without them it is the tree of the degrees of freedom itself.
+//!
+//! Errors: [`Error::NotPositiveDefinite`] names the DOF whose pivot is not positive (a joint
+//! that moves no mass or inertia).
 
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
@@ -25,7 +32,7 @@ pub fn factor_mass_matrix<const N: usize>(
     }
     for k in (0..n).rev() {
         if h[k][k] <= 0.0 || !h[k][k].is_finite() {
-            return Err(Error::NotPositiveDefinite);
+            return Err(Error::NotPositiveDefinite { dof: k });
         }
         let mut i = model.dof_parent[k];
         while i != ROOT {

@@ -15,6 +15,7 @@ mod gravity;
 pub mod ik;
 mod jacobian;
 mod mass_solve;
+mod mimic;
 mod operational;
 mod rnea;
 

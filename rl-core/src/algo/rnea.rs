@@ -4,6 +4,10 @@
 //! *Rigid Body Dynamics Algorithms*, Table 5.1, body coordinates). `q`: `nq`, `qd`, `qdd`:
 //! `dof` elements; the result has `dof` elements. Gravity enters as a fictitious
 //! acceleration of the base, `a₀ = −g`. O(n). Does not allocate.
+//!
+//! With mimic joints the sweeps run on the internal coordinates, `q̇_int = G q̇`,
+//! `q̈_int = G q̈`, and the result is `τ = Gᵀ τ_int` ([`crate::model::mimic`]): a mimic joint's
+//! torque reaches its leader times the multiplier.
 
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
@@ -22,7 +26,7 @@ pub fn rnea<'d, const N: usize>(
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
     check_len("qdd", qdd, model.nv)?;
-    run(model, data, q, Some(qd), Some(qdd), true, None);
+    inverse_dynamics(model, data, q, Some(qd), Some(qdd), true, None);
     Ok(&data.tau[..model.nv])
 }
 
@@ -46,13 +50,60 @@ pub fn rnea_with_external_forces<'d, const N: usize>(
             got: fext.len(),
         });
     }
-    run(model, data, q, Some(qd), Some(qdd), true, Some(fext));
+    inverse_dynamics(model, data, q, Some(qd), Some(qdd), true, Some(fext));
     Ok(&data.tau[..model.nv])
 }
 
-/// The RNEA sweeps; `None` velocities or accelerations are zero (and skipped).
+/// RNEA on public coordinates into `data.tau[..nv]` (lengths already checked); `None`
+/// velocities or accelerations are zero (and skipped).
 #[inline]
-pub(crate) fn run<const N: usize>(
+pub(crate) fn inverse_dynamics<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+    with_gravity: bool,
+    fext: Option<&[ForceVector]>,
+) {
+    if model.has_mimic {
+        inverse_dynamics_mimic(model, data, q, qd, qdd, with_gravity, fext);
+    } else {
+        run::<false, N>(model, data, q, qd, qdd, with_gravity, fext);
+    }
+}
+
+/// `Gᵀ RNEA(q, G q̇, G q̈)`, for models with mimic joints (out of line: the common path stays
+/// as it was).
+#[cold]
+#[inline(never)]
+fn inverse_dynamics_mimic<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    q: &[f64],
+    qd: Option<&[f64]>,
+    qdd: Option<&[f64]>,
+    with_gravity: bool,
+    fext: Option<&[ForceVector]>,
+) {
+    let qd = qd.map(|x| super::mimic::expand(model, x));
+    let qdd = qdd.map(|x| super::mimic::expand(model, x));
+    run::<true, N>(
+        model,
+        data,
+        q,
+        qd.as_ref().map(|x| &x[..]),
+        qdd.as_ref().map(|x| &x[..]),
+        with_gravity,
+        fext,
+    );
+    super::mimic::contract_tau(model, data);
+}
+
+/// The RNEA sweeps over internal coordinates; `None` velocities or accelerations are zero
+/// (and skipped).
+#[inline]
+fn run<const MIMIC: bool, const N: usize>(
     model: &Model<N>,
     data: &mut Data<N>,
     q: &[f64],
@@ -70,7 +121,7 @@ pub(crate) fn run<const N: usize>(
         },
     );
     for i in 0..model.nbodies {
-        local_pose(model, data, q, i);
+        local_pose::<MIMIC, N>(model, data, q, i);
         let p = model.parents[i];
         let x = &data.parent_pose[i];
         let inertia = &model.inertias[i];

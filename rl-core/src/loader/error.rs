@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::string::String;
 
 use crate::model::ModelError;
+use crate::spatial::InertiaProblem;
 
 /// An XML element named in an error: its tag, its `id`/`name` and where it starts.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -95,6 +96,30 @@ pub enum LoadErrorKind {
         /// The candidate roots found.
         roots: std::vec::Vec<String>,
     },
+    /// A body whose inertia no rigid body can have (see
+    /// [`crate::spatial::RigidBodyInertia::check_physical`]).
+    UnphysicalInertia {
+        /// The body's link (URDF) or body (RL).
+        link: String,
+        /// How many links fixed to it are merged into the body's inertia.
+        merged_links: usize,
+        /// What is wrong.
+        problem: InertiaProblem,
+    },
+    /// The input is larger or deeper than the loader reads ([`super::InputLimits`]).
+    TooLarge {
+        /// What is too large (`"file size"`, `"nesting depth"`, `"number of XML nodes"`).
+        what: &'static str,
+        /// The limit.
+        limit: u64,
+    },
+    /// A mimic joint that cannot follow the joint it names.
+    Mimic {
+        /// The mimic joint.
+        joint: String,
+        /// Why (it names the joint it follows).
+        reason: String,
+    },
     /// The model does not fit in its capacity, or the builder refused a value.
     Model(ModelError),
     /// A feature of the format that this loader does not support.
@@ -150,6 +175,28 @@ impl fmt::Display for LoadErrorKind {
                         roots.join(", ")
                     )
                 }
+            }
+            LoadErrorKind::UnphysicalInertia {
+                link,
+                merged_links,
+                problem,
+            } => {
+                write!(f, "the inertia of link \"{link}\"")?;
+                match merged_links {
+                    0 => {}
+                    1 => f.write_str(" (with the link fixed to it)")?,
+                    n => write!(f, " (with the {n} links fixed to it)")?,
+                }
+                write!(f, " is not one a rigid body can have: {problem}")
+            }
+            LoadErrorKind::TooLarge { what, limit } => {
+                write!(
+                    f,
+                    "the input's {what} is above the loader's limit of {limit}"
+                )
+            }
+            LoadErrorKind::Mimic { joint, reason } => {
+                write!(f, "mimic joint \"{joint}\": {reason}")
             }
             LoadErrorKind::Model(e) => write!(f, "{e}"),
             LoadErrorKind::Unsupported { feature } => write!(f, "unsupported: {feature}"),

@@ -8,7 +8,8 @@
 //! (RL's operational frames), in depth-first order, named after the leaf frame or link.
 //!
 //! ```no_run
-//! let loaded = rl_core::loader::load_file::<64>("unimation-puma560.xml")?;
+//! // From the workspace root.
+//! let loaded = rl_core::loader::load_file::<64>("tests/data/rlmdl/unimation-puma560.xml")?;
 //! assert_eq!(loaded.model.dof(), 6);
 //! # Ok::<(), rl_core::loader::LoadError>(())
 //! ```
@@ -17,6 +18,7 @@
 //! wrong with it. Nothing here panics on bad input.
 
 mod error;
+mod physical;
 mod rlmdl;
 mod tree;
 mod urdf;
@@ -55,11 +57,15 @@ pub enum JointOrder {
 /// What to do with a moving URDF joint that has a `<mimic>` tag.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MimicJoints {
-    /// Refuse the file: the model has no coupled joints.
+    /// The joint follows its leader, `q = multiplier · q_leader + offset`, and adds no degree
+    /// of freedom ([`crate::model::mimic`]; Pinocchio's `mimic=True`).
     #[default]
-    Reject,
-    /// Load the joint as an independent joint (what Pinocchio does by default).
+    Follow,
+    /// Load the joint as an independent joint (what Pinocchio does by default), with a
+    /// warning.
     Independent,
+    /// Refuse the file.
+    Reject,
 }
 
 /// Options for URDF (RL XML files carry all they need).
@@ -86,10 +92,83 @@ impl Default for UrdfOptions {
         Self {
             floating_base: false,
             joint_order: JointOrder::File,
-            mimic: MimicJoints::Reject,
+            mimic: MimicJoints::Follow,
             locked_joints: Vec::new(),
             leaf_tools: true,
             extra_tools: Vec::new(),
+        }
+    }
+}
+
+/// How strictly body inertias are checked (see
+/// [`crate::spatial::RigidBodyInertia::check_physical`] for the rules).
+///
+/// An inertia that is not positive semi-definite makes the spatial inertia indefinite (a
+/// motion with negative kinetic energy): the mass matrix may lose its definiteness and the
+/// dynamics their meaning. One that only breaks the triangle inequality `I₁ + I₂ ≥ I₃` is
+/// impossible for a rigid body but numerically harmless (the mass matrix stays positive
+/// definite), and common in published parameter sets: RL's own Puma 560 (Armstrong, Khatib and
+/// Burdick's link 3, 0.0125 + 0.066 < 0.086 kg·m²) and a third of example-robot-data's robots
+/// (ANYmal C's cameras, the Allegro hand's links, PR2's sensor mounts, …). Hence the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum InertiaCheck {
+    /// Refuse a body that is not positive semi-definite or breaks the triangle inequality,
+    /// naming its link.
+    Strict,
+    /// Refuse a body that is not positive semi-definite, naming its link; warn about the
+    /// triangle inequality.
+    #[default]
+    Definite,
+    /// Warn about both and load.
+    Lenient,
+}
+
+/// Bounds on what a loader reads, so a huge or hostile file is refused early with a clear
+/// error instead of taking the machine's memory ([`LoadErrorKind::TooLarge`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InputLimits {
+    /// Largest file (or text) in bytes.
+    pub max_bytes: u64,
+    /// Deepest element nesting (URDF and RL XML need about 6).
+    pub max_depth: usize,
+    /// Most XML nodes (elements, text and comments) the parser builds.
+    pub max_nodes: u32,
+}
+
+impl InputLimits {
+    /// 64 MiB, depth 256, 8 million nodes: about 300 times the largest URDF of
+    /// example-robot-data and 700 000 URDF links; the parsed tree of such a file takes well
+    /// under 1 GB.
+    pub const DEFAULT: Self = Self {
+        max_bytes: 64 << 20,
+        max_depth: 256,
+        max_nodes: 8_000_000,
+    };
+}
+
+impl Default for InputLimits {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Every option of a load: the URDF options, the physical check, the input limits.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// URDF only (RL XML files carry all they need).
+    pub urdf: UrdfOptions,
+    /// Bodies whose inertia is not physical.
+    pub inertia: InertiaCheck,
+    /// Size and nesting bounds.
+    pub input: InputLimits,
+}
+
+impl LoadOptions {
+    /// The defaults with these URDF options.
+    pub fn urdf(urdf: &UrdfOptions) -> Self {
+        Self {
+            urdf: urdf.clone(),
+            ..Self::default()
         }
     }
 }
@@ -134,7 +213,8 @@ pub struct LoadedModel<const N: usize> {
     /// Every transform reached from the root, in depth-first order.
     pub transforms: Vec<TransformInfo>,
     /// Things that loaded but deserve a note (ignored elements, unconnected frames, mimic
-    /// joints loaded as independent).
+    /// joints loaded as independent, inertias that are not physical, joints that move no
+    /// mass).
     pub warnings: Vec<String>,
 }
 
@@ -171,7 +251,10 @@ impl<const N: usize> LoadedModel<N> {
         let mut out = Vec::with_capacity(self.model.nq());
         let mut at = 0;
         for b in 0..self.model.body_count() {
-            let nq = self.model.joint(b).nq();
+            let nq = self.model.joint_nq(b);
+            if nq == 0 {
+                continue; // a mimic joint: no coordinates (nor in Pinocchio's q)
+            }
             if self.joint_source_type(b) == Some("continuous") {
                 let (c, s) = (*q.get(at)?, *q.get(at + 1)?);
                 out.push(libm::atan2(s, c));
@@ -195,6 +278,16 @@ impl<const N: usize> LoadedModel<N> {
     }
 }
 
+/// A speed or effort limit as read from a file: 0 means "not given" and becomes infinite,
+/// decided here once for every format. URDF requires `velocity` and `effort` on every
+/// `<limit>` (urdfdom refuses one without them), so files that do not know a joint's limits
+/// write 0 (e.g. example-robot-data's double pendulums); a joint that could neither move nor
+/// push would be a fixed joint. An infinite [`crate::model::JointLimits::velocity`] or
+/// [`crate::model::JointLimits::effort`] means unknown, as when the file has no limit at all.
+pub(crate) fn rate_limit(x: f64) -> f64 {
+    if x == 0.0 { f64::INFINITY } else { x }
+}
+
 /// A model's display name cut to what [`crate::model::Name`] holds (at a character boundary):
 /// unlike body and joint names it identifies nothing, so a long one is no error.
 fn display_name(s: &str) -> &str {
@@ -210,17 +303,50 @@ pub fn load_str<const N: usize>(
     text: &str,
     urdf: &UrdfOptions,
 ) -> Result<LoadedModel<N>, LoadError> {
-    let doc = xml::parse(text)?;
+    load_str_options(text, &LoadOptions::urdf(urdf))
+}
+
+/// Loads RL XML or URDF from `text`, by its root element, with every option.
+pub fn load_str_options<const N: usize>(
+    text: &str,
+    options: &LoadOptions,
+) -> Result<LoadedModel<N>, LoadError> {
+    load_as(text, options, None)
+}
+
+/// Parses `text` and loads it as `format` (or by its root element), then adds the warnings
+/// about joints that move no mass.
+fn load_as<const N: usize>(
+    text: &str,
+    options: &LoadOptions,
+    format: Option<Format>,
+) -> Result<LoadedModel<N>, LoadError> {
+    let doc = xml::parse(text, &options.input)?;
     let root = doc.root_element();
-    match root.tag_name().name() {
-        "robot" => urdf::from_document(root, urdf),
-        _ => rlmdl::from_document(root),
+    let urdf = match format {
+        Some(f) => f == Format::Urdf,
+        None => root.tag_name().name() == "robot",
+    };
+    let mut loaded = if urdf {
+        urdf::from_document(root, options)?
+    } else {
+        rlmdl::from_document(root, options)?
+    };
+    for k in physical::massless_dofs(&loaded.model) {
+        let b = loaded.model.dof_body(k);
+        loaded.warnings.push(std::format!(
+            "joint \"{}\" (DOF {k}) moves no mass or inertia along it at the neutral \
+             configuration: the mass matrix is singular there, so forward dynamics and the \
+             mass-matrix solve fail; give the links it moves an inertia",
+            loaded.model.joint_name(b)
+        ));
     }
+    Ok(loaded)
 }
 
 /// Loads RL's XML model format from `text`.
 pub fn load_rlmdl_str<const N: usize>(text: &str) -> Result<LoadedModel<N>, LoadError> {
-    rlmdl::load(text)
+    load_as(text, &LoadOptions::default(), Some(Format::Rlmdl))
 }
 
 /// Loads URDF from `text`.
@@ -228,7 +354,7 @@ pub fn load_urdf_str<const N: usize>(
     text: &str,
     options: &UrdfOptions,
 ) -> Result<LoadedModel<N>, LoadError> {
-    urdf::load(text, options)
+    load_as(text, &LoadOptions::urdf(options), Some(Format::Urdf))
 }
 
 /// Loads a model file (RL XML or URDF, by its root element) with default URDF options.
@@ -241,11 +367,49 @@ pub fn load_file_with<const N: usize>(
     path: impl AsRef<Path>,
     urdf: &UrdfOptions,
 ) -> Result<LoadedModel<N>, LoadError> {
+    load_file_options(path, &LoadOptions::urdf(urdf))
+}
+
+/// Loads a model file (RL XML or URDF, by its root element) with every option. A file larger
+/// than [`InputLimits::max_bytes`] is refused before it is read.
+pub fn load_file_options<const N: usize>(
+    path: impl AsRef<Path>,
+    options: &LoadOptions,
+) -> Result<LoadedModel<N>, LoadError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        LoadError::new(LoadErrorKind::Io(e.to_string())).in_file(path.to_path_buf())
-    })?;
-    load_str(&text, urdf).map_err(|e| e.in_file(path.to_path_buf()))
+    let text =
+        read_text(path, options.input.max_bytes).map_err(|e| e.in_file(path.to_path_buf()))?;
+    load_str_options(&text, options).map_err(|e| e.in_file(path.to_path_buf()))
+}
+
+/// The file's text, refused above `max_bytes` (checked on the size and while reading, for files
+/// that grow or report no size).
+fn read_text(path: &Path, max_bytes: u64) -> Result<String, LoadError> {
+    use std::io::Read;
+    let io = |e: std::io::Error| LoadError::new(LoadErrorKind::Io(e.to_string()));
+    let too_large = || {
+        LoadError::new(LoadErrorKind::TooLarge {
+            what: "file size",
+            limit: max_bytes,
+        })
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    if file.metadata().map_err(io)?.len() > max_bytes {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::new();
+    file.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_large());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        LoadError::new(LoadErrorKind::Io(std::format!(
+            "not UTF-8 text (byte {})",
+            e.utf8_error().valid_up_to()
+        )))
+    })
 }
 
 /// The directory holding example-robot-data's `robots/` (for tests and tools): `$RL_ROBOT_DATA`

@@ -5,6 +5,7 @@
 //! fictitious base acceleration (physical gravity is its negative). Only the first `<model>` is
 //! loaded. Joint offsets are folded into the placement, so `q` here is RL's `q`.
 
+use std::collections::HashMap;
 use std::format;
 use std::string::ToString;
 use std::vec::Vec;
@@ -15,9 +16,10 @@ use roxmltree::Node;
 use super::error::{LoadError, LoadErrorKind};
 use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Frame, assemble};
 use super::xml::{
-    attr, child, child_number, child_xyz, children, elem, err, invalid, number, rot_zyx, unit_axis,
+    Lines, attr, child, child_number, child_xyz, children, elem, err, invalid, number, rot_zyx,
+    unit_axis,
 };
-use super::{Format, LoadedModel};
+use super::{Format, LoadOptions, LoadedModel};
 use crate::joint::{
     Cylindrical, Helical, Joint, MAX_JOINT_NV, Prismatic, Revolute, SixDof, Spherical,
 };
@@ -37,13 +39,10 @@ const TRANSFORMS: [&str; 7] = [
 const XINCLUDE: &str = "http://www.w3.org/2001/XInclude";
 
 /// Loads the first model of an RL XML document.
-pub(crate) fn load<const N: usize>(text: &str) -> Result<LoadedModel<N>, LoadError> {
-    let doc = super::xml::parse(text)?;
-    let root = doc.root_element();
-    from_document(root)
-}
-
-pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>, LoadError> {
+pub(crate) fn from_document<const N: usize>(
+    root: Node,
+    options: &LoadOptions,
+) -> Result<LoadedModel<N>, LoadError> {
     let tag = root.tag_name().name();
     if tag == "stylesheet" || tag == "transform" {
         return Err(err(
@@ -86,8 +85,10 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
         warnings.push("only the first <model> is loaded, as RL does".to_string());
     }
 
+    let lines = Lines::new(root.document().input_text());
     // Frames: world, bodies and plain frames, by id.
     let mut nodes: Vec<Frame> = Vec::new();
+    let mut index: HashMap<&str, usize> = HashMap::new();
     let mut world: Option<(usize, Node)> = None;
     for n in model.children().filter(|n| n.is_element()) {
         let t = n.tag_name().name();
@@ -95,7 +96,7 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
             continue;
         }
         let id = attr(n, "id")?;
-        if nodes.iter().any(|f| f.name == id) {
+        if index.insert(id, nodes.len()).is_some() {
             return Err(err(
                 n,
                 LoadErrorKind::DuplicateName {
@@ -125,7 +126,7 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
         nodes.push(Frame {
             name: id.to_string(),
             inertia,
-            elem: elem(n),
+            elem: lines.elem(n),
         });
     }
     let Some((world_index, world_node)) = world else {
@@ -150,7 +151,7 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
     for n in model.children().filter(|n| n.is_element()) {
         let t = n.tag_name().name();
         if TRANSFORMS.contains(&t) {
-            edges.push(transform(n, &nodes)?);
+            edges.push(transform(n, &index, &lines)?);
         } else if matches!(
             t,
             "world" | "body" | "frame" | "manufacturer" | "name" | "home"
@@ -191,8 +192,10 @@ pub(crate) fn from_document<const N: usize>(root: Node) -> Result<LoadedModel<N>
         leaf_tools: true,
         extra_tools: &[],
         doc_elem: elem(model),
+        inertia: options.inertia,
     };
     let assembled = assemble(&nodes, &edges, &how, &mut builder)?;
+    warnings.extend(assembled.warnings.iter().cloned());
     for f in &assembled.unconnected {
         warnings.push(format!(
             "frame \"{f}\" is not connected to the world and is skipped, as RL does"
@@ -268,7 +271,7 @@ fn limits(n: Node, k: usize, scale: f64) -> Result<JointLimits, LoadError> {
         let c = children(n, "min").nth(k - 1).unwrap_or(n);
         return Err(invalid(c, "min", &lower.to_string(), "greater than max"));
     }
-    let speed = indexed(n, "speed", k, f64::INFINITY)?;
+    let speed = super::rate_limit(indexed(n, "speed", k, f64::INFINITY)?);
     if speed < 0.0 {
         let c = children(n, "speed").nth(k - 1).unwrap_or(n);
         return Err(invalid(c, "speed", &speed.to_string(), "negative"));
@@ -310,7 +313,7 @@ fn same_axis(n: Node, a: DVec3, b: DVec3, kind: &str) -> Result<(), LoadError> {
 }
 
 /// One transform element.
-fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
+fn transform(n: Node, nodes: &HashMap<&str, usize>, lines: &Lines) -> Result<Edge, LoadError> {
     let t = n.tag_name().name();
     let name = attr(n, "id")?.to_string();
     let f = child(n, "frame")
@@ -319,7 +322,7 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
         let e =
             child(f, tag).ok_or_else(|| err(f, LoadErrorKind::MissingElement { child: tag }))?;
         let id = attr(e, "idref")?;
-        nodes.iter().position(|x| x.name == id).ok_or_else(|| {
+        nodes.get(id).copied().ok_or_else(|| {
             err(
                 n,
                 LoadErrorKind::UnresolvedReference {
@@ -431,7 +434,7 @@ fn transform(n: Node, nodes: &[Frame]) -> Result<Edge, LoadError> {
         source_type: t.to_string(),
         origin,
         kind,
-        elem: elem(n),
+        elem: lines.elem(n),
     })
 }
 

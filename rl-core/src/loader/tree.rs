@@ -77,6 +77,8 @@ pub(crate) struct Assembly<'a> {
     pub extra_tools: &'a [String],
     /// Where to report a name in `extra_tools` that does not exist.
     pub doc_elem: ElementRef,
+    /// What an unphysical body inertia is.
+    pub inertia: super::InertiaCheck,
 }
 
 /// What assembly found besides the model itself.
@@ -85,6 +87,8 @@ pub(crate) struct Assembled {
     pub transforms: Vec<TransformInfo>,
     /// Frames that are not connected to the root (RL skips them).
     pub unconnected: Vec<String>,
+    /// Notes from the physical checks.
+    pub warnings: Vec<String>,
 }
 
 fn model_err(elem: &ElementRef, e: crate::model::ModelError) -> LoadError {
@@ -131,7 +135,20 @@ pub(crate) fn assemble<const N: usize>(
         frames: Vec::new(),
         transforms: Vec::new(),
         unconnected: Vec::new(),
+        warnings: Vec::new(),
     };
+    // Per body: its first node with mass (or its own node) and how many more nodes with mass
+    // were merged into it; per node with mass: whether it went to the world.
+    let mut body_node: Vec<(usize, usize)> = Vec::new();
+    let note_mass = |body_node: &mut Vec<(usize, usize)>, b: usize, n: usize| {
+        let (first, more) = &mut body_node[b];
+        if nodes[*first].inertia.is_none() {
+            *first = n;
+        } else if *first != n {
+            *more += 1;
+        }
+    };
+    let mut massive: Vec<(usize, bool)> = Vec::new();
     let mut leaves = Vec::new();
 
     let root = &nodes[how.root];
@@ -154,6 +171,10 @@ pub(crate) fn assemble<const N: usize>(
                 body: b,
                 moving: true,
             });
+            body_node.push((how.root, 0));
+            if root.inertia.is_some() {
+                massive.push((how.root, false));
+            }
             (b, PlueckerTransform::IDENTITY)
         }
         None => {
@@ -161,6 +182,7 @@ pub(crate) fn assemble<const N: usize>(
                 builder
                     .add_fixed_inertia(ROOT, how.base, i)
                     .map_err(|e| model_err(&root.elem, e))?;
+                massive.push((how.root, true));
             }
             (ROOT, how.base)
         }
@@ -191,6 +213,10 @@ pub(crate) fn assemble<const N: usize>(
                     builder
                         .add_fixed_inertia(pb, pose, i)
                         .map_err(|e| model_err(&edge.elem, e))?;
+                    massive.push((edge.child, pb == ROOT));
+                    if pb != ROOT {
+                        note_mass(&mut body_node, pb, edge.child);
+                    }
                 }
                 (pb, pose, false)
             }
@@ -208,6 +234,10 @@ pub(crate) fn assemble<const N: usize>(
                 let b = builder
                     .add_body(pb, &edge.name, *joint, placement, &child.name, inertia)
                     .map_err(|e| model_err(&edge.elem, e))?;
+                body_node.push((edge.child, 0));
+                if child.inertia.is_some() {
+                    massive.push((edge.child, false));
+                }
                 for (k, l) in limits.iter().enumerate().take(joint.nv()) {
                     builder
                         .set_limits(b, k, *l)
@@ -234,22 +264,54 @@ pub(crate) fn assemble<const N: usize>(
         stack.extend(children[edge.child].iter().rev().copied());
     }
 
-    // Frames not reached: on a cycle (an error) or just not connected (RL skips those).
+    // Frames not reached: on a cycle (an error) or just not connected (RL skips those). Each
+    // walk towards the root stops at a frame already known to be clear, so this is linear.
+    let mut clear = vec![false; nodes.len()];
+    let mut on_walk = vec![false; nodes.len()];
+    let mut walk = Vec::new();
     for (n, m) in map.iter().enumerate() {
         if m.is_some() {
             continue;
         }
+        walk.clear();
         let mut at = n;
-        let mut steps = 0;
-        while let Some(e) = parent_edge[at] {
-            at = edges[e].parent;
-            steps += 1;
-            if at == n || steps > nodes.len() {
+        loop {
+            if clear[at] {
+                break;
+            }
+            if on_walk[at] {
+                let e = parent_edge[at].unwrap_or(0);
                 return Err(LoadError::at(edges[e].elem.clone(), LoadErrorKind::Cycle));
             }
+            on_walk[at] = true;
+            walk.push(at);
+            match parent_edge[at] {
+                Some(e) => at = edges[e].parent,
+                None => break,
+            }
+        }
+        for &w in &walk {
+            on_walk[w] = false;
+            clear[w] = true;
         }
         out.unconnected.push(nodes[n].name.clone());
     }
+
+    let bodies: Vec<super::physical::BodyInertia> = body_node
+        .iter()
+        .enumerate()
+        .map(|(b, &(n, merged_links))| super::physical::BodyInertia {
+            link: &nodes[n].name,
+            elem: &nodes[n].elem,
+            merged_links,
+            inertia: builder.inertia(b).copied().unwrap_or_default(),
+        })
+        .collect();
+    let links: Vec<(&str, RigidBodyInertia, bool)> = massive
+        .iter()
+        .filter_map(|&(n, world)| nodes[n].inertia.map(|i| (nodes[n].name.as_str(), i, world)))
+        .collect();
+    super::physical::check_inertias(&bodies, &links, how.inertia, &mut out.warnings)?;
 
     if how.leaf_tools {
         for &n in &leaves {

@@ -6,9 +6,16 @@
 //! `planar` (the axis is the plane's normal). The joint order is depth-first from the root
 //! link with siblings in file order (RL's) by default; [`super::JointOrder::Pinocchio`] orders
 //! siblings by joint name, as Pinocchio does (urdfdom keeps joints in a sorted map).
+//!
+//! `<mimic joint= multiplier= offset=>` on a revolute, continuous or prismatic joint makes it
+//! follow the named joint, `q = multiplier · q_leader + offset` (defaults 1 and 0, as urdfdom),
+//! by default ([`super::MimicJoints`]); the leader may be anywhere in the tree, and a mimic of
+//! a mimic follows the first leader. A mimic of a locked joint is locked at the position the
+//! relation gives. Names are looked up in hash maps: loading is linear in the file's size.
 
+use std::collections::HashMap;
 use std::format;
-use std::string::ToString;
+use std::string::{String, ToString};
 use std::vec::Vec;
 
 use glam::{DMat3, DQuat, DVec3};
@@ -17,23 +24,15 @@ use roxmltree::Node;
 use super::error::{LoadError, LoadErrorKind};
 use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Link, assemble};
 use super::xml::{
-    attr, attr_number, attr_vec3, child, children, elem, err, invalid, rot_zyx, unit_axis,
+    Lines, attr, attr_number, attr_vec3, child, children, elem, err, invalid, rot_zyx, unit_axis,
 };
-use super::{Format, JointOrder, LoadedModel, MimicJoints, UrdfOptions};
+use super::{Format, JointOrder, LoadOptions, LoadedModel, MimicJoints};
 use crate::joint::{Joint, MAX_JOINT_NV, Planar, Prismatic, Revolute, SixDof};
 use crate::model::{JointLimits, ModelBuilder};
 use crate::spatial::{PlueckerTransform, RigidBodyInertia};
 
 /// URDF's default physical gravity (RL and Pinocchio use the same value).
 const GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.80665);
-
-pub(crate) fn load<const N: usize>(
-    text: &str,
-    opt: &UrdfOptions,
-) -> Result<LoadedModel<N>, LoadError> {
-    let doc = super::xml::parse(text)?;
-    from_document(doc.root_element(), opt)
-}
 
 /// `<origin xyz rpy>` of `n`, identity when absent.
 fn origin(n: Node) -> Result<PlueckerTransform, LoadError> {
@@ -101,8 +100,8 @@ fn limit(j: Node, required: bool, positional: bool) -> Result<JointLimits, LoadE
         return Ok(JointLimits::UNLIMITED);
     };
     let mut out = JointLimits {
-        velocity: attr_number(l, "velocity", f64::INFINITY)?,
-        effort: attr_number(l, "effort", f64::INFINITY)?,
+        velocity: super::rate_limit(attr_number(l, "velocity", f64::INFINITY)?),
+        effort: super::rate_limit(attr_number(l, "effort", f64::INFINITY)?),
         ..JointLimits::UNLIMITED
     };
     if positional {
@@ -126,8 +125,9 @@ fn limit(j: Node, required: bool, positional: bool) -> Result<JointLimits, LoadE
 
 pub(crate) fn from_document<const N: usize>(
     robot: Node,
-    opt: &UrdfOptions,
+    options: &LoadOptions,
 ) -> Result<LoadedModel<N>, LoadError> {
+    let opt = &options.urdf;
     let tag = robot.tag_name().name();
     if tag != "robot" {
         return Err(err(
@@ -138,11 +138,13 @@ pub(crate) fn from_document<const N: usize>(
         ));
     }
     let mut warnings = Vec::new();
+    let lines = Lines::new(robot.document().input_text());
 
     let mut links: Vec<Link> = Vec::new();
+    let mut link_index: HashMap<&str, usize> = HashMap::new();
     for l in children(robot, "link") {
         let name = attr(l, "name")?;
-        if links.iter().any(|x| x.name == name) {
+        if link_index.insert(name, links.len()).is_some() {
             return Err(err(
                 l,
                 LoadErrorKind::DuplicateName {
@@ -153,23 +155,47 @@ pub(crate) fn from_document<const N: usize>(
         links.push(Link {
             name: name.to_string(),
             inertia: link_inertia(l)?,
-            elem: elem(l),
+            elem: lines.elem(l),
         });
     }
 
-    let mut edges: Vec<Edge> = Vec::new();
-    let mut locked_used = std::vec![false; opt.locked_joints.len()];
-    for j in children(robot, "joint") {
-        let name = attr(j, "name")?.to_string();
-        if edges.iter().any(|e| e.name == name) {
-            return Err(err(j, LoadErrorKind::DuplicateName { name }));
+    let joints: Vec<Node> = children(robot, "joint").collect();
+    let mut joint_index: HashMap<&str, usize> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        let name = attr(*j, "name")?;
+        if joint_index.insert(name, k).is_some() {
+            return Err(err(
+                *j,
+                LoadErrorKind::DuplicateName {
+                    name: name.to_string(),
+                },
+            ));
         }
+    }
+    let locked: HashMap<&str, usize> = opt
+        .locked_joints
+        .iter()
+        .enumerate()
+        .map(|(k, (n, _))| (n.as_str(), k))
+        .collect();
+    let mimics = Mimics {
+        joints: &joints,
+        index: &joint_index,
+        locked: &locked,
+    };
+
+    let mut edges: Vec<Edge> = Vec::new();
+    // Moving joints that follow another: (edge, leader joint, multiplier, offset).
+    let mut followers: Vec<(usize, String, f64, f64)> = Vec::new();
+    let mut locked_used = std::vec![false; opt.locked_joints.len()];
+    for &j in &joints {
+        let name = attr(j, "name")?.to_string();
         let ty = attr(j, "type")?;
         let find = |tag: &'static str| -> Result<usize, LoadError> {
             let e = child(j, tag)
                 .ok_or_else(|| err(j, LoadErrorKind::MissingElement { child: tag }))?;
             let link = attr(e, "link")?;
-            links.iter().position(|x| x.name == link).ok_or_else(|| {
+            link_index.get(link).copied().ok_or_else(|| {
                 err(
                     j,
                     LoadErrorKind::UnresolvedReference {
@@ -187,18 +213,21 @@ pub(crate) fn from_document<const N: usize>(
             }
             _ => DVec3::X,
         };
-        let lock = opt.locked_joints.iter().position(|(n, _)| *n == name);
-        if let Some(k) = lock {
+        let mut lock = locked
+            .get(name.as_str())
+            .map(|&k| (k, opt.locked_joints[k].1));
+        if let Some((k, _)) = lock {
             locked_used[k] = true;
         }
+        let mut follows = None;
         if ty != "fixed" && lock.is_none() && child(j, "mimic").is_some() {
             match opt.mimic {
                 MimicJoints::Reject => {
                     return Err(err(
                         j,
                         LoadErrorKind::Unsupported {
-                            feature: "<mimic> (a joint coupled to another); lock the joint or \
-                                      load it as independent (UrdfOptions::mimic)"
+                            feature: "<mimic> (a joint coupled to another): this load refuses \
+                                      mimic joints"
                                 .into(),
                         },
                     ));
@@ -206,6 +235,18 @@ pub(crate) fn from_document<const N: usize>(
                 MimicJoints::Independent => warnings.push(format!(
                     "mimic joint \"{name}\" loaded as an independent joint"
                 )),
+                MimicJoints::Follow => match mimics.resolve(j)? {
+                    Ok((leader, m, off)) => match locked.get(leader.as_str()) {
+                        // Following a locked joint: locked where the relation puts it.
+                        Some(&k) => lock = Some((usize::MAX, m * opt.locked_joints[k].1 + off)),
+                        None => follows = Some((leader, m, off)),
+                    },
+                    // As urdfdom and Pinocchio's default read it: an independent joint.
+                    Err(missing) => warnings.push(format!(
+                        "mimic joint \"{name}\" follows \"{missing}\", which does not exist: \
+                         loaded as an independent joint"
+                    )),
+                },
             }
         }
         let id = PlueckerTransform::IDENTITY;
@@ -257,8 +298,7 @@ pub(crate) fn from_document<const N: usize>(
         };
         let kind = match (joint, lock) {
             (None, _) => EdgeKind::Fixed,
-            (Some(joint), Some(k)) => {
-                let value = opt.locked_joints[k].1;
+            (Some(joint), Some((_, value))) => {
                 if joint.nq() != 1 {
                     return Err(err(
                         j,
@@ -274,7 +314,7 @@ pub(crate) fn from_document<const N: usize>(
                     source_type: format!("{ty} (locked)"),
                     origin: o * post * joint.transform(&[value]) * child_offset,
                     kind: EdgeKind::Fixed,
-                    elem: elem(j),
+                    elem: lines.elem(j),
                 });
                 continue;
             }
@@ -285,6 +325,9 @@ pub(crate) fn from_document<const N: usize>(
                 limits: lim,
             },
         };
+        if let Some((leader, m, off)) = follows {
+            followers.push((edges.len(), leader, m, off));
+        }
         edges.push(Edge {
             parent,
             child: child_link,
@@ -292,7 +335,7 @@ pub(crate) fn from_document<const N: usize>(
             source_type: ty.to_string(),
             origin: o,
             kind,
-            elem: elem(j),
+            elem: lines.elem(j),
         });
     }
     if let Some(k) = locked_used.iter().position(|u| !u) {
@@ -337,8 +380,44 @@ pub(crate) fn from_document<const N: usize>(
         leaf_tools: opt.leaf_tools,
         extra_tools: &opt.extra_tools,
         doc_elem: elem(robot),
+        inertia: options.inertia,
     };
     let assembled = assemble(&links, &edges, &how, &mut builder)?;
+    warnings.extend(assembled.warnings.iter().cloned());
+    if !followers.is_empty() {
+        let body_of: HashMap<&str, usize> = assembled
+            .transforms
+            .iter()
+            .filter(|t| t.moving)
+            .map(|t| (t.name.as_str(), t.body))
+            .collect();
+        for (e, leader, m, off) in &followers {
+            let edge = &edges[*e];
+            let mimic_err = |reason: String| {
+                LoadError::at(
+                    edge.elem.clone(),
+                    LoadErrorKind::Mimic {
+                        joint: edge.name.clone(),
+                        reason,
+                    },
+                )
+            };
+            let (Some(&b), Some(&l)) = (
+                body_of.get(edge.name.as_str()),
+                body_of.get(leader.as_str()),
+            ) else {
+                return Err(mimic_err(format!(
+                    "it follows \"{leader}\", which is not a moving joint of the model"
+                )));
+            };
+            builder.set_mimic(b, l, *m, *off).map_err(|e| match e {
+                crate::model::ModelError::InvalidMimic { reason, .. } => {
+                    mimic_err(format!("it cannot follow \"{leader}\": {reason}"))
+                }
+                e => LoadError::at(edge.elem.clone(), LoadErrorKind::Model(e)),
+            })?;
+        }
+    }
     Ok(LoadedModel {
         model: builder.build(),
         format: Format::Urdf,
@@ -347,4 +426,69 @@ pub(crate) fn from_document<const N: usize>(
         transforms: assembled.transforms,
         warnings,
     })
+}
+
+/// The `<mimic>` tags of a file's joints, by joint name.
+struct Mimics<'a, 'i> {
+    joints: &'a [Node<'a, 'i>],
+    index: &'a HashMap<&'a str, usize>,
+    /// Locked joints end a chain: their position is known.
+    locked: &'a HashMap<&'a str, usize>,
+}
+
+impl Mimics<'_, '_> {
+    /// The joint that mimic joint `j` finally follows (through other mimic joints, up to the
+    /// first that is not one or is locked), with the multiplier and offset composed along the
+    /// way: `q_j = m q_leader + o`; or the name of a joint in the chain that does not exist.
+    #[allow(clippy::type_complexity)]
+    fn resolve(&self, j: Node) -> Result<Result<(String, f64, f64), String>, LoadError> {
+        let name = j.attribute("name").unwrap_or("");
+        let fail = |reason: String| {
+            err(
+                j,
+                LoadErrorKind::Mimic {
+                    joint: name.to_string(),
+                    reason,
+                },
+            )
+        };
+        let (mut m, mut o) = (1.0, 0.0);
+        let mut at = j;
+        // A chain longer than the number of joints has a loop.
+        for _ in 0..=self.joints.len() {
+            let end = at != j && self.locked.contains_key(at.attribute("name").unwrap_or(""));
+            let Some(tag) = child(at, "mimic").filter(|_| !end) else {
+                let leader = at.attribute("name").unwrap_or("");
+                let ty = at.attribute("type").unwrap_or("");
+                if !matches!(ty, "revolute" | "continuous" | "prismatic") {
+                    return Err(fail(format!(
+                        "it follows \"{leader}\", a {ty} joint (only revolute, continuous and \
+                         prismatic joints can be followed)"
+                    )));
+                }
+                return Ok(Ok((leader.to_string(), m, o)));
+            };
+            let ty = at.attribute("type").unwrap_or("");
+            if !matches!(ty, "revolute" | "continuous" | "prismatic") {
+                return Err(fail(format!(
+                    "a {ty} joint cannot follow another (only revolute, continuous and \
+                     prismatic joints can)"
+                )));
+            }
+            let target = attr(tag, "joint")?;
+            let mult = super::xml::attr_number(tag, "multiplier", 1.0)?;
+            let off = super::xml::attr_number(tag, "offset", 0.0)?;
+            // q_at = mult q_target + off, and q_j = m q_at + o.
+            o += m * off;
+            m *= mult;
+            let Some(&k) = self.index.get(target) else {
+                return Ok(Err(target.to_string()));
+            };
+            at = self.joints[k];
+            if at == j {
+                return Err(fail("its mimic chain loops back to it".to_string()));
+            }
+        }
+        Err(fail("its mimic chain has a loop".to_string()))
+    }
 }

@@ -1,34 +1,188 @@
 //! Small helpers over roxmltree shared by both formats: element references for errors,
 //! child lookup and number parsing that reports the element at fault.
 
-use std::string::ToString;
+use std::string::{String, ToString};
 
 use glam::{DMat3, DVec3};
 use roxmltree::{Document, Node, ParsingOptions};
 
 use super::error::{ElementRef, LoadError, LoadErrorKind};
 
-/// Parses `text` (DTDs allowed: roxmltree bounds entity expansion).
-pub(crate) fn parse(text: &str) -> Result<Document<'_>, LoadError> {
+/// Parses `text` within `limits` (DTDs allowed: roxmltree bounds entity expansion). The size
+/// and the nesting depth are checked first, in one pass over the bytes, so a huge or deeply
+/// nested input is refused before a tree is built.
+pub(crate) fn parse<'i>(
+    text: &'i str,
+    limits: &super::InputLimits,
+) -> Result<Document<'i>, LoadError> {
+    if text.len() as u64 > limits.max_bytes {
+        return Err(LoadError::new(LoadErrorKind::TooLarge {
+            what: "size in bytes",
+            limit: limits.max_bytes,
+        }));
+    }
+    check_depth(text.as_bytes(), limits.max_depth)?;
     let opt = ParsingOptions {
         allow_dtd: true,
+        nodes_limit: limits.max_nodes,
         ..ParsingOptions::default()
     };
-    Document::parse_with_options(text, opt)
-        .map_err(|e| LoadError::new(LoadErrorKind::Xml(e.to_string())))
+    Document::parse_with_options(text, opt).map_err(|e| match e {
+        roxmltree::Error::NodesLimitReached => LoadError::new(LoadErrorKind::TooLarge {
+            what: "number of XML nodes",
+            limit: u64::from(limits.max_nodes),
+        }),
+        e => LoadError::new(LoadErrorKind::Xml(e.to_string())),
+    })
 }
 
-/// The reference of `node` for error messages.
+/// Refuses element nesting deeper than `max` (an error naming line:column of the element that
+/// goes too deep). Skips comments, CDATA, processing instructions, the DOCTYPE and quoted
+/// attribute values; malformed markup is left for the parser to report. Linear, no allocation.
+fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
+    let find = |from: usize, pat: &[u8]| {
+        b[from.min(b.len())..]
+            .windows(pat.len())
+            .position(|w| w == pat)
+            .map_or(b.len(), |p| from + p + pat.len())
+    };
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = find(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = find(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = find(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            // DOCTYPE, with an internal subset in brackets.
+            let mut brackets = 0usize;
+            let mut quote = 0u8;
+            i += 2;
+            while i < b.len() {
+                let c = b[i];
+                i += 1;
+                match c {
+                    _ if quote != 0 && c == quote => quote = 0,
+                    _ if quote != 0 => {}
+                    b'"' | b'\'' => quote = c,
+                    b'[' => brackets += 1,
+                    b']' => brackets = brackets.saturating_sub(1),
+                    b'>' if brackets == 0 => break,
+                    _ => {}
+                }
+            }
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = find(i + 2, b">");
+        } else {
+            let start = i;
+            let mut quote = 0u8;
+            let mut last = 0u8;
+            i += 1;
+            while i < b.len() {
+                let c = b[i];
+                i += 1;
+                if quote != 0 {
+                    if c == quote {
+                        quote = 0;
+                    }
+                } else if c == b'"' || c == b'\'' {
+                    quote = c;
+                } else if c == b'>' {
+                    break;
+                } else if !c.is_ascii_whitespace() {
+                    last = c;
+                }
+            }
+            if last != b'/' {
+                depth += 1;
+                if depth > max {
+                    let line_start = b[..start]
+                        .iter()
+                        .rposition(|&c| c == b'\n')
+                        .map_or(0, |p| p + 1);
+                    let name_len = b[start + 1..]
+                        .iter()
+                        .position(|c| c.is_ascii_whitespace() || matches!(c, b'/' | b'>'))
+                        .unwrap_or(0);
+                    let tag = String::from_utf8_lossy(&b[start + 1..start + 1 + name_len]);
+                    let at = ElementRef {
+                        tag: tag.into_owned(),
+                        id: None,
+                        line: (b[..start].iter().filter(|&&c| c == b'\n').count() + 1) as u32,
+                        column: (start - line_start + 1) as u32,
+                    };
+                    return Err(LoadError::at(
+                        at,
+                        LoadErrorKind::TooLarge {
+                            what: "nesting depth",
+                            limit: max as u64,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The reference of `node` for error messages (for one error: this counts the lines from the
+/// start of the document; [`Lines::elem`] is the way for every element of a file).
 pub(crate) fn elem(node: Node) -> ElementRef {
     let pos = node.document().text_pos_at(node.range().start);
+    element_ref(node, pos.row, pos.col)
+}
+
+fn element_ref(node: Node, line: u32, column: u32) -> ElementRef {
     ElementRef {
         tag: node.tag_name().name().to_string(),
         id: node
             .attribute("id")
             .or_else(|| node.attribute("name"))
             .map(str::to_string),
-        line: pos.row,
-        column: pos.col,
+        line,
+        column,
+    }
+}
+
+/// Where the lines of a document start, so that an element's line and column cost a binary
+/// search instead of a scan from the start (which made loading quadratic in the file's size).
+pub(crate) struct Lines<'i> {
+    text: &'i str,
+    starts: std::vec::Vec<usize>,
+}
+
+impl<'i> Lines<'i> {
+    /// The line index of `text`, one pass.
+    pub(crate) fn new(text: &'i str) -> Self {
+        let mut starts = std::vec![0];
+        starts.extend(
+            text.bytes()
+                .enumerate()
+                .filter(|&(_, b)| b == b'\n')
+                .map(|(i, _)| i + 1),
+        );
+        Self { text, starts }
+    }
+
+    /// The reference of `node` (of this document), line and column (in characters) from 1.
+    pub(crate) fn elem(&self, node: Node) -> ElementRef {
+        let at = node.range().start;
+        let line = self.starts.partition_point(|&s| s <= at).max(1);
+        let start = self.starts[line - 1];
+        let column = self
+            .text
+            .get(start..at)
+            .map_or(at - start, |s| s.chars().count())
+            + 1;
+        element_ref(node, line as u32, column as u32)
     }
 }
 

@@ -2,5 +2,7 @@
 
 pub mod real;
 mod small;
+mod symmetric_eigen;
 
 pub use small::invert_spd;
+pub use symmetric_eigen::symmetric_eigenvalues;

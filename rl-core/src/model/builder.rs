@@ -1,6 +1,6 @@
 //! Building a model body by body, merging fixed joints as it goes.
 
-use super::{JointLimits, Model, ModelError, Name, ROOT, Tool};
+use super::{JointLimits, Mimic, Model, ModelError, Name, ROOT, Tool};
 use crate::joint::{Joint, MAX_JOINT_NV};
 use crate::spatial::{MotionVector, PlueckerTransform, RigidBodyInertia};
 
@@ -63,6 +63,11 @@ impl<const N: usize> ModelBuilder<N> {
         self.model.nbodies
     }
 
+    /// Body `body`'s inertia so far (its own and what was merged into it), in its frame.
+    pub fn inertia(&self, body: usize) -> Option<&RigidBodyInertia> {
+        self.model.inertias[..self.model.nbodies].get(body)
+    }
+
     /// Adds a moving body hanging from `parent` (a body index or [`ROOT`]) through `joint`,
     /// whose frame sits at `placement` in the parent's frame. Returns the new body's index.
     pub fn add_body(
@@ -82,10 +87,10 @@ impl<const N: usize> ModelBuilder<N> {
         if parent != ROOT && parent >= i {
             return Err(ModelError::UnknownParent { parent });
         }
-        if m.nv + joint.nv() > N {
+        if m.nv_ext + joint.nv() > N {
             return Err(ModelError::TooManyDofs {
                 capacity: N,
-                needed: m.nv + joint.nv(),
+                needed: m.nv_ext + joint.nv(),
             });
         }
         if !placement.translation.is_finite()
@@ -116,26 +121,67 @@ impl<const N: usize> ModelBuilder<N> {
         m.joints[i] = joint;
         m.placements[i] = placement;
         m.inertias[i] = inertia;
-        m.idx_q[i] = m.nq;
-        m.idx_v[i] = m.nv;
+        // Until `build`, every joint has coordinates of its own (internal indices).
+        m.idx_v[i] = m.nv_ext;
         let mut s = [MotionVector::ZERO; MAX_JOINT_NV];
         joint.motion_subspace(&mut s);
         for (k, col) in s.iter().enumerate().take(joint.nv()) {
-            m.subspace[m.nv + k] = *col;
-            m.dof_body[m.nv + k] = i;
-            m.dof_parent[m.nv + k] = if k > 0 {
-                m.nv + k - 1
-            } else if parent == ROOT {
-                ROOT
-            } else {
-                m.idx_v[parent] + m.joints[parent].nv() - 1
-            };
-            m.limits[m.nv + k] = JointLimits::UNLIMITED;
+            m.subspace[m.nv_ext + k] = *col;
+            m.dof_body[m.nv_ext + k] = i;
+            m.limits[m.nv_ext + k] = JointLimits::UNLIMITED;
         }
-        m.nq += joint.nq();
-        m.nv += joint.nv();
+        m.nv_ext += joint.nv();
         m.nbodies += 1;
         Ok(i)
+    }
+
+    /// Makes `body`'s joint follow `leader`'s: `q_body = multiplier · q_leader + offset` (a mimic
+    /// joint, see [`super::mimic`]). Both joints have one coordinate; the leader is no mimic
+    /// joint itself and `body` leads no other (resolve chains first: a mimic of a mimic follows
+    /// the first leader with the multipliers multiplied). The leader may be added before or
+    /// after `body`. Limits set on `body` are dropped (it has no coordinate of its own).
+    pub fn set_mimic(
+        &mut self,
+        body: usize,
+        leader: usize,
+        multiplier: f64,
+        offset: f64,
+    ) -> Result<&mut Self, ModelError> {
+        let m = &mut self.model;
+        let bad = |reason| Err(ModelError::InvalidMimic { body, reason });
+        if body >= m.nbodies {
+            return Err(ModelError::UnknownBody { body });
+        }
+        if leader >= m.nbodies {
+            return Err(ModelError::UnknownBody { body: leader });
+        }
+        if !(multiplier.is_finite() && offset.is_finite()) {
+            return bad("the multiplier or offset is not finite");
+        }
+        if body == leader {
+            return bad("it follows itself");
+        }
+        if m.joints[body].nq() != 1 || m.joints[body].nv() != 1 {
+            return bad("only a joint with one coordinate can follow another");
+        }
+        if m.joints[leader].nq() != 1 || m.joints[leader].nv() != 1 {
+            return bad("the joint it follows does not have exactly one coordinate");
+        }
+        if m.mimic[leader].is_some() {
+            return bad("the joint it follows is a mimic joint itself");
+        }
+        if m.mimic[..m.nbodies]
+            .iter()
+            .any(|x| x.is_some_and(|x| x.leader == body))
+        {
+            return bad("another mimic joint follows it");
+        }
+        m.mimic[body] = Some(Mimic {
+            leader,
+            multiplier,
+            offset,
+        });
+        Ok(self)
     }
 
     /// Rigidly attaches more mass to `body` (or to the world with [`ROOT`]): `inertia` is given
@@ -208,6 +254,7 @@ impl<const N: usize> ModelBuilder<N> {
             m.coms[i] = m.inertias[i].com();
             m.inertias_com[i] = m.inertias[i].inertia_com();
         }
+        m.finish_coordinates();
         self.model
     }
 }

@@ -54,6 +54,14 @@ pub enum ModelError {
         /// The body.
         body: usize,
     },
+    /// A mimic joint that cannot follow the joint it names (see
+    /// [`super::ModelBuilder::set_mimic`]).
+    InvalidMimic {
+        /// The mimic joint's body.
+        body: usize,
+        /// Why.
+        reason: &'static str,
+    },
     /// A transform or value that is not finite.
     NotFinite {
         /// What it was.
@@ -99,6 +107,9 @@ impl fmt::Display for ModelError {
             ),
             ModelError::InvalidAxis { body } => {
                 write!(f, "body {body}'s joint axis is zero or not finite")
+            }
+            ModelError::InvalidMimic { body, reason } => {
+                write!(f, "body {body}'s joint cannot be a mimic joint: {reason}")
             }
             ModelError::NotFinite { what } => write!(f, "{what} is not finite"),
         }

@@ -10,6 +10,7 @@ mod builder;
 mod data;
 mod error;
 mod limits;
+pub mod mimic;
 #[allow(clippy::module_inception)]
 mod model;
 mod name;
@@ -18,5 +19,6 @@ pub use builder::ModelBuilder;
 pub use data::Data;
 pub use error::ModelError;
 pub use limits::JointLimits;
-pub use model::{Model, ROOT, Tool};
+pub use mimic::Mimic;
+pub use model::{Model, QuaternionNorm, ROOT, Tool, UNIT_QUATERNION_TOLERANCE};
 pub use name::{NAME_CAPACITY, Name};

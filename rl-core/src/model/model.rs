@@ -2,7 +2,7 @@
 
 use glam::{DMat3, DVec3};
 
-use super::{JointLimits, Name};
+use super::{JointLimits, Mimic, Name};
 use crate::joint::{Joint, Revolute};
 use crate::spatial::{
     ForceVector, MotionVector, PlueckerTransform, RigidBodyInertia, rotate_symmetric_upper,
@@ -11,6 +11,22 @@ use crate::spatial::{
 
 /// The parent index of a body attached to the world (the fixed base).
 pub const ROOT: usize = usize::MAX;
+
+/// How far from 1 the norm of a configuration's quaternion may be
+/// ([`Model::unit_quaternion_errors`]): far above the rounding of computed quaternions, far
+/// below the error of one typed with four decimals.
+pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-6;
+
+/// A quaternion of a configuration that is not of unit norm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuaternionNorm {
+    /// The body whose joint it belongs to.
+    pub body: usize,
+    /// The index of its `x` in `q` (`x, y, z, w` follow).
+    pub q_index: usize,
+    /// Its norm.
+    pub norm: f64,
+}
 
 /// A tool (operational frame, RL's end-effector): a frame rigidly attached to a body.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,11 +39,16 @@ pub struct Tool {
     pub placement: PlueckerTransform,
 }
 
-/// A tree of up to `N` moving bodies with up to `N` degrees of freedom in total.
+/// A tree of up to `N` moving bodies with up to `N` degrees of freedom in total (mimic joints
+/// count here too: `N` bounds the internal coordinates, see [`super::mimic`]).
 ///
 /// Body `i` hangs from `parent(i)` (an earlier body, or [`ROOT`]) through its joint: the
 /// joint frame sits at `placement(i)` in the parent's frame, and the body frame is the joint's
 /// child frame. Build one with [`super::ModelBuilder`] or a loader; it never changes after.
+///
+/// A joint may follow another ([`Model::mimic`]): it then has no coordinates of its own in
+/// `q`, `q̇`, `q̈` and `τ`, which hold the independent joints only ([`Model::nq`],
+/// [`Model::dof`]).
 #[derive(Clone, Debug)]
 pub struct Model<const N: usize> {
     pub(crate) name: Name,
@@ -42,18 +63,34 @@ pub struct Model<const N: usize> {
     /// `inertias` because rotating an inertia about its centre of mass is the cheap way.
     pub(crate) coms: [DVec3; N],
     pub(crate) inertias_com: [DMat3; N],
+    /// Index of each body's first coordinate in the public `q` (its leader's for a mimic joint).
     pub(crate) idx_q: [usize; N],
+    /// Index of each body's first internal velocity coordinate (the sweeps' indexing: every
+    /// joint, mimic or not, has its own).
     pub(crate) idx_v: [usize; N],
     pub(crate) joint_names: [Name; N],
     pub(crate) body_names: [Name; N],
-    /// Motion subspace columns, one per DOF, in the owning body's coordinates.
+    /// Motion subspace columns, one per internal coordinate, in the owning body's coordinates.
     pub(crate) subspace: [MotionVector; N],
-    /// The body that owns each DOF.
+    /// The body that owns each internal coordinate.
     pub(crate) dof_body: [usize; N],
-    /// The DOF before each DOF on the path to the root (Featherstone's λ for the sparse
-    /// factorisation), or [`ROOT`].
+    /// The public DOF before each public DOF on the path of the sparse factorisation of `M`
+    /// (Featherstone's λ; the elimination tree when mimic joints couple branches), or [`ROOT`].
     pub(crate) dof_parent: [usize; N],
+    /// Limits per public DOF.
     pub(crate) limits: [JointLimits; N],
+    /// Number of internal velocity coordinates (`nv` plus one per mimic joint).
+    pub(crate) nv_ext: usize,
+    /// How each body's joint follows another, if it does.
+    pub(crate) mimic: [Option<Mimic>; N],
+    /// Per internal coordinate: the public DOF it follows (its own, or its leader's) …
+    pub(crate) ext_v: [usize; N],
+    /// … and the factor (1, or the mimic multiplier): `q̇_int[k] = ext_scale[k] q̇[ext_v[k]]`.
+    pub(crate) ext_scale: [f64; N],
+    /// Per public DOF: its internal coordinate.
+    pub(crate) v_ext: [usize; N],
+    /// Whether any joint is a mimic joint.
+    pub(crate) has_mimic: bool,
     pub(crate) tools: [Tool; N],
     pub(crate) ntools: usize,
     /// Physical gravitational acceleration in world coordinates, m/s².
@@ -95,6 +132,12 @@ impl<const N: usize> Model<N> {
             dof_body: [0; N],
             dof_parent: [ROOT; N],
             limits: [JointLimits::UNLIMITED; N],
+            nv_ext: 0,
+            mimic: [None; N],
+            ext_v: [0; N],
+            ext_scale: [1.0; N],
+            v_ext: [0; N],
+            has_mimic: false,
             tools: [filler; N],
             ntools: 0,
             gravity: DVec3::new(0.0, 0.0, -9.80665),
@@ -107,7 +150,7 @@ impl<const N: usize> Model<N> {
         self.name.as_str()
     }
 
-    /// Number of moving bodies (= number of joints).
+    /// Number of moving bodies (= number of joints, mimic joints included).
     #[inline]
     pub fn body_count(&self) -> usize {
         self.nbodies
@@ -155,14 +198,56 @@ impl<const N: usize> Model<N> {
         self.body_names[i].as_str()
     }
 
-    /// The first index of body `i`'s coordinates in `q`.
+    /// The first index of body `i`'s coordinates in `q` (for a mimic joint: its leader's).
     pub fn q_index(&self, i: usize) -> usize {
         self.idx_q[i]
     }
 
-    /// The first index of body `i`'s coordinates in `q̇`.
+    /// The first index of body `i`'s coordinates in `q̇` (for a mimic joint: its leader's).
     pub fn v_index(&self, i: usize) -> usize {
-        self.idx_v[i]
+        self.ext_v[self.idx_v[i]]
+    }
+
+    /// How many entries of `q` body `i`'s joint owns: its `nq`, or 0 for a mimic joint.
+    pub fn joint_nq(&self, i: usize) -> usize {
+        if self.mimic[i].is_some() {
+            0
+        } else {
+            self.joints[i].nq()
+        }
+    }
+
+    /// How many entries of `q̇` body `i`'s joint owns: its `nv`, or 0 for a mimic joint.
+    pub fn joint_nv(&self, i: usize) -> usize {
+        if self.mimic[i].is_some() {
+            0
+        } else {
+            self.joints[i].nv()
+        }
+    }
+
+    /// How body `i`'s joint follows another one, if it is a mimic joint.
+    pub fn mimic(&self, i: usize) -> Option<&Mimic> {
+        self.mimic[i].as_ref()
+    }
+
+    /// Whether any joint is a mimic joint.
+    #[inline]
+    pub fn has_mimic(&self) -> bool {
+        self.has_mimic
+    }
+
+    /// Body `i`'s joint position when the model is at `q` (the mimic relation applied), for a
+    /// joint with one coordinate; `None` for other joints.
+    pub fn joint_position(&self, i: usize, q: &[f64]) -> Option<f64> {
+        if self.joints[i].nq() != 1 {
+            return None;
+        }
+        let x = *q.get(self.idx_q[i])?;
+        Some(match &self.mimic[i] {
+            Some(m) => m.multiplier * x + m.offset,
+            None => x,
+        })
     }
 
     /// Limits of DOF `k` (index into `q̇`).
@@ -170,9 +255,9 @@ impl<const N: usize> Model<N> {
         &self.limits[k]
     }
 
-    /// The body that owns DOF `k`.
+    /// The body that owns DOF `k` (index into `q̇`).
     pub fn dof_body(&self, k: usize) -> usize {
-        self.dof_body[k]
+        self.dof_body[self.v_ext[k]]
     }
 
     /// The tools (operational frames).
@@ -204,7 +289,9 @@ impl<const N: usize> Model<N> {
 
     /// Total mass of the moving bodies, kg.
     pub fn moving_mass(&self) -> f64 {
-        self.inertias[..self.nbodies].iter().map(|i| i.mass).sum()
+        self.inertias[..self.nbodies]
+            .iter()
+            .fold(0.0, |m, i| m + i.mass)
     }
 
     /// Mass rigidly attached to the world (a fixed base), kg.
@@ -259,7 +346,7 @@ impl<const N: usize> Model<N> {
 
     /// Motion subspace column `k` (a DOF of body `i`) in the coordinates of a frame in which
     /// body `i` sits at `x`; revolute and prismatic columns skip their zero half.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn act_subspace(&self, i: usize, k: usize, x: &PlueckerTransform) -> MotionVector {
         let s = &self.subspace[k];
         match &self.joints[i] {
@@ -290,6 +377,9 @@ impl<const N: usize> Model<N> {
     /// The neutral configuration (zeros, identity quaternions) into `q[..nq]`.
     pub fn neutral(&self, q: &mut [f64]) {
         for i in 0..self.nbodies {
+            if self.mimic[i].is_some() {
+                continue;
+            }
             let j = &self.joints[i];
             let s = self.idx_q[i];
             j.neutral(&mut q[s..s + j.nq()]);
@@ -299,8 +389,11 @@ impl<const N: usize> Model<N> {
     /// `q ⊕ v dt` for the whole model (see [`Joint::integrate`]).
     pub fn integrate(&self, q: &[f64], v: &[f64], dt: f64, out: &mut [f64]) {
         for i in 0..self.nbodies {
+            if self.mimic[i].is_some() {
+                continue;
+            }
             let j = &self.joints[i];
-            let (sq, sv) = (self.idx_q[i], self.idx_v[i]);
+            let (sq, sv) = (self.idx_q[i], self.v_index(i));
             j.integrate(
                 &q[sq..sq + j.nq()],
                 &v[sv..sv + j.nv()],
@@ -310,9 +403,37 @@ impl<const N: usize> Model<N> {
         }
     }
 
+    /// The quaternions of `q` (spherical and six-DOF joints) that are not unit quaternions: a
+    /// norm off 1 by more than [`UNIT_QUATERNION_TOLERANCE`], zero or not finite. The
+    /// algorithms use a quaternion as given (a non-unit one shears the rotation), so inputs
+    /// from outside should pass this check or go through [`Model::normalize`].
+    pub fn unit_quaternion_errors<'a>(
+        &'a self,
+        q: &'a [f64],
+    ) -> impl Iterator<Item = QuaternionNorm> + 'a {
+        (0..self.nbodies).filter_map(move |i| {
+            let at = match self.joints[i] {
+                Joint::Spherical(_) if self.mimic[i].is_none() => self.idx_q[i],
+                Joint::SixDof(_) if self.mimic[i].is_none() => self.idx_q[i] + 3,
+                _ => return None,
+            };
+            let x = q.get(at..at + 4)?;
+            let norm = libm::sqrt(x.iter().map(|v| v * v).sum::<f64>());
+            let ok = norm.is_finite() && (norm - 1.0).abs() <= UNIT_QUATERNION_TOLERANCE;
+            (!ok).then_some(QuaternionNorm {
+                body: i,
+                q_index: at,
+                norm,
+            })
+        })
+    }
+
     /// Renormalises every quaternion in `q`.
     pub fn normalize(&self, q: &mut [f64]) {
         for i in 0..self.nbodies {
+            if self.mimic[i].is_some() {
+                continue;
+            }
             let j = &self.joints[i];
             let s = self.idx_q[i];
             j.normalize(&mut q[s..s + j.nq()]);
@@ -324,8 +445,11 @@ impl<const N: usize> Model<N> {
     /// uniformly random unit quaternion for ball and free joints.
     pub fn random_configuration(&self, q: &mut [f64], mut next_uniform: impl FnMut() -> f64) {
         for i in 0..self.nbodies {
+            if self.mimic[i].is_some() {
+                continue;
+            }
             let j = &self.joints[i];
-            let (sq, sv) = (self.idx_q[i], self.idx_v[i]);
+            let (sq, sv) = (self.idx_q[i], self.v_index(i));
             let mut draw = |k: usize, default_half_range: f64| {
                 let l = &self.limits[sv + k];
                 let u = next_uniform();

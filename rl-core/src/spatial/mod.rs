@@ -14,7 +14,7 @@ mod transform;
 pub use articulated_inertia::ArticulatedBodyInertia;
 pub use force::ForceVector;
 pub use motion::MotionVector;
-pub use rigid_inertia::RigidBodyInertia;
+pub use rigid_inertia::{InertiaProblem, RigidBodyInertia};
 pub use transform::PlueckerTransform;
 
 use glam::{DMat3, DVec3};

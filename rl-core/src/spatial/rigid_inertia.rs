@@ -65,6 +65,48 @@ impl RigidBodyInertia {
         self.rotational + c * c * self.mass
     }
 
+    /// The principal moments of inertia about the centre of mass, ascending, kg·m².
+    pub fn principal_moments(&self) -> [f64; 3] {
+        crate::math::symmetric_eigenvalues(&self.inertia_com())
+    }
+
+    /// Whether a rigid body can have this inertia: finite, mass ≥ 0, the rotational inertia
+    /// about the centre of mass positive semi-definite (no principal moment below 0) and, for a
+    /// body with mass, its principal moments satisfying the triangle inequality
+    /// `I₁ + I₂ ≥ I₃` (both follow from `I = ∫ ρ (|r|² 1 − r rᵀ) dV` with `ρ ≥ 0`).
+    ///
+    /// A massless inertia is held to positive semi-definiteness only: no rigid body is
+    /// massless, so such an inertia stands for something else, e.g. a motor's rotor inertia
+    /// about the joint axis lumped into the link (RL's Puma 560 body 1: `m = 0`,
+    /// `I = diag(0, 0.35, 0)`, where only that inertia was identified).
+    ///
+    /// Tolerance: `1e-9` of the largest moment, plus `1e-12` kg·m² for files that write an
+    /// inertia of a few ulps of noise (a rounded rotation of zero).
+    pub fn check_physical(&self) -> Result<(), InertiaProblem> {
+        let finite = self.mass.is_finite()
+            && self.first_moment.is_finite()
+            && self
+                .rotational
+                .to_cols_array()
+                .iter()
+                .all(|x| x.is_finite());
+        if !finite {
+            return Err(InertiaProblem::NotFinite);
+        }
+        if self.mass < 0.0 {
+            return Err(InertiaProblem::NegativeMass { mass: self.mass });
+        }
+        let moments = self.principal_moments();
+        let tol = 1e-9 * moments[2].abs().max(moments[0].abs()) + 1e-12;
+        if moments[0] < -tol {
+            return Err(InertiaProblem::NotPositiveSemiDefinite { moments });
+        }
+        if self.mass > 0.0 && moments[0] + moments[1] < moments[2] - tol {
+            return Err(InertiaProblem::TriangleInequality { moments });
+        }
+        Ok(())
+    }
+
     /// The momentum `I v` of a body moving with `v`.
     #[inline]
     pub fn mul_motion(&self, v: &MotionVector) -> ForceVector {
@@ -143,5 +185,46 @@ mod tests {
         );
         assert!((direct - via).force.length() < 1e-13);
         assert!((i.com() - DVec3::new(0.1, -0.05, 0.2)).length() < 1e-15);
+    }
+}
+
+/// Why an inertia is not one a rigid body can have ([`RigidBodyInertia::check_physical`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InertiaProblem {
+    /// A value is not finite.
+    NotFinite,
+    /// The mass is negative.
+    NegativeMass {
+        /// The mass, kg.
+        mass: f64,
+    },
+    /// A principal moment about the centre of mass is negative.
+    NotPositiveSemiDefinite {
+        /// The principal moments about the centre of mass, ascending, kg·m².
+        moments: [f64; 3],
+    },
+    /// The two smaller principal moments add up to less than the largest.
+    TriangleInequality {
+        /// The principal moments about the centre of mass, ascending, kg·m².
+        moments: [f64; 3],
+    },
+}
+
+impl core::fmt::Display for InertiaProblem {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            InertiaProblem::NotFinite => f.write_str("a mass or inertia value is not finite"),
+            InertiaProblem::NegativeMass { mass } => write!(f, "the mass {mass} kg is negative"),
+            InertiaProblem::NotPositiveSemiDefinite { moments: [a, b, c] } => write!(
+                f,
+                "its principal moments about the centre of mass ({a:.6e}, {b:.6e}, {c:.6e}) \
+                 kg·m² are not all ≥ 0 (the tensor is not positive semi-definite)"
+            ),
+            InertiaProblem::TriangleInequality { moments: [a, b, c] } => write!(
+                f,
+                "its principal moments about the centre of mass ({a:.6e}, {b:.6e}, {c:.6e}) \
+                 kg·m² break the triangle inequality I₁ + I₂ ≥ I₃"
+            ),
+        }
     }
 }

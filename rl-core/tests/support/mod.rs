@@ -137,6 +137,75 @@ pub fn every_joint_type<const N: usize>(seed: u64) -> Model<N> {
     b.build()
 }
 
+/// A 19-body tree on a six-DOF base with mimic joints in every relation to their leaders: a
+/// leader later in the tree on another branch, a mimic below its leader, a mimic above its
+/// leader, two mimics of one leader, a prismatic and a helical joint following a revolute and a
+/// prismatic one, multipliers other than 1 and offsets (12 + 6 DOF, 19 internal coordinates).
+pub fn mimic_tree<const N: usize>(seed: u64) -> Model<N> {
+    let mut r = Rng(seed);
+    let mut b = ModelBuilder::<N>::new();
+    b.name("mimic-tree").unwrap();
+    b.gravity(DVec3::new(0.0, 0.0, -9.80665));
+    let base = b
+        .add_body(
+            ROOT,
+            "base",
+            Joint::SixDof(SixDof),
+            PlueckerTransform::IDENTITY,
+            "base",
+            r.inertia(),
+        )
+        .unwrap();
+    let mut add = |b: &mut ModelBuilder<N>, parent: usize, name: &str, j: Joint| {
+        let pose = r.pose();
+        let inertia = r.inertia();
+        b.add_body(parent, name, j, pose, name, inertia).unwrap()
+    };
+    let rz = Joint::Revolute(Revolute::new(DVec3::Z));
+    let ru = Joint::Revolute(Revolute::new(DVec3::new(0.3, -0.4, 0.8)));
+    let px = Joint::Prismatic(Prismatic::new(DVec3::new(1.0, 0.2, 0.0)));
+    // Branch B first in the tree: its mimic joints' leaders come later, on branch A.
+    let b1 = add(&mut b, base, "b1", rz);
+    let b2 = add(&mut b, b1, "b2", ru); // follows a2
+    let b3 = add(&mut b, b2, "b3", px); // follows a3 (prismatic)
+    let b4 = add(&mut b, b3, "b4", rz);
+    // Branch A.
+    let a1 = add(&mut b, base, "a1", rz);
+    let a2 = add(&mut b, a1, "a2", Joint::Revolute(Revolute::new(DVec3::Y)));
+    let a3 = add(&mut b, a2, "a3", px);
+    let a4 = add(&mut b, a3, "a4", rz); // below a2, follows a2
+    let a5 = add(&mut b, a4, "a5", Joint::Revolute(Revolute::new(DVec3::X)));
+    let a6 = add(
+        &mut b,
+        a5,
+        "a6",
+        Joint::Helical(Helical::new(DVec3::Y, 0.02)),
+    ); // follows a3
+    // Branch C: a mimic above its leader.
+    let c1 = add(&mut b, base, "c1", ru); // follows c3, below it
+    let c2 = add(&mut b, c1, "c2", rz);
+    let c3 = add(&mut b, c2, "c3", Joint::Revolute(Revolute::new(DVec3::X)));
+    let c4 = add(&mut b, c3, "c4", px);
+    b.set_mimic(b2, a2, -0.7, 0.1).unwrap();
+    b.set_mimic(b3, a3, 1.5, -0.02).unwrap();
+    b.set_mimic(a4, a2, 2.0, 0.3).unwrap();
+    b.set_mimic(a6, a3, 0.8, 0.0).unwrap();
+    b.set_mimic(c1, c3, -1.2, 0.05).unwrap();
+    let limits = JointLimits {
+        lower: -2.0,
+        upper: 2.0,
+        velocity: 3.0,
+        effort: 50.0,
+        wraparound: false,
+    };
+    b.set_limits(a2, 0, limits).unwrap();
+    b.add_tool("tool_a", a6, r.pose()).unwrap();
+    b.add_tool("tool_b", b4, r.pose()).unwrap();
+    b.add_tool("tool_c", c4, r.pose()).unwrap();
+    b.add_tool("tool_b2", b2, r.pose()).unwrap();
+    b.build()
+}
+
 /// A random serial chain of `n` revolute joints with random axes and placements.
 pub fn random_chain<const N: usize>(n: usize, seed: u64) -> Model<N> {
     let mut r = Rng(seed);

@@ -556,6 +556,9 @@ fn scalar_q_index<const N: usize>(model: &Model<N>, k: usize) -> Option<usize> {
 /// `q ← q ⊕ dq` joint by joint (exact on quaternion joints), renormalised.
 fn integrate_in_place<const N: usize>(model: &Model<N>, q: &mut [f64], dq: &[f64]) {
     for i in 0..model.body_count() {
+        if model.mimic(i).is_some() {
+            continue;
+        }
         let j = model.joint(i);
         let (sq, sv, nq) = (model.q_index(i), model.v_index(i), j.nq());
         let mut next = [0.0; MAX_JOINT_NQ];
@@ -569,6 +572,9 @@ fn integrate_in_place<const N: usize>(model: &Model<N>, q: &mut [f64], dq: &[f64
 /// have no limits.
 fn clamp_to_limits<const N: usize>(model: &Model<N>, q: &mut [f64]) {
     for i in 0..model.body_count() {
+        if model.mimic(i).is_some() {
+            continue;
+        }
         let j = model.joint(i);
         let (sq, sv) = (model.q_index(i), model.v_index(i));
         let scalars = match j {
