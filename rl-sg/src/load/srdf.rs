@@ -1,0 +1,97 @@
+//! SRDF: the allowed-collision pairs that ship with most robot descriptions (MoveIt's semantic
+//! robot description).
+//!
+//! `<disable_collisions link1 link2 reason/>` allows a pair; `<disable_default_collisions
+//! link/>` allows every pair with that link; `<enable_collisions link1 link2/>` checks a pair
+//! again (applied last, as MoveIt does). An SRDF replaces the model's default allowed set
+//! (adjacent links): its authors list the adjacent pairs themselves. Links rigidly joined (by
+//! fixed joints, one rl-core body) stay allowed whatever the SRDF says: they cannot move
+//! against each other, so their contact is no collision (ur5's SRDF, for one, forgets its
+//! 1 cm `ee_link` box inside `wrist_3_link`). Links the SRDF names but
+//! the model lacks are reported as warnings (MoveIt ignores them too), not errors: SRDFs are
+//! often shared between variants of a robot.
+
+use std::path::Path;
+
+use super::read_text;
+use super::xml::{attr, children, parse, robot_root};
+use crate::error::SgError;
+use crate::scene::Model;
+
+/// What an SRDF did to a model.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SrdfReport {
+    /// Pairs allowed.
+    pub disabled: usize,
+    /// Pairs checked again by `<enable_collisions>`.
+    pub enabled: usize,
+    /// Elements naming links the model does not have.
+    pub unknown_links: Vec<String>,
+}
+
+/// Applies the SRDF in `text` to `model` (see the module docs).
+pub fn apply_str(text: &str, model: &mut Model) -> Result<SrdfReport, SgError> {
+    let doc = parse(text)?;
+    let robot = robot_root(&doc, "an SRDF")?;
+    let mut report = SrdfReport::default();
+    let mut allowed = crate::AllowedCollisions::new();
+    let unknown = |name: &str, report: &mut SrdfReport| {
+        if !report.unknown_links.iter().any(|n| n == name) {
+            report.unknown_links.push(name.to_string());
+        }
+    };
+    for d in children(robot, "disable_collisions") {
+        let (l1, l2) = (attr(d, "link1")?, attr(d, "link2")?);
+        match (model.body_index(l1), model.body_index(l2)) {
+            (Some(a), Some(b)) => {
+                allowed.allow(a, b);
+                report.disabled += 1;
+            }
+            (a, b) => {
+                if a.is_none() {
+                    unknown(l1, &mut report);
+                }
+                if b.is_none() {
+                    unknown(l2, &mut report);
+                }
+            }
+        }
+    }
+    let n = model.bodies().len();
+    for d in children(robot, "disable_default_collisions") {
+        let l = attr(d, "link")?;
+        match model.body_index(l) {
+            Some(a) => {
+                for b in (0..n).filter(|&b| b != a) {
+                    allowed.allow(a, b);
+                    report.disabled += 1;
+                }
+            }
+            None => unknown(l, &mut report),
+        }
+    }
+    for d in children(robot, "enable_collisions") {
+        let (l1, l2) = (attr(d, "link1")?, attr(d, "link2")?);
+        if let (Some(a), Some(b)) = (model.body_index(l1), model.body_index(l2)) {
+            allowed.disallow(a, b);
+            report.enabled += 1;
+        }
+    }
+    *model.allowed_collisions_mut() = allowed;
+    // Links rigidly joined (one kinematic body) can never move against each other: their
+    // contact is permanent and meaningless, whatever the SRDF lists.
+    model.allow_rigidly_joined();
+    if !report.unknown_links.is_empty() {
+        model.warn(format!(
+            "the SRDF names links this model does not have: {}",
+            report.unknown_links.join(", ")
+        ));
+    }
+    Ok(report)
+}
+
+/// Applies the SRDF file at `path` to `model`.
+pub fn apply_file(path: &Path, model: &mut Model) -> Result<SrdfReport, SgError> {
+    let text = read_text(path)?;
+    apply_str(&text, model).map_err(|e| e.in_file(path))
+}
