@@ -1,0 +1,124 @@
+//! Spheres first, exact geometry last: a checker whose every "valid" is the exact
+//! geometry's, at close to the sphere checker's speed.
+//!
+//! Three models of the robot: `cover`, spheres that contain the collision meshes
+//! ([`super::SphereSet::cover`]); optionally `inner`, the original (not conservative)
+//! spheres; and `exact`, rl-sg's meshes. For a batch of configurations:
+//!
+//! 1. the lanes where `cover` touches nothing are valid — the meshes cannot touch anything
+//!    either;
+//! 2. if `inner` touches something in any lane, the batch is invalid (VAMP's verdict: a
+//!    configuration its spheres reject is rejected here too — conservative, so it never lets a
+//!    collision through);
+//! 3. every remaining lane (touching with `cover`, clear with `inner`) is decided by `exact`.
+//!
+//! So a configuration reported valid is valid for the exact geometry; the exact check runs
+//! only in the thin band where the models disagree.
+
+use super::SphereChecker;
+use crate::scene::SceneValidity;
+use crate::space::JointSpace;
+use crate::validity::Validity;
+
+/// The three-model checker (see the module docs).
+#[derive(Clone, Debug)]
+pub struct HybridChecker {
+    cover: SphereChecker,
+    inner: Option<SphereChecker>,
+    exact: SceneValidity,
+    q: Vec<f64>,
+    checks: u64,
+    free: u64,
+}
+
+impl HybridChecker {
+    /// A checker from covering spheres, optional inner spheres and the exact geometry.
+    pub fn new(cover: SphereChecker, inner: Option<SphereChecker>, exact: SceneValidity) -> Self {
+        Self {
+            cover,
+            inner,
+            exact,
+            q: Vec::new(),
+            checks: 0,
+            free: 0,
+        }
+    }
+
+    /// Configurations the exact geometry decided.
+    pub fn exact_checks(&self) -> u64 {
+        self.exact.checks()
+    }
+
+    fn decide(
+        &mut self,
+        space: &JointSpace,
+        a: &[f64],
+        b: &[f64],
+        ts: &[f64],
+        scratch: &mut Vec<f64>,
+    ) -> bool {
+        let band = self.cover.segment_mask(space, a, b, ts);
+        if band == 0 {
+            return true;
+        }
+        if let Some(inner) = &mut self.inner {
+            if !inner.segment_valid(space, a, b, ts, scratch) {
+                return false;
+            }
+        }
+        self.q.resize(space.nq(), 0.0);
+        for (i, &t) in ts.iter().enumerate() {
+            if band & (1 << i) != 0 {
+                space.interpolate(a, b, t, &mut self.q);
+                if !self.exact.is_valid(&self.q) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+impl Validity for HybridChecker {
+    fn is_valid(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        let space = self.exact.space().clone();
+        if !space.contains(q) {
+            return false;
+        }
+        let mut scratch = Vec::new();
+        let ok = self.decide(&space, q, q, &[0.0], &mut scratch);
+        self.free += u64::from(ok);
+        ok
+    }
+
+    fn lanes(&self) -> usize {
+        8
+    }
+
+    fn segment_valid(
+        &mut self,
+        space: &JointSpace,
+        a: &[f64],
+        b: &[f64],
+        ts: &[f64],
+        scratch: &mut Vec<f64>,
+    ) -> bool {
+        for chunk in ts.chunks(8) {
+            self.checks += chunk.len() as u64;
+            if !self.decide(space, a, b, chunk, scratch) {
+                return false;
+            }
+            self.free += chunk.len() as u64;
+        }
+        true
+    }
+
+    fn checks(&self) -> u64 {
+        self.checks
+    }
+
+    fn free_checks(&self) -> u64 {
+        self.free
+    }
+}
