@@ -1,5 +1,6 @@
-//! Codec throughput: H7 packet encode/decode and Coach line encode/parse (one control cycle's
-//! worth of wire work each). Run with `cargo bench -p rl-drivers`.
+//! Codec throughput: H7 packet encode/decode, Coach line encode/parse and the EtherCAT cyclic
+//! frame of 6 CiA 402 drives (one control cycle's worth of wire work each). Run with `cargo
+//! bench -p rl-drivers`.
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
 
 use std::hint::black_box;
@@ -45,5 +46,39 @@ fn coach(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, h7, coach);
+/// The cyclic frame of `EthercatDrives` with 6 drives: LRW of 6 × (15 + 15) bytes, FRMW of the
+/// reference clock, BRD of AL status.
+fn ecat(c: &mut Criterion) {
+    use rl_drivers::proto::ecat::command::Command;
+    use rl_drivers::proto::ecat::datagram::{DatagramHeader, physical};
+    use rl_drivers::proto::ecat::frame::{Frame, FrameBuilder, MAX_FRAME_LEN, MacAddr};
+    let image = [0x5Au8; 180];
+    let encode = |buf: &mut [u8]| {
+        let mut b = FrameBuilder::new(buf, MacAddr::MASTER).unwrap();
+        b.push(DatagramHeader::new(Command::Lrw, 0, 0), &image)
+            .unwrap();
+        b.push_zeroed(
+            DatagramHeader::new(Command::Frmw, physical(0x1001, 0x0910), 0),
+            8,
+        )
+        .unwrap();
+        b.push_zeroed(DatagramHeader::new(Command::Brd, physical(0, 0x0130), 0), 2)
+            .unwrap();
+        b.finish()
+    };
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    let n = encode(&mut frame);
+    c.bench_function("ecat encode cyclic frame 6 drives", |b| {
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        b.iter(|| encode(black_box(&mut buf)))
+    });
+    c.bench_function("ecat decode cyclic frame 6 drives", |b| {
+        b.iter(|| {
+            let f = Frame::decode(black_box(&frame[..n])).unwrap();
+            f.datagrams().map(|d| d.unwrap().wkc).sum::<u16>()
+        })
+    });
+}
+
+criterion_group!(benches, h7, coach, ecat);
 criterion_main!(benches);

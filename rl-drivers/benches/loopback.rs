@@ -7,12 +7,17 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rl_drivers::coach::{Coach, CoachConfig};
 use rl_drivers::fake::coach_server::{CoachServer, CoachServerConfig};
-use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, Pacing};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::{CyclicDevice, Device, JointPositionActuator};
 
 fn h7_step(c: &mut Criterion) {
-    let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake H7");
+    // Unpaced: the communication cost itself, not the controller's cycle.
+    let fake = FakeH7::spawn(FakeH7Config {
+        pacing: Pacing::Immediate,
+        ..FakeH7Config::loopback(6)
+    })
+    .expect("fake H7");
     let mut robot =
         MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr())).unwrap();
     robot.open().unwrap();
@@ -30,7 +35,7 @@ fn h7_step(c: &mut Criterion) {
 
 fn coach_step(c: &mut Criterion) {
     let server = CoachServer::spawn(CoachServerConfig {
-        models: vec![(0, 6)],
+        models: vec![(0, vec![0.0; 6])],
         ..CoachServerConfig::loopback()
     })
     .expect("Coach server");

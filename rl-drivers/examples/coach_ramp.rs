@@ -22,7 +22,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let server = match addr {
         Some(_) => None,
-        None => Some(CoachServer::spawn(CoachServerConfig::loopback())?),
+        // The in-process viewer has the model loaded, standing at zero (the client asks where
+        // it stands when it opens).
+        None => Some(CoachServer::spawn(CoachServerConfig {
+            models: vec![(model, vec![0.0; dof])],
+            ..CoachServerConfig::loopback()
+        })?),
     };
     let mut config = CoachConfig::new(dof);
     config.model = model;

@@ -2,9 +2,15 @@
 //! visualisers (rlCoachMdl, rlCoachKin) or simulator over TCP, and reads back joint positions
 //! with `6 <i>` requests ([`proto::coach`]).
 //!
-//! Wire-compatible with RL's `Coach`, with two fixes: replies are reassembled from the byte
-//! stream ([`LineBuffer`]) instead of one unframed `recv`, and `step` waits for the reply at most
-//! `reply_timeout` instead of sleeping until the end of the period (the caller's loop keeps time).
+//! Wire-compatible with RL's `Coach`, with these fixes: replies are reassembled from the byte
+//! stream ([`LineBuffer`]) instead of one unframed `recv`; `step` waits for the reply at most
+//! `reply_timeout` (one period by default) instead of sleeping until the end of the period (the
+//! caller's loop keeps time); replies are matched to requests in order, so a reply to an
+//! earlier request that timed out is counted late, never taken for the current one; whatever
+//! piles up while the server is slow is drained at the start of the next step (bounded by its
+//! deadline), and a line too long for the buffer is dropped, counted, and reading resumes at
+//! the next newline. A closed connection faults the device at once; a silent or garbling server
+//! after `max_consecutive_failures` steps.
 //!
 //! [`proto::coach`]: crate::proto::coach
 
@@ -23,10 +29,11 @@ use rl_core::rotation::euler;
 
 /// The port RL's visualisers listen on.
 pub const DEFAULT_PORT: u16 = 11235;
-/// Bytes of commands one step can carry.
-pub const OUTPUT_CAPACITY: usize = 8192;
-/// Bytes of received lines buffered for reassembly.
-pub const INPUT_CAPACITY: usize = 4096;
+/// Bytes of commands one step can carry: position, velocity and torque lines of
+/// [`MAX_VALUES`] joints at 14 bytes a value (`-1.23457e+308 `) and the request.
+pub const OUTPUT_CAPACITY: usize = 16384;
+/// Bytes of received lines buffered for reassembly: two replies of [`MAX_VALUES`] joints.
+pub const INPUT_CAPACITY: usize = 8192;
 
 /// How to reach the Coach server.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,23 +46,28 @@ pub struct CoachConfig {
     pub dof: usize,
     /// The period the caller steps at.
     pub update_period: Duration,
-    /// Bound on waiting for the `6 <i>` reply (and on sending).
+    /// Bound on a step: draining, sending, and waiting for the `6 <i>` reply. Default: the
+    /// update period.
     pub reply_timeout: Duration,
+    /// Failed steps in a row that fault the device.
+    pub max_consecutive_failures: u32,
     /// Ask for joint positions each step (`6 <i>`); off for rlSimulator, which does not answer.
     pub request_joints: bool,
-    /// Bound on connecting.
+    /// Bound on connecting, and on the first joint reply at open (when `request_joints`).
     pub connect_timeout: Duration,
 }
 
 impl CoachConfig {
-    /// Model 0 at 127.0.0.1:11235, 10 ms period, 100 ms reply bound, joints requested.
+    /// Model 0 at 127.0.0.1:11235, 10 ms period, a reply bound of one period, 10 failed steps
+    /// in a row to fault, joints requested.
     pub fn new(dof: usize) -> Self {
         Self {
             server: SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), DEFAULT_PORT),
             model: 0,
             dof,
             update_period: Duration::from_millis(10),
-            reply_timeout: Duration::from_millis(100),
+            reply_timeout: Duration::from_millis(10),
+            max_consecutive_failures: crate::device::DEFAULT_MAX_CONSECUTIVE_FAILURES,
             request_joints: true,
             connect_timeout: Duration::from_secs(2),
         }
@@ -73,23 +85,42 @@ pub struct CoachCounters {
     pub timeouts: u64,
     /// Replies to earlier requests found at the start of a step (after a timeout), dropped.
     pub late: u64,
-    /// Lines that did not parse or did not fit the buffer.
+    /// Lines that did not parse or did not fit the buffer (dropped up to their newline).
     pub bad_lines: u64,
     /// Well-formed lines that were not a reply for our model (such as rlSimulator's empty lines).
     pub other_lines: u64,
+    /// Requests sent whose reply has not come yet.
+    pub outstanding: u32,
+    /// Requests taken as never answered: a step's wait saw a reply it took for an earlier
+    /// request and then nothing until its deadline, so the server had skipped requests (the
+    /// count of outstanding requests starts again from there). A reply that turns up after all
+    /// moves from here to `late` (and, from a server that is merely very slow, one stale
+    /// reply may be taken for a current one). Always
+    /// `sent == replies + late + outstanding + unanswered`.
+    pub unanswered: u64,
 }
+
+/// Outstanding requests beyond which the server is taken to drop requests: the count starts
+/// again (a later reply is then taken as current).
+const MAX_OUTSTANDING: u32 = 1024;
 
 /// A client of RL's Coach protocol (RL's `rl::hal::Coach`).
 #[derive(Debug)]
 pub struct Coach {
     config: CoachConfig,
     lifecycle: Lifecycle,
+    /// The reply wait of the step in progress, when the caller bounded it.
+    step_budget: Option<Duration>,
     link: Option<TcpLink>,
     out: [u8; OUTPUT_CAPACITY],
     out_len: usize,
     lines: LineBuffer<INPUT_CAPACITY>,
     joints: [f64; MAX_VALUES],
     have_joints: bool,
+    /// Whether this step's request is out (a reply may be the current one).
+    waiting: bool,
+    /// This step's wait took a reply for an earlier request, leaving only its own outstanding.
+    skipped_suspect: bool,
     counters: CoachCounters,
 }
 
@@ -98,20 +129,23 @@ impl Coach {
     pub fn new(config: CoachConfig) -> Result<Self, Error> {
         if config.dof == 0 || config.dof > MAX_VALUES {
             return Err(Error::InvalidArgument {
-                what: "dof (1..=32)",
+                what: "dof (1..=256)",
                 expected: MAX_VALUES,
                 got: config.dof,
             });
         }
         Ok(Self {
             config,
-            lifecycle: Lifecycle::new(),
+            lifecycle: Lifecycle::with_failure_limit(config.max_consecutive_failures),
+            step_budget: None,
             link: None,
             out: [0; OUTPUT_CAPACITY],
             out_len: 0,
             lines: LineBuffer::new(),
             joints: [0.0; MAX_VALUES],
             have_joints: false,
+            waiting: false,
+            skipped_suspect: false,
             counters: CoachCounters::default(),
         })
     }
@@ -174,19 +208,31 @@ impl Coach {
         Error::protocol(Operation::Step, "Coach line", &e)
     }
 
-    /// Takes buffered lines; returns whether a joint reply for our model was among them.
+    /// Takes the complete lines buffered. A reply for our model answers the oldest outstanding
+    /// request: the current one if only one is outstanding (used; returns `true`), else an
+    /// earlier one (late, dropped). The error is the last bad line's, if no reply was used.
     fn take_lines(&mut self) -> Result<bool, Error> {
         let mut got = false;
         let mut failure = None;
         while let Some(line) = self.lines.next_line() {
             match line.and_then(Message::parse) {
                 Ok(Message::Reply { model, values }) if model == self.config.model => {
-                    if values.len() == self.config.dof {
+                    // Before this step's request is sent, every reply is for an earlier one.
+                    let current = self.waiting && self.counters.outstanding <= 1;
+                    if self.counters.outstanding == 0 && self.counters.unanswered > 0 {
+                        // One taken as unanswered was answered after all.
+                        self.counters.unanswered -= 1;
+                    } else {
+                        self.counters.outstanding = self.counters.outstanding.saturating_sub(1);
+                    }
+                    if !current {
+                        self.counters.late += 1;
+                        if self.waiting {
+                            self.skipped_suspect = true;
+                        }
+                    } else if values.len() == self.config.dof {
                         self.joints[..values.len()].copy_from_slice(&values);
                         self.have_joints = true;
-                        if got {
-                            self.counters.late += 1;
-                        }
                         got = true;
                     } else {
                         self.counters.bad_lines += 1;
@@ -199,6 +245,7 @@ impl Coach {
                 }
                 Ok(Message::Request { model }) if model == self.config.model => {
                     // A server that does not know the model answers `6 <i>` without values.
+                    self.counters.outstanding = self.counters.outstanding.saturating_sub(1);
                     self.counters.bad_lines += 1;
                     failure = Some(Error::protocol(
                         Operation::Step,
@@ -219,76 +266,157 @@ impl Coach {
         }
     }
 
+    /// Reads once into the line buffer (waiting until `deadline` if `wait`), then takes the
+    /// complete lines. `Ok(None)`: nothing to read (or the deadline passed while waiting).
+    fn read_lines(&mut self, deadline: Instant, wait: bool) -> Result<Option<bool>, Error> {
+        const OP: Operation = Operation::Step;
+        if self.lines.spare().is_empty() {
+            // A partial line fills the buffer: `next_line` reports it and drops it up to its
+            // newline, which frees the buffer.
+            return self.take_lines().map(Some);
+        }
+        let link = self.link.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
+        let read = if wait {
+            match link.recv(self.lines.spare(), deadline) {
+                Ok(n) => Some(n),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => None,
+                Err(e) => return Err(Error::io(OP, &e)),
+            }
+        } else {
+            link.try_recv(self.lines.spare())
+                .map_err(|e| Error::io(OP, &e))?
+        };
+        match read {
+            None => Ok(None),
+            Some(0) => Err(Error::Disconnected { operation: OP }),
+            Some(n) => {
+                self.lines.commit(n);
+                self.take_lines().map(Some)
+            }
+        }
+    }
+
     fn exchange(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Step;
+        let timeout = self.step_budget.map_or(self.config.reply_timeout, |b| {
+            b.min(self.config.reply_timeout)
+        });
+        let deadline = Instant::now() + timeout;
+        // What piled up answers requests of earlier steps: drain it (within the deadline).
+        while Instant::now() < deadline {
+            match self.read_lines(deadline, false) {
+                Ok(None) => break,
+                // Late replies are counted in `take_lines`; a bad line here is only counted.
+                Ok(Some(_)) | Err(Error::Protocol { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
         if self.config.request_joints {
             self.push(&Message::Request {
                 model: self.config.model,
             })?;
         }
-        let timeout = self.config.reply_timeout;
-        let deadline = Instant::now() + timeout;
         let link = self.link.as_mut().ok_or(Error::State {
             operation: OP,
             state: State::Closed,
         })?;
-        let io = |e: std::io::Error| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation: OP,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(OP, &e)
-            }
-        };
-        // Replies already here answer requests of earlier, timed-out steps.
-        loop {
-            match link.try_recv(self.lines.spare()).map_err(io)? {
-                Some(0) => {
-                    return Err(Error::io(OP, &std::io::ErrorKind::ConnectionAborted.into()));
-                }
-                Some(n) => self.lines.commit(n),
-                None => break,
-            }
-        }
-        if self.lines.pending() > 0 && self.take_lines().unwrap_or(false) {
-            self.counters.late += 1;
-        }
-        let link = self.link.as_mut().ok_or(Error::State {
-            operation: OP,
-            state: State::Closed,
-        })?;
-        link.send_all(&self.out[..self.out_len], deadline)
-            .map_err(io)?;
+        let sent = link.send_all(&self.out[..self.out_len], deadline);
         self.out_len = 0;
+        if let Err(e) = sent {
+            if e.kind() == std::io::ErrorKind::TimedOut {
+                self.counters.timeouts += 1;
+            }
+            return Err(link_error(OP, &e, timeout));
+        }
         self.counters.sent += 1;
         if !self.config.request_joints {
             return Ok(());
         }
-        loop {
-            let link = self.link.as_mut().ok_or(Error::State {
+        self.counters.outstanding += 1;
+        if self.counters.outstanding > MAX_OUTSTANDING {
+            self.counters.outstanding = 1;
+        }
+        self.waiting = true;
+        self.skipped_suspect = false;
+        let result = self.wait_reply(deadline);
+        self.waiting = false;
+        if result.is_err() && self.skipped_suspect {
+            // A reply came during the wait and then nothing until the deadline: the server
+            // skipped requests, and the reply taken as late was this step's. Start counting
+            // again (a reply that still comes moves from `unanswered` to `late`).
+            self.counters.unanswered += u64::from(self.counters.outstanding);
+            self.counters.outstanding = 0;
+        }
+        result
+    }
+
+    /// At open: sends `6 <i>` and waits (at most `connect_timeout`: a server thread may take a
+    /// moment to serve a new connection) for the reply, so the joint positions can be read
+    /// before the device starts.
+    fn query_joints(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Open;
+        let waited = self.config.connect_timeout;
+        let deadline = Instant::now() + waited;
+        let n = Message::Request {
+            model: self.config.model,
+        }
+        .encode(&mut self.out)
+        .map_err(|e| Error::protocol(OP, "Coach line", &e))?;
+        let link = self.link.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
+        link.send_all(&self.out[..n], deadline)
+            .map_err(|e| link_error(OP, &e, waited))?;
+        self.counters.sent += 1;
+        self.counters.outstanding = 1;
+        self.waiting = true;
+        let result = self.wait_reply(deadline);
+        self.waiting = false;
+        match result {
+            Ok(()) => Ok(()),
+            Err(Error::Timeout { .. }) => Err(Error::Timeout {
                 operation: OP,
-                state: State::Closed,
-            })?;
-            let n = match link.recv(self.lines.spare(), deadline) {
-                Ok(0) => return Err(Error::io(OP, &std::io::ErrorKind::ConnectionAborted.into())),
-                Ok(n) => n,
-                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
-                    self.counters.timeouts += 1;
-                    return Err(Error::Timeout {
-                        operation: OP,
-                        waited: timeout,
-                    });
+                waited,
+            }),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Waits for the reply until `deadline`. Bad lines on the way are counted and skipped; if
+    /// no reply comes, the step fails with the last bad line's error (else a timeout).
+    fn wait_reply(&mut self, deadline: Instant) -> Result<(), Error> {
+        let mut bad = None;
+        loop {
+            match self.read_lines(deadline, true) {
+                Ok(Some(true)) => {
+                    self.counters.replies += 1;
+                    return Ok(());
                 }
-                Err(e) => return Err(Error::io(OP, &e)),
-            };
-            self.lines.commit(n);
-            if self.take_lines()? {
-                self.counters.replies += 1;
-                return Ok(());
+                Ok(Some(false)) => {}
+                Err(e @ Error::Protocol { .. }) => bad = Some(e),
+                Err(e) => return Err(e),
+                Ok(None) => {
+                    self.counters.timeouts += 1;
+                    return Err(bad.unwrap_or(Error::Timeout {
+                        operation: Operation::Step,
+                        waited: self.config.reply_timeout,
+                    }));
+                }
             }
         }
+    }
+}
+
+/// A socket error of `operation`: a timeout after `waited`, else the I/O error.
+fn link_error(operation: Operation, e: &std::io::Error, waited: Duration) -> Error {
+    if e.kind() == std::io::ErrorKind::TimedOut {
+        Error::Timeout { operation, waited }
+    } else {
+        Error::io(operation, e)
     }
 }
 
@@ -308,20 +436,18 @@ impl Device for Coach {
 
     fn open(&mut self) -> Result<(), Error> {
         Lifecycle::transition(self, Operation::Open, lifecycle, |coach| {
+            coach.counters.outstanding = 0;
             const OP: Operation = Operation::Open;
             let timeout = coach.config.connect_timeout;
-            let link = TcpLink::connect(coach.config.server, timeout).map_err(|e| {
-                if e.kind() == std::io::ErrorKind::TimedOut {
-                    Error::Timeout {
-                        operation: OP,
-                        waited: timeout,
-                    }
-                } else {
-                    Error::io(OP, &e)
-                }
-            })?;
+            let link = TcpLink::connect(coach.config.server, timeout)
+                .map_err(|e| link_error(OP, &e, timeout))?;
             coach.link = Some(link);
             coach.lines.clear();
+            coach.have_joints = false;
+            if coach.config.request_joints {
+                // Where the viewer shows the robot now: the pose a controller starts from.
+                coach.query_joints()?;
+            }
             Ok(())
         })
     }
@@ -367,12 +493,21 @@ impl CyclicDevice for Coach {
         Lifecycle::step(self, lifecycle, Self::exchange)
     }
 
+    fn step_within(&mut self, budget: Duration) -> Result<(), Error> {
+        self.step_budget = Some(budget);
+        let result = self.step();
+        self.step_budget = None;
+        result
+    }
+
     fn update_period(&self) -> Duration {
         self.config.update_period
     }
 }
 
 impl LinkStatisticsSensor for Coach {
+    /// `rejected` counts well-formed lines that were not ours; `corrupt` lines that did not
+    /// parse, did not fit, or did not match the model.
     fn link_statistics(&self) -> LinkStatistics {
         let c = self.counters;
         LinkStatistics {
@@ -447,5 +582,14 @@ impl JointPositionSensor for Coach {
         }
         q.copy_from_slice(&self.joints[..self.config.dof]);
         Ok(())
+    }
+
+    /// The server prints six significant digits: half a unit in the sixth digit.
+    fn joint_position_resolution(&self, q: f64) -> f64 {
+        if q == 0.0 || !q.is_finite() {
+            return 0.0;
+        }
+        let exponent = q.abs().log10().floor();
+        0.5 * 10f64.powf(exponent - 5.0)
     }
 }

@@ -36,13 +36,20 @@
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![deny(missing_docs)]
 
+#[cfg(feature = "std")]
+mod boxed;
 pub mod capability;
+pub mod cia402;
 pub mod device;
 pub mod proto;
 pub mod typestate;
 
 #[cfg(feature = "std")]
+pub mod canopen;
+#[cfg(feature = "std")]
 pub mod coach;
+#[cfg(feature = "std")]
+pub mod ethercat;
 #[cfg(feature = "std")]
 pub mod fake;
 #[cfg(feature = "std")]
@@ -57,5 +64,7 @@ pub use device::{
     CyclicDevice, Description, Device, DeviceError, Error, ErrorKind, Lifecycle, Operation,
     ProtocolError, State,
 };
+#[cfg(feature = "std")]
+pub use ethercat::EthercatDrives;
 #[cfg(feature = "std")]
 pub use mitsubishi_h7::MitsubishiH7;

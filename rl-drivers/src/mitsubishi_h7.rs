@@ -2,21 +2,33 @@
 //! [`UdpLink`] once per 7.11 ms cycle, set up and torn down with [`proto::r3`] commands over
 //! [`TcpLink`].
 //!
-//! Session (as RL runs it, `shared/reference/mitsubishi-h7.md`):
-//! - `open`: connect R3 (TCP) and bind the UDP socket.
+//! Session (as RL runs it, `shared/reference/mitsubishi-h7.md`, with the differences below):
+//! - `open`: connect R3 (TCP), bind the UDP socket (to the local address of the route to the
+//!   controller, not the wildcard, unless configured), and ask `JPOSF` where the arm stands:
+//!   from then on [`JointDevice::dof`] is the number of axes the controller reports and
+//!   [`JointPositionSensor::joint_position`] where they are — before the servo is on.
 //! - `start`: `STOP`; upload program 1432 (`NEW`, `LOAD=1432`, `ECLR`, `EMDAT`…, `SAVE`);
 //!   `CNTLON`, `SRVON`, `CNTLOFF`; poll `DSTATE` until the servo is on; `CNTLON`, `SLOTINIT`,
 //!   `RUN1432;1`, `CNTLOFF`.
-//! - `step`: send the buffered command with the requested reply types, wait at most
-//!   (filter + 6) × 7.11 ms for the reply from the controller's address.
-//! - `stop`: send the end packet (command 255) without waiting, `STOP`, `DSTATE`, and if the
-//!   servo is on `SRVOFF` and poll until it is off.
-//! - `close`: drop both sockets.
+//! - `step`: send the buffered command with the requested reply types and wait for the reply
+//!   to it until the cycle's deadline ([`MitsubishiH7Config::reply_timeout`], one period).
+//! - `stop` (from running or faulted): the end packet (command 255), `STOP`, `DSTATE`, and
+//!   `SRVOFF` with a poll until the servo is off — every step attempted even when an earlier
+//!   one failed, each bounded in time; the first error is returned.
+//! - `close`: drop both sockets (the counts stay).
 //!
-//! Differences from RL: motor pulses go into the first data block (RL writes the third, a bug);
-//! a late or missing reply is a counted timeout and the next step goes on (RL throws); only
-//! `max_consecutive_failures` failed steps in a row fault the device; datagrams from any other
-//! address than the controller's are dropped and counted.
+//! Every reply is checked: it must come from the controller's address, be 196 bytes, decode,
+//! hold the requested types, and echo the counter of the packet just sent. A reply with the
+//! counter of an earlier packet that has not been answered is late (counted, dropped, the wait
+//! goes on); one with the counter of a packet already answered, or of none sent yet, is a
+//! replayed or frozen reply (counted corrupt, the step fails). Nothing is used silently.
+//!
+//! Differences from RL: the reply wait is one period, not (filter + 6) × 7.11 ms; motor pulses
+//! go into the first data block (RL writes the third, a bug); a missing reply is a counted
+//! timeout and the next step goes on (RL throws); only `max_consecutive_failures` failed steps
+//! in a row fault the device; an axis the caller gives no value for is commanded where it was
+//! measured (RL sends 0); R3 replies are read until complete (RL reads once); `stop` works from
+//! the faulted state.
 //!
 //! [`proto::h7`]: crate::proto::h7
 //! [`proto::r3`]: crate::proto::r3
@@ -26,7 +38,7 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Instant;
 
 use crate::capability::{
-    CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice,
+    CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
     JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
 use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
@@ -34,7 +46,7 @@ use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
 };
-use crate::proto::r3::{self, DState, EmdatChunks, R3Error, Reply, Request};
+use crate::proto::r3::{self, DState, EmdatChunks, JointReport, R3Error, Reply, Request};
 use crate::transport::{TcpLink, UdpLink};
 use glam::DVec3;
 use rl_core::rotation::euler;
@@ -69,36 +81,65 @@ impl Default for GripperIo {
     }
 }
 
+/// How a reply's packet counter (`cCount`) is checked against the packets sent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CounterCheck {
+    /// The reply echoes the counter of the packet it answers (the fake does; RL's reference
+    /// and Mitsubishi's header call it the transmission counter): the reply to the packet just
+    /// sent must carry its counter.
+    #[default]
+    Echo,
+    /// Only require that the counter differs from the last reply used (catches a frozen or
+    /// replayed reply from a controller that counts its own transmissions).
+    Advancing,
+    /// No check.
+    Off,
+}
+
 /// How to reach and drive the controller.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MitsubishiH7Config {
-    /// Joints (at most 8).
-    pub dof: usize,
+    /// Axes the caller expects; `None` takes the count the controller reports (`JPOSF`) at
+    /// `open`. When given, `open` fails if the controller reports another count, and it is the
+    /// fallback when the controller does not answer `JPOSF`.
+    pub axes: Option<usize>,
+    /// Axes that are linear (mm in `JPOSF` and in the packets) rather than rotary (degrees in
+    /// `JPOSF`, rad in the packets).
+    pub linear_axes: [bool; MAX_AXES],
     /// The controller's real-time UDP address (port 10000 on a real controller).
     pub server: SocketAddr,
     /// The controller's R3 TCP address (port 10001).
     pub r3: SocketAddr,
     /// Local UDP address to bind. Default: 127.0.0.1:0 when the controller is on loopback,
-    /// otherwise any address (0.0.0.0:0) so the route to the controller decides.
+    /// otherwise the wildcard, which `open` replaces by the local address of the route to the
+    /// controller (the socket then hears only that interface).
     pub local: SocketAddr,
     /// Address written into the program's `ENET:` line (where the controller sends replies).
-    /// Default: the bound local address, or, if that is unspecified, the local address of the
-    /// route to the controller.
+    /// Default: the bound local address.
     pub client_ip: Option<IpAddr>,
     /// What the client commands (the MXT program's mode).
     pub mode: Mode,
-    /// The controller's filter argument (`MXT 1,<mode>,<filter>`); the reply deadline is
-    /// (filter + 6) × 7.11 ms.
+    /// The controller's low-pass filter time constant in ms (`MXT 1,<mode>,<filter>`).
     pub filter: u32,
-    /// Reply types requested in `dat`, `dat1`, `dat2`, `dat3`. Default: encoder feedback of
-    /// joints, pose and pulses, and current feedback. [`MitsubishiH7Config::RL_FEEDBACK`] is RL's.
+    /// Reply types requested in `dat`, `dat1`, `dat2`, `dat3`. Default: encoder feedback of the
+    /// joints, the controller's joint command (to see a clamped command: [`JointLimitSensor`]),
+    /// encoder feedback of the pose, and current feedback. [`MitsubishiH7Config::RL_FEEDBACK`]
+    /// is RL's.
     pub feedback: [MxtType; 4],
+    /// How long a step waits for its reply: by default one period, so a step returns within
+    /// the cycle; a reply that has not come by then is counted lost (RL waits
+    /// (filter + 6) × 7.11 ms).
+    pub reply_timeout: Duration,
+    /// How reply counters are checked.
+    pub counter_check: CounterCheck,
     /// Gripper I/O.
     pub gripper: GripperIo,
     /// Failed steps in a row (timeouts or bad replies) that fault the device.
     pub max_consecutive_failures: u32,
     /// Bound on each R3 exchange and on connecting.
     pub r3_timeout: Duration,
+    /// Silence after the last byte that ends an R3 reply sent without a carriage return.
+    pub r3_quiet: Duration,
     /// Bound on waiting for the servo to switch.
     pub servo_timeout: Duration,
     /// Robot number in R3 commands.
@@ -114,10 +155,13 @@ impl MitsubishiH7Config {
         MxtType::CurrentFeedback,
     ];
 
-    /// Joint mode, filter 0, RL's gripper I/O, 10 failures to fault, 2 s R3 and 5 s servo bounds.
-    pub fn new(dof: usize, server: SocketAddr, r3: SocketAddr) -> Self {
+    /// A controller at `server` (UDP) and `r3` (TCP) whose axis count is read at `open`: joint
+    /// mode, filter 0, a reply wait of one period, RL's gripper I/O, 10 failures to fault, 2 s
+    /// R3 and 5 s servo bounds.
+    pub fn at(server: SocketAddr, r3: SocketAddr) -> Self {
         Self {
-            dof,
+            axes: None,
+            linear_axes: [false; MAX_AXES],
             server,
             r3,
             local: if server.ip().is_loopback() {
@@ -132,34 +176,48 @@ impl MitsubishiH7Config {
             filter: 0,
             feedback: [
                 MxtType::JointFeedback,
+                MxtType::Joint,
                 MxtType::PoseFeedback,
-                MxtType::PulseFeedback,
                 MxtType::CurrentFeedback,
             ],
+            reply_timeout: UPDATE_PERIOD,
+            counter_check: CounterCheck::Echo,
             gripper: GripperIo::default(),
             max_consecutive_failures: 10,
             r3_timeout: Duration::from_secs(2),
+            r3_quiet: Duration::from_millis(20),
             servo_timeout: Duration::from_secs(5),
             robot: 1,
         }
     }
 
-    /// The bound on waiting for one reply: (filter + 6) × 7.11 ms.
-    pub fn reply_timeout(&self) -> Duration {
+    /// [`at`](Self::at), expecting exactly `axes` axes: `open` fails if the controller reports
+    /// another number.
+    pub fn new(axes: usize, server: SocketAddr, r3: SocketAddr) -> Self {
+        Self {
+            axes: Some(axes),
+            ..Self::at(server, r3)
+        }
+    }
+
+    /// RL's bound on waiting for one reply, (filter + 6) × 7.11 ms, for callers who want it
+    /// as [`reply_timeout`](Self::reply_timeout).
+    pub fn rl_reply_timeout(&self) -> Duration {
         UPDATE_PERIOD * (self.filter.saturating_add(6))
     }
 }
 
-/// What happened to the real-time exchange so far.
+/// What happened to the real-time exchange so far (over the life of the driver object: the
+/// counts survive `close`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct H7Counters {
     /// Packets sent (including end packets).
     pub sent: u64,
     /// Valid replies used.
     pub replies: u64,
-    /// Steps without a reply before the deadline (dropped or late replies).
+    /// Steps without their reply by the deadline (lost).
     pub timeouts: u64,
-    /// Replies that arrived after their step had timed out (found and dropped at the next step).
+    /// Replies that arrived after their step had given up, dropped.
     pub late: u64,
     /// Datagrams from any other address than the controller's, dropped.
     pub foreign: u64,
@@ -167,8 +225,27 @@ pub struct H7Counters {
     pub wrong_length: u64,
     /// Replies that did not decode or did not hold the requested types.
     pub corrupt: u64,
+    /// Replies carrying the counter of a packet already answered or never sent (a frozen or
+    /// replayed reply).
+    pub replayed: u64,
+    /// Bytes found on the R3 connection before a request (a reply to an earlier request that
+    /// had timed out), dropped.
+    pub r3_stale_bytes: u64,
     /// Current run of failed steps.
     pub consecutive_failures: u32,
+    /// Steps that sent nothing because the previous request was still unanswered: the
+    /// controller was a cycle behind, and waiting for that reply lets it catch up.
+    pub held: u64,
+}
+
+/// Where the last joint positions came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measured {
+    None,
+    /// The `JPOSF` answer at `open`.
+    Report(JointReport),
+    /// A real-time reply.
+    Reply,
 }
 
 /// A Mitsubishi controller in real-time external control mode (RL's `MitsubishiH7`).
@@ -176,11 +253,24 @@ pub struct H7Counters {
 pub struct MitsubishiH7 {
     config: MitsubishiH7Config,
     lifecycle: Lifecycle,
+    /// The reply wait of the step in progress, when the caller bounded it.
+    step_budget: Option<Duration>,
     udp: Option<UdpLink>,
     r3: Option<TcpLink>,
+    axes: usize,
     request: Packet,
     reply: Option<Packet>,
     c_count: u32,
+    last_used: Option<u32>,
+    /// The last request sent and not answered yet, and when it was sent.
+    outstanding: Option<(u32, Instant)>,
+    /// The last step saw the controller answer the packet before its own: a cycle behind.
+    behind: bool,
+    measured: [f64; MAX_AXES],
+    measured_from: Measured,
+    commanded: Option<[f32; MAX_AXES]>,
+    limit: [bool; MAX_AXES],
+    last_latency: Option<Duration>,
     counters: H7Counters,
     /// Foreign datagrams counted by sockets closed since (the counts survive `close`).
     foreign_before: u64,
@@ -190,24 +280,46 @@ pub struct MitsubishiH7 {
     r3_rx: [u8; r3::MAX_REPLY_LEN],
 }
 
+/// How a received datagram relates to the packet just sent.
+enum Verdict {
+    /// The reply to it.
+    Current(Packet),
+    /// The reply to an earlier packet (its counter), after that step gave up.
+    Late(u32),
+    /// Not usable; counted, and the error says why.
+    Bad(Error),
+}
+
 impl MitsubishiH7 {
     /// A closed device; checks the configuration.
     pub fn new(config: MitsubishiH7Config) -> Result<Self, Error> {
-        if config.dof == 0 || config.dof > MAX_AXES {
+        if let Some(axes) = config.axes
+            && (axes == 0 || axes > MAX_AXES)
+        {
             return Err(Error::InvalidArgument {
-                what: "dof (1..=8)",
+                what: "axes (1..=8)",
                 expected: MAX_AXES,
-                got: config.dof,
+                got: axes,
             });
         }
         Ok(Self {
             config,
             lifecycle: Lifecycle::with_failure_limit(config.max_consecutive_failures),
+            step_budget: None,
             udp: None,
             r3: None,
+            axes: config.axes.unwrap_or(0),
             request: Packet::default(),
             reply: None,
             c_count: 0,
+            last_used: None,
+            outstanding: None,
+            behind: false,
+            measured: [0.0; MAX_AXES],
+            measured_from: Measured::None,
+            commanded: None,
+            limit: [false; MAX_AXES],
+            last_latency: None,
             counters: H7Counters::default(),
             foreign_before: 0,
             tx: [0; PACKET_LEN],
@@ -243,6 +355,12 @@ impl MitsubishiH7 {
     /// The last valid reply.
     pub fn reply(&self) -> Option<&Packet> {
         self.reply.as_ref()
+    }
+
+    /// How long the last used reply took after its packet was sent: near the reply timeout,
+    /// the loop's phase sits at the controller's cycle edge.
+    pub fn last_reply_latency(&self) -> Option<Duration> {
+        self.last_latency
     }
 
     /// Commands motor pulses (pulse mode); written to the first data block.
@@ -308,7 +426,7 @@ impl MitsubishiH7 {
                 got: usize::from(mode.code()),
             });
         }
-        Error::check_len("joint vector length", self.config.dof, len)
+        Error::check_len("joint vector length", self.axes, len)
     }
 
     fn last_reply(&self) -> Result<&Packet, Error> {
@@ -334,10 +452,10 @@ impl MitsubishiH7 {
         missing: &'static str,
         out: &mut [i32],
     ) -> Result<(), Error> {
-        Error::check_len("output length", self.config.dof, out.len())?;
+        Error::check_len("output length", self.axes, out.len())?;
         match self.find_shape(shape, missing)? {
             DataView::Pulse(v) | DataView::Current(v) => {
-                out.copy_from_slice(&v[..self.config.dof]);
+                out.copy_from_slice(&v[..self.axes]);
                 Ok(())
             }
             _ => Err(Error::protocol(Operation::Get, "H7 packet", &missing)),
@@ -351,7 +469,10 @@ impl MitsubishiH7 {
         })
     }
 
-    /// Sends one R3 request and returns the reply payload's length in `r3_rx` (after `QoK`).
+    /// Sends one R3 request and returns the reply's payload (after `QoK`). The reply is read
+    /// until it is complete: up to its carriage return, or — from a controller that sends no
+    /// end code — until `r3_quiet` passes without a byte; bytes already waiting before the
+    /// request (the answer to an earlier request that timed out) are dropped and counted.
     fn r3_exchange(&mut self, operation: Operation, slot: u8, body: &str) -> Result<&str, Error> {
         let request = Request {
             robot: self.config.robot,
@@ -362,6 +483,7 @@ impl MitsubishiH7 {
             .encode(&mut self.r3_tx)
             .map_err(|e| Error::protocol(operation, "R3 request", &e))?;
         let timeout = self.config.r3_timeout;
+        let quiet = self.config.r3_quiet;
         let deadline = Instant::now() + timeout;
         let link = self.r3.as_mut().ok_or(Error::State {
             operation,
@@ -377,16 +499,49 @@ impl MitsubishiH7 {
                 Error::io(operation, &e)
             }
         };
-        link.send_all(&self.r3_tx[..n], deadline).map_err(map)?;
-        // RL reads a reply with one receive; we do the same but bounded by the deadline.
-        let got = link.recv(&mut self.r3_rx, deadline).map_err(map)?;
-        if got == 0 {
-            return Err(Error::io(
-                operation,
-                &std::io::ErrorKind::ConnectionAborted.into(),
-            ));
+        let disconnected = Error::Disconnected { operation };
+        while let Some(stale) = link.try_recv(&mut self.r3_rx).map_err(map)? {
+            if stale == 0 {
+                return Err(disconnected);
+            }
+            self.counters.r3_stale_bytes += stale as u64;
         }
-        match Reply::parse(&self.r3_rx[..got])
+        link.send_all(&self.r3_tx[..n], deadline).map_err(map)?;
+        let mut len = 0;
+        let end = loop {
+            if let Some(end) = r3::reply_end(&self.r3_rx[..len]) {
+                break end;
+            }
+            if len == self.r3_rx.len() {
+                return Err(Error::protocol(
+                    operation,
+                    "R3 reply",
+                    &"longer than 256 bytes without an end",
+                ));
+            }
+            // Without an end code yet: wait for more, but once some bytes are here, a pause of
+            // `r3_quiet` ends the reply.
+            let wait_until = if len == 0 {
+                deadline
+            } else {
+                deadline.min(Instant::now() + quiet)
+            };
+            match link.recv(&mut self.r3_rx[len..], wait_until) {
+                Ok(0) => return Err(disconnected),
+                Ok(got) => len += got,
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut && len > 0 => {
+                    if Instant::now() >= deadline {
+                        return Err(map(e));
+                    }
+                    break len;
+                }
+                Err(e) => return Err(map(e)),
+            }
+        };
+        if end < len {
+            self.counters.r3_stale_bytes += (len - end) as u64;
+        }
+        match Reply::parse(&self.r3_rx[..end])
             .map_err(|e| Error::protocol(operation, "R3 reply", &e))?
         {
             Reply::Ok(payload) => Ok(payload),
@@ -422,6 +577,42 @@ impl MitsubishiH7 {
             }
             std::thread::sleep(Duration::from_millis(10));
         }
+    }
+
+    /// Asks `JPOSF` where the arm stands and how many axes it has.
+    fn read_joint_report(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Open;
+        let report = self.r3_exchange(OP, 1, "JPOSF").and_then(|payload| {
+            JointReport::parse(payload).map_err(|e| Error::protocol(OP, "R3 JPOSF", &e))
+        });
+        let report = match (report, self.config.axes) {
+            (Ok(report), Some(axes)) if report.axes != axes => {
+                return Err(Error::InvalidArgument {
+                    what: "axes: the controller reports (JPOSF) another number than configured",
+                    expected: report.axes,
+                    got: axes,
+                });
+            }
+            (Ok(report), _) => report,
+            // No report: the configured count stands, the position is unknown until a reply.
+            (Err(_), Some(axes)) => {
+                self.axes = axes;
+                self.measured_from = Measured::None;
+                return Ok(());
+            }
+            (Err(e), None) => return Err(e),
+        };
+        self.axes = report.axes;
+        for (i, m) in self.measured.iter_mut().enumerate() {
+            let v = report.values[i];
+            *m = if self.config.linear_axes[i] {
+                v
+            } else {
+                v.to_radians()
+            };
+        }
+        self.measured_from = Measured::Report(report);
+        Ok(())
     }
 
     fn start_sequence(&mut self) -> Result<(), Error> {
@@ -467,8 +658,16 @@ impl MitsubishiH7 {
         Ok(())
     }
 
+    /// End packet, program stop, servo off: every step is attempted even if an earlier one
+    /// failed (each is bounded by `r3_timeout` or `servo_timeout`); the first error is returned.
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
+        let mut first: Option<Error> = None;
+        let mut note = |r: Result<(), Error>| {
+            if let Err(e) = r {
+                first.get_or_insert(e);
+            }
+        };
         let end = Packet {
             command: Command::End,
             c_count: self.c_count,
@@ -476,69 +675,41 @@ impl MitsubishiH7 {
         };
         end.encode(&mut self.tx);
         let tx = self.tx;
-        self.udp(OP)?.send(&tx).map_err(|e| Error::io(OP, &e))?;
-        self.counters.sent += 1;
-        self.r3_command(OP, 1, "STOP")?;
-        if self.dstate(OP)?.servo_on() {
-            self.r3_command(OP, 1, "SRVOFF")?;
-            self.wait_servo(OP, false)?;
+        let sent = self
+            .udp(OP)
+            .and_then(|udp| udp.send(&tx).map_err(|e| Error::io(OP, &e)));
+        if sent.is_ok() {
+            self.counters.sent += 1;
         }
-        Ok(())
+        note(sent);
+        note(self.r3_command(OP, 1, "STOP"));
+        // If the state cannot be read, switch the servo off anyway.
+        let servo_on = match self.dstate(OP) {
+            Ok(state) => state.servo_on(),
+            Err(e) => {
+                note(Err(e));
+                true
+            }
+        };
+        if servo_on {
+            note(self.r3_command(OP, 1, "SRVOFF"));
+            note(self.wait_servo(OP, false));
+        }
+        first.map_or(Ok(()), Err)
     }
 
-    fn exchange(&mut self) -> Result<(), Error> {
+    /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
+    fn verdict(&mut self, n: usize, sent: u32) -> Verdict {
         const OP: Operation = Operation::Step;
-        let [t0, t1, t2, t3] = self.config.feedback;
-        self.request.recv_type = t0;
-        self.request.recv_type1 = t1;
-        self.request.recv_type2 = t2;
-        self.request.recv_type3 = t3;
-        self.request.c_count = self.c_count;
-        self.request.encode(&mut self.tx);
-        let timeout = self.config.reply_timeout();
-        let udp = self.udp.as_mut().ok_or(Error::State {
-            operation: OP,
-            state: State::Closed,
-        })?;
-        // Anything from the controller still queued answers an earlier step that timed out.
-        while udp
-            .try_recv(&mut self.rx)
-            .map_err(|e| Error::io(OP, &e))?
-            .is_some()
-        {
-            self.counters.late += 1;
-        }
-        udp.send(&self.tx).map_err(|e| Error::io(OP, &e))?;
-        self.counters.sent += 1;
-        self.c_count = self.c_count.wrapping_add(1);
-        // As RL: after sending, the one-shot command and I/O fields are cleared.
-        self.request.command = Command::Null;
-        self.request.send_type = MxtType::Null;
-        self.request.send_io_type = IoType::Null;
-        self.request.recv_io_type = IoType::Null;
-        self.request.bit_top = 0;
-        self.request.bit_mask = 0;
-        self.request.io_data = 0;
-        let deadline = Instant::now() + timeout;
-        let Some(n) = udp
-            .recv_until(&mut self.rx, deadline)
-            .map_err(|e| Error::io(OP, &e))?
-        else {
-            self.counters.timeouts += 1;
-            return Err(Error::Timeout {
-                operation: OP,
-                waited: timeout,
-            });
-        };
         let reply = match Packet::decode(&self.rx[..n]) {
             Ok(p) => p,
             Err(e @ DecodeError::Length { .. }) => {
                 self.counters.wrong_length += 1;
-                return Err(Error::protocol(OP, "H7 packet", &e));
+                return Verdict::Bad(Error::protocol(OP, "H7 packet", &e));
             }
             Err(e) => {
                 self.counters.corrupt += 1;
-                return Err(Error::protocol(OP, "H7 packet", &e));
+                return Verdict::Bad(Error::protocol(OP, "H7 packet", &e));
             }
         };
         if [
@@ -549,15 +720,195 @@ impl MitsubishiH7 {
         ] != self.config.feedback
         {
             self.counters.corrupt += 1;
-            return Err(Error::protocol(
+            return Verdict::Bad(Error::protocol(
                 OP,
                 "H7 packet",
                 &"reply holds other data types than requested",
             ));
         }
-        self.reply = Some(reply);
+        let c = reply.c_count;
+        let replayed = match self.config.counter_check {
+            CounterCheck::Off => false,
+            CounterCheck::Advancing => Some(c) == self.last_used,
+            CounterCheck::Echo => {
+                if c == sent {
+                    false
+                } else {
+                    // Packets sent since the reply's and since the last one answered.
+                    let age = sent.wrapping_sub(c);
+                    let answered = self.last_used.map_or(u32::MAX, |u| sent.wrapping_sub(u));
+                    if age < answered && age < u32::MAX / 2 {
+                        self.counters.late += 1;
+                        return Verdict::Late(c);
+                    }
+                    true
+                }
+            }
+        };
+        if replayed {
+            self.counters.replayed += 1;
+            return Verdict::Bad(Error::protocol(
+                OP,
+                "H7 packet",
+                &"replayed reply: its counter is of a packet already answered or never sent",
+            ));
+        }
+        Verdict::Current(reply)
+    }
+
+    fn exchange(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Step;
+        let begin = Instant::now();
+        let timeout = self.step_budget.map_or(self.config.reply_timeout, |b| {
+            b.min(self.config.reply_timeout)
+        });
+        let deadline = begin + timeout;
+        // A controller a cycle behind (two requests reached it within one of its cycles, and it
+        // answers one per cycle: the last step saw the reply to the packet before its own)
+        // stays behind while we send one packet a cycle. This step then sends nothing and
+        // waits for the reply to the last request, so the controller's queue drains; a request
+        // older than a reply timeout plus a cycle is given up instead.
+        let held = self
+            .outstanding
+            .filter(|(_, at)| {
+                self.behind && at.elapsed() < self.config.reply_timeout + UPDATE_PERIOD
+            })
+            .map(|(c, _)| c);
+        self.behind = false;
+        let sent = held.unwrap_or(self.c_count);
+        if held.is_none() {
+            let [t0, t1, t2, t3] = self.config.feedback;
+            self.request.recv_type = t0;
+            self.request.recv_type1 = t1;
+            self.request.recv_type2 = t2;
+            self.request.recv_type3 = t3;
+            self.request.c_count = sent;
+            self.request.encode(&mut self.tx);
+        }
+        // Anything from the controller still queued answers an earlier step that gave up.
+        loop {
+            let udp = self.udp.as_mut().ok_or(Error::State {
+                operation: OP,
+                state: State::Closed,
+            })?;
+            match udp
+                .try_recv(&mut self.rx, deadline)
+                .map_err(|e| Error::io(OP, &e))?
+            {
+                Some(n) => match self.verdict(n, sent) {
+                    // The held request's reply, already here: use it.
+                    Verdict::Current(reply) if held.is_some() => {
+                        self.accept_held(reply);
+                        return Ok(());
+                    }
+                    // A reply carrying the counter of the packet not sent yet is a bogus one.
+                    Verdict::Current(_) => {
+                        if self.config.counter_check == CounterCheck::Echo {
+                            self.counters.replayed += 1;
+                        } else {
+                            self.counters.late += 1;
+                        }
+                    }
+                    // Late or corrupt: counted, never used.
+                    Verdict::Late(_) | Verdict::Bad(_) => {}
+                },
+                None => break,
+            }
+        }
+        let sent_at = Instant::now();
+        if held.is_some() {
+            self.counters.held += 1;
+        } else {
+            let tx = self.tx;
+            self.udp(OP)?.send(&tx).map_err(|e| Error::io(OP, &e))?;
+            self.counters.sent += 1;
+            self.c_count = self.c_count.wrapping_add(1);
+            self.outstanding = Some((sent, sent_at));
+            if self.request.command == Command::Move && self.request.send_type == MxtType::Joint {
+                self.commanded = Some(self.request.dat.joints());
+            }
+            // As RL: after sending, the one-shot command and I/O fields are cleared.
+            self.request.command = Command::Null;
+            self.request.send_type = MxtType::Null;
+            self.request.send_io_type = IoType::Null;
+            self.request.recv_io_type = IoType::Null;
+            self.request.bit_top = 0;
+            self.request.bit_mask = 0;
+            self.request.io_data = 0;
+        }
+        loop {
+            let udp = self.udp.as_mut().ok_or(Error::State {
+                operation: OP,
+                state: State::Closed,
+            })?;
+            let Some(n) = udp
+                .recv_until(&mut self.rx, deadline)
+                .map_err(|e| Error::io(OP, &e))?
+            else {
+                self.counters.timeouts += 1;
+                return Err(Error::Timeout {
+                    operation: OP,
+                    waited: timeout,
+                });
+            };
+            match self.verdict(n, sent) {
+                Verdict::Current(reply) if held.is_some() => {
+                    self.accept_held(reply);
+                    return Ok(());
+                }
+                Verdict::Current(reply) => {
+                    self.last_latency = Some(sent_at.elapsed());
+                    self.outstanding = None;
+                    self.accept(reply);
+                    return Ok(());
+                }
+                // The controller answered our previous packet only now, at this cycle's tick:
+                // it is a cycle behind, and would stay so while we send one packet a cycle.
+                Verdict::Late(c) if c == sent.wrapping_sub(1) && held.is_none() => {
+                    self.behind = true;
+                }
+                Verdict::Late(_) => {}
+                Verdict::Bad(e) => return Err(e),
+            }
+        }
+    }
+
+    /// Uses the reply to a request of an earlier step: it came a cycle late (counted late),
+    /// and the controller's queue is empty again.
+    fn accept_held(&mut self, reply: Packet) {
+        self.counters.late += 1;
+        self.outstanding = None;
+        self.accept(reply);
+    }
+
+    /// Uses a checked reply: measured joints, and the joints whose command the controller
+    /// changed (clamped at a position or speed limit).
+    fn accept(&mut self, reply: Packet) {
+        self.last_used = Some(reply.c_count);
         self.counters.replies += 1;
-        Ok(())
+        let joints = [
+            MxtType::JointFeedback,
+            MxtType::JointFiltered,
+            MxtType::Joint,
+        ]
+        .into_iter()
+        .find_map(|t| reply.find(t));
+        if let Some(DataView::Joint(j)) = joints {
+            for (m, v) in self.measured.iter_mut().zip(j) {
+                *m = f64::from(v);
+            }
+            self.measured_from = Measured::Reply;
+        }
+        self.limit = [false; MAX_AXES];
+        if let (Some(DataView::Joint(taken)), Some(sent)) =
+            (reply.find(MxtType::Joint), self.commanded)
+        {
+            for i in 0..self.axes {
+                let (t, s) = (taken[i], sent[i]);
+                self.limit[i] = !(t == s || (t - s).abs() <= f32_ulp(s));
+            }
+        }
+        self.reply = Some(reply);
     }
 }
 
@@ -595,11 +946,22 @@ impl Device for MitsubishiH7 {
                     Error::io(OP, &e)
                 }
             })?;
-            let udp =
-                UdpLink::bind(h7.config.local, h7.config.server).map_err(|e| Error::io(OP, &e))?;
+            // A wildcard address would hear every interface: bind to the one that routes to
+            // the controller.
+            let mut local = h7.config.local;
+            if local.ip().is_unspecified() {
+                local.set_ip(route_ip(h7.config.server).map_err(|e| Error::io(OP, &e))?);
+            }
+            let udp = UdpLink::bind(local, h7.config.server).map_err(|e| Error::io(OP, &e))?;
             h7.r3 = Some(r3);
             h7.udp = Some(udp);
-            Ok(())
+            h7.reply = None;
+            h7.read_joint_report().inspect_err(|_| {
+                if let Some(udp) = h7.udp.take() {
+                    h7.foreign_before += udp.counters().foreign;
+                }
+                h7.r3 = None;
+            })
         })
     }
 
@@ -608,6 +970,12 @@ impl Device for MitsubishiH7 {
             h7.request = Packet::default();
             h7.reply = None;
             h7.c_count = 0;
+            h7.last_used = None;
+            h7.outstanding = None;
+            h7.behind = false;
+            h7.commanded = None;
+            h7.limit = [false; MAX_AXES];
+            h7.last_latency = None;
             h7.start_sequence()
         })
     }
@@ -622,6 +990,7 @@ impl Device for MitsubishiH7 {
                 h7.foreign_before += udp.counters().foreign;
             }
             h7.r3 = None;
+            h7.measured_from = Measured::None;
             Ok(())
         })
     }
@@ -644,8 +1013,20 @@ impl CyclicDevice for MitsubishiH7 {
         Lifecycle::step(self, lifecycle, Self::exchange)
     }
 
+    fn step_within(&mut self, budget: Duration) -> Result<(), Error> {
+        self.step_budget = Some(budget);
+        let result = self.step();
+        self.step_budget = None;
+        result
+    }
+
     fn update_period(&self) -> Duration {
         UPDATE_PERIOD
+    }
+
+    /// The controller answers at its own 7.11 ms ticks.
+    fn runs_own_cycle(&self) -> bool {
+        true
     }
 }
 
@@ -658,24 +1039,45 @@ impl LinkStatisticsSensor for MitsubishiH7 {
             lost: c.timeouts,
             late: c.late,
             rejected: c.foreign,
-            corrupt: c.wrong_length + c.corrupt,
+            corrupt: c.wrong_length + c.corrupt + c.replayed,
             consecutive_failures: c.consecutive_failures,
         }
     }
 }
 
 impl JointDevice for MitsubishiH7 {
+    /// The axes the controller reported at `open` (or the configured count; 0 before `open`
+    /// when none is configured).
     fn dof(&self) -> usize {
-        self.config.dof
+        self.axes
+    }
+
+    fn joint_limit_sensor(&self) -> Option<&dyn JointLimitSensor<Error = Error>> {
+        Some(self)
+    }
+}
+
+impl JointLimitSensor for MitsubishiH7 {
+    /// A joint whose command value in the last reply (type 2, the value the controller took)
+    /// differs from the last joint command sent by more than an `f32` unit in the last place:
+    /// the controller clamped it at a position or speed limit. Always `false` when the reply
+    /// types hold no joint command or no joint command was sent yet.
+    fn joint_limit_reached(&self, reached: &mut [bool]) -> Result<(), Error> {
+        self.lifecycle.check(Operation::Get)?;
+        Error::check_len("joint vector length", self.axes, reached.len())?;
+        reached.copy_from_slice(&self.limit[..self.axes]);
+        Ok(())
     }
 }
 
 impl JointPositionActuator for MitsubishiH7 {
+    /// Buffers `q` for the axes the device has; any other slot of the packet carries the last
+    /// measured value, never a made-up one.
     fn set_joint_position(&mut self, q: &[f64]) -> Result<(), Error> {
         self.check_command(Mode::Joint, q.len())?;
         let mut j = [0f32; MAX_AXES];
-        for (d, s) in j.iter_mut().zip(q) {
-            *d = *s as f32;
+        for (i, d) in j.iter_mut().enumerate() {
+            *d = q.get(i).copied().unwrap_or(self.measured[i]) as f32;
         }
         self.request.dat = Data::from_joints(&j);
         self.request.command = Command::Move;
@@ -685,27 +1087,52 @@ impl JointPositionActuator for MitsubishiH7 {
 }
 
 impl JointPositionSensor for MitsubishiH7 {
+    /// The joints of the last reply (encoder feedback when requested, else the filtered or
+    /// commanded joints), or, before the first reply, where `JPOSF` said the arm stood at
+    /// `open`.
     fn joint_position(&self, q: &mut [f64]) -> Result<(), Error> {
-        Error::check_len("joint vector length", self.config.dof, q.len())?;
-        match self.find_shape(DataShape::Joint, "no joint data in the last reply")? {
-            DataView::Joint(j) => {
-                for (d, s) in q.iter_mut().zip(j) {
-                    *d = f64::from(s);
-                }
-                Ok(())
-            }
-            _ => Err(Error::protocol(
+        self.lifecycle.check(Operation::Get)?;
+        Error::check_len("joint vector length", self.axes, q.len())?;
+        match self.measured_from {
+            Measured::None => Err(Error::protocol(
                 Operation::Get,
                 "H7 packet",
-                &"no joint data in the last reply",
+                &"no joint position known yet (no JPOSF answer, no reply)",
             )),
+            _ => {
+                q.copy_from_slice(&self.measured[..self.axes]);
+                Ok(())
+            }
         }
     }
 
-    /// Joints travel as `f32`: half a unit in the last place at `q`.
+    /// Joints travel as `f32`: half a unit in the last place at `q`; before the first reply,
+    /// half the last digit `JPOSF` printed (0.005° for two decimals) where that is coarser.
     fn joint_position_resolution(&self, q: f64) -> f64 {
-        f32_half_ulp(q)
+        let printed = match &self.measured_from {
+            Measured::Report(r) => (0..r.axes)
+                .map(|i| {
+                    let d = r.resolution(i);
+                    if self.config.linear_axes[i] {
+                        d
+                    } else {
+                        d.to_radians()
+                    }
+                })
+                .fold(0.0, f64::max),
+            _ => 0.0,
+        };
+        f32_half_ulp(q).max(printed)
     }
+}
+
+/// The spacing of `f32` values at `x`.
+fn f32_ulp(x: f32) -> f32 {
+    let a = x.abs();
+    if !a.is_finite() {
+        return 0.0;
+    }
+    f32::from_bits(a.to_bits() + 1) - a
 }
 
 /// Half the spacing of `f32` values at `x`: how far a value rounded to `f32` can be off.
@@ -720,7 +1147,7 @@ fn f32_half_ulp(x: f64) -> f64 {
 
 impl CartesianPositionActuator for MitsubishiH7 {
     fn set_cartesian_position(&mut self, pose: &Pose) -> Result<(), Error> {
-        self.check_command(Mode::Pose, self.config.dof)?;
+        self.check_command(Mode::Pose, self.axes)?;
         // Keep the arm configuration (structure flags) the controller last reported.
         let (sflg1, sflg2) = match self.find_shape(DataShape::Pose, "") {
             Ok(DataView::Pose(p)) => (p.sflg1, p.sflg2),

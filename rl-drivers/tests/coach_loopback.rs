@@ -9,14 +9,14 @@ use rl_drivers::coach::{Coach, CoachConfig};
 use rl_drivers::fake::coach_server::{CoachServer, CoachServerConfig, Delivery};
 use rl_drivers::{
     CyclicDevice, Device, DeviceError, ErrorKind, JointPositionActuator, JointPositionSensor,
-    JointTorqueActuator, JointVelocityActuator, Pose, ProtocolError,
+    JointTorqueActuator, JointVelocityActuator, Pose, ProtocolError, State,
 };
 
 const DOF: usize = 6;
 
 fn server(delivery: Delivery) -> CoachServer {
     let config = CoachServerConfig {
-        models: vec![(0, DOF)],
+        models: vec![(0, vec![0.0; DOF])],
         delivery,
         ..CoachServerConfig::loopback()
     };
@@ -62,15 +62,16 @@ fn a_thousand_cycles_of_joint_positions() {
     let server = server(Delivery::default());
     let mut coach = client(&server);
     exchange(&mut coach, 1000);
+    // One request at open (where the robot stands), then a joint line and a request per step.
     let c = coach.counters();
     assert_eq!(
         (c.sent, c.replies, c.timeouts, c.late, c.bad_lines),
-        (1000, 1000, 0, 0, 0)
+        (1001, 1001, 0, 0, 0)
     );
     let s = server.status();
     assert_eq!(
         (s.requests, s.lines, s.bad_lines, s.ignored_lines),
-        (1000, 2000, 0, 0)
+        (1001, 2001, 0, 0)
     );
     let last = ramp(999);
     for (a, b) in s.joints[&0].iter().zip(last) {
@@ -89,7 +90,7 @@ fn replies_split_into_pieces_are_reassembled() {
     });
     let mut coach = client(&server);
     exchange(&mut coach, 50);
-    assert_eq!(coach.counters().replies, 50);
+    assert_eq!(coach.counters().replies, 51);
 }
 
 #[test]
@@ -101,7 +102,7 @@ fn several_lines_in_one_read_are_separated() {
     let mut coach = client(&server);
     exchange(&mut coach, 50);
     let c = coach.counters();
-    assert_eq!((c.replies, c.other_lines, c.bad_lines), (50, 150, 0));
+    assert_eq!((c.replies, c.other_lines, c.bad_lines), (51, 153, 0));
 }
 
 #[test]
@@ -135,8 +136,11 @@ fn an_unknown_model_is_a_protocol_error() {
         ..CoachServerConfig::loopback()
     })
     .unwrap();
-    let mut coach = client(&server);
-    let e = coach.step().unwrap_err();
+    let mut config = CoachConfig::new(DOF);
+    config.server = server.addr();
+    let mut coach = Coach::new(config).unwrap();
+    // The query at open (`6 0`) is answered `6 0` without values: nothing to start from.
+    let e = coach.open().unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Protocol);
     assert!(matches!(
         e,
@@ -148,10 +152,47 @@ fn an_unknown_model_is_a_protocol_error() {
             ..
         }
     ));
-    assert_eq!(
-        coach.joint_position(&mut [0.0; DOF]).unwrap_err().kind(),
-        ErrorKind::Protocol
+    assert!(e.to_string().contains("does not know the model"), "{e}");
+    assert_eq!(coach.state(), State::Closed);
+}
+
+/// Open asks where the robot stands, so a controller can start from there before the device
+/// runs; a viewer that never answers fails the open within its bound.
+#[test]
+fn open_reads_where_the_robot_stands() {
+    let standing = [0.1, -0.25, 1.5, 0.0, 2.0e-3, -3.0];
+    let server = CoachServer::spawn(CoachServerConfig {
+        models: vec![(0, standing.to_vec())],
+        ..CoachServerConfig::loopback()
+    })
+    .unwrap();
+    let mut config = CoachConfig::new(DOF);
+    config.server = server.addr();
+    let mut coach = Coach::new(config).unwrap();
+    coach.open().unwrap();
+    let mut q = [9.0; DOF];
+    coach.joint_position(&mut q).unwrap();
+    for (a, b) in q.iter().zip(standing) {
+        assert!((a - b).abs() <= coach.joint_position_resolution(b), "{q:?}");
+    }
+    // Six significant digits.
+    assert!((coach.joint_position_resolution(1.5) - 5e-6).abs() < 1e-12);
+    assert!((coach.joint_position_resolution(-3.0e-3) - 5e-9).abs() < 1e-15);
+
+    let silent = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let mut config = CoachConfig::new(DOF);
+    config.server = silent.local_addr().unwrap();
+    config.connect_timeout = Duration::from_millis(200);
+    let mut coach = Coach::new(config).unwrap();
+    let begin = std::time::Instant::now();
+    let e = coach.open().unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Timeout, "{e}");
+    assert!(
+        begin.elapsed() < Duration::from_secs(2),
+        "{:?}",
+        begin.elapsed()
     );
+    assert_eq!(coach.state(), State::Closed);
 }
 
 #[test]

@@ -65,6 +65,10 @@ fn finite() -> impl Strategy<Value = f64> {
     ]
 }
 
+/// Bytes of the longest Coach line: [`MAX_VALUES`] numbers of at most 14 bytes each
+/// (`-1.23457e+308 `) after the command and model fields.
+const LINE: usize = MAX_VALUES * 14 + 64;
+
 fn values() -> impl Strategy<Value = Values> {
     proptest::collection::vec(finite(), 1..MAX_VALUES).prop_map(|v| Values::from_slice(&v).unwrap())
 }
@@ -174,7 +178,7 @@ proptest! {
 
     #[test]
     fn coach_lines_round_trip_to_six_digits(m in message()) {
-        let mut buf = [0u8; 2048];
+        let mut buf = [0u8; LINE];
         let n = m.encode(&mut buf).unwrap();
         prop_assert_eq!(buf[n - 1], b'\n');
         let back = Message::parse(&buf[..n]).unwrap();
@@ -186,7 +190,7 @@ proptest! {
             prop_assert!((x - y).abs() <= 5e-6 * x.abs(), "{} became {}", x, y);
         }
         // Text is stable: encoding what was parsed gives the same line.
-        let mut again = [0u8; 2048];
+        let mut again = [0u8; LINE];
         let m2 = back.encode(&mut again).unwrap();
         prop_assert_eq!(&again[..m2], &buf[..n]);
     }
@@ -239,11 +243,11 @@ proptest! {
     fn lines_survive_any_split(msgs in proptest::collection::vec(message(), 1..8), cuts in proptest::collection::vec(1usize..40, 1..20)) {
         let mut stream = Vec::new();
         for m in &msgs {
-            let mut buf = [0u8; 2048];
+            let mut buf = [0u8; LINE];
             let n = m.encode(&mut buf).unwrap();
             stream.extend_from_slice(&buf[..n]);
         }
-        let mut lines = LineBuffer::<4096>::new();
+        let mut lines = LineBuffer::<{ 2 * LINE }>::new();
         let mut parsed = Vec::new();
         let mut rest = &stream[..];
         let mut i = 0;

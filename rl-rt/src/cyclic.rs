@@ -29,6 +29,7 @@ use core::ops::ControlFlow;
 use core::time::Duration;
 
 use crate::clock::{MonoTime, duration_to_nanos};
+use crate::phase::PhaseShift;
 use crate::stats::LoopStats;
 use crate::stop::StopFlag;
 use crate::thread::ThreadCounters;
@@ -170,6 +171,7 @@ pub struct CyclicLoop {
     period_ns: u64,
     policy: OverrunPolicy,
     stop: Option<StopFlag>,
+    phase: Option<PhaseShift>,
     max_cycles: Option<u64>,
     range_us: usize,
     start: Option<MonoTime>,
@@ -186,6 +188,7 @@ impl CyclicLoop {
             period_ns,
             policy: OverrunPolicy::default(),
             stop: None,
+            phase: None,
             max_cycles: None,
             range_us: DEFAULT_HISTOGRAM_RANGE_US,
             start: None,
@@ -206,6 +209,13 @@ impl CyclicLoop {
     /// End the loop when `flag` is raised (checked on every wake-up, before the step).
     pub fn stop_flag(mut self, flag: &StopFlag) -> Self {
         self.stop = Some(flag.clone());
+        self
+    }
+
+    /// Moves the grid of deadlines by what is asked through `phase` (applied before each
+    /// next deadline), to phase-lock the loop to an external clock.
+    pub fn phase_shift(mut self, phase: &PhaseShift) -> Self {
+        self.phase = Some(phase.clone());
         self
     }
 
@@ -297,6 +307,7 @@ impl CyclicLoop {
         F: FnMut(&Cycle) -> ControlFlow<()>,
     {
         let stop_requested = || self.stop.as_ref().is_some_and(StopFlag::is_stop_requested);
+        let mut start = start;
         let mut deadline_index = 0u64;
         let mut index = 0u64;
         let mut skipped_before = 0u64;
@@ -306,6 +317,18 @@ impl CyclicLoop {
             }
             if stop_requested() {
                 return Ok(LoopEnd::StopRequested);
+            }
+            if let Some(shift) = self.phase.as_ref().map(PhaseShift::take) {
+                // The whole grid moves, so later deadlines stay a period apart.
+                let moved = if shift >= 0 {
+                    start.checked_add_nanos(shift.unsigned_abs())
+                } else {
+                    start
+                        .as_nanos()
+                        .checked_sub(shift.unsigned_abs())
+                        .map(MonoTime::from_nanos)
+                };
+                start = moved.ok_or(LoopError::TimeOverflow)?;
             }
             let deadline = self.deadline(start, deadline_index)?;
             deadline.sleep_until().map_err(LoopError::Sleep)?;

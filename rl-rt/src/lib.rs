@@ -7,6 +7,8 @@
 //! - [`memory`]: `mlockall`, stack and heap prefault, `RLIMIT_MEMLOCK`/`RLIMIT_RTPRIO`.
 //! - [`cyclic`]: [`CyclicLoop`] on `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)`, measuring
 //!   wake-up latency and step duration, with an [`OverrunPolicy`].
+//! - [`phase`]: a [`PhaseShift`] moves a running loop's deadlines, to phase-lock it to a
+//!   device that runs its own cycle.
 //! - [`stop`]: the two-level [`StopFlag`] (first request: come to rest; second: stop now),
 //!   raised from SIGINT/SIGTERM without a signal handler.
 //! - [`stats`]: 1 µs-bin [`Histogram`]s (text, JSON, cyclictest's `-h` format), mergeable.
@@ -46,6 +48,7 @@ pub mod cpu_latency;
 pub mod cyclic;
 pub mod exchange;
 pub mod memory;
+pub mod phase;
 pub mod preflight;
 pub mod stats;
 pub mod stop;
@@ -55,6 +58,7 @@ pub mod thread;
 
 pub use clock::MonoTime;
 pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy};
+pub use phase::PhaseShift;
 pub use stats::{Histogram, LoopStats, Overrun, Summary};
 pub use stop::{StopFlag, StopLevel};
 pub use thread::{Policy, RtThread, RtThreadBuilder, Scheduling, ThreadCounters, ThreadError};

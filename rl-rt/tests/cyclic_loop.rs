@@ -289,3 +289,38 @@ fn stop_flag_ends_the_loop_within_one_period() {
         "stop took {stop_latency} ns"
     );
 }
+
+#[test]
+fn a_phase_shift_moves_the_grid_and_keeps_the_period() {
+    let period = Duration::from_millis(4);
+    let phase = rl_rt::PhaseShift::new();
+    let looped = CyclicLoop::new(period)
+        .expect("valid")
+        .max_cycles(8)
+        .phase_shift(&phase);
+    let (deadlines, report) = support::on_loop_thread(move || {
+        let mut deadlines = Vec::with_capacity(8);
+        let report = looped.run(|c| {
+            deadlines.push(c.deadline);
+            if c.index == 3 {
+                phase.shift(1_500_000);
+            }
+            if c.index == 5 {
+                phase.shift(-500_000);
+            }
+            ControlFlow::Continue(())
+        });
+        (deadlines, report)
+    });
+    assert_eq!(report.expect("runs").stats.cycles(), 8);
+    let gaps: Vec<u64> = deadlines
+        .windows(2)
+        .map(|w| w[1].nanos_since(w[0]))
+        .collect();
+    assert_eq!(
+        gaps,
+        [
+            4_000_000, 4_000_000, 4_000_000, 5_500_000, 4_000_000, 3_500_000, 4_000_000
+        ]
+    );
+}

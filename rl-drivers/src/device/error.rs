@@ -59,7 +59,7 @@ pub trait DeviceError: fmt::Debug + fmt::Display {
 }
 
 /// Bytes a [`Description`] holds; longer text is cut at a character boundary and marked `…`.
-pub const DESCRIPTION_CAPACITY: usize = 88;
+pub const DESCRIPTION_CAPACITY: usize = 64;
 
 /// A short text in a fixed buffer: the description of a protocol error, written with
 /// [`core::fmt::Write`] without allocating. Text beyond [`DESCRIPTION_CAPACITY`] bytes is cut at

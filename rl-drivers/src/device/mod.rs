@@ -47,6 +47,21 @@ pub trait CyclicDevice: Device {
     /// Sends the buffered commands and receives fresh measurements, within one period. Does
     /// not allocate.
     fn step(&mut self) -> Result<(), Self::Error>;
+
+    /// [`step`](Self::step), waiting at most `budget` for the device's answer: a loop passes
+    /// the time left before its next deadline, so a reply that has not come by then is counted
+    /// lost and the cycle goes on. Drivers that never wait ignore it.
+    fn step_within(&mut self, budget: Duration) -> Result<(), Self::Error> {
+        let _ = budget;
+        self.step()
+    }
     /// The device's control period: call `step` once per period.
     fn update_period(&self) -> Duration;
+
+    /// Whether the device runs its own cycle and answers at its own ticks (a robot controller
+    /// with its own interpolation cycle), rather than when it is asked. A caller's loop should
+    /// then phase-lock to the replies, so each command reaches the device before its tick.
+    fn runs_own_cycle(&self) -> bool {
+        false
+    }
 }

@@ -2,8 +2,14 @@
 //! states and body/shape poses, answers `6 <i>` with the model's joint positions (`6 <i>` alone
 //! for an unknown model, as rlCoachMdl does), and ignores a `2 <i>` line whose length differs
 //! from the model's joints. Usable as the fake for tests (with options that split replies into
-//! partial lines or batch several lines into one write) and as the endpoint a visualiser builds
-//! on (read the state with [`CoachServer::status`]).
+//! partial lines or batch several lines into one write, and [`Behaviour`]s that pause, stay
+//! silent, garble or hang up) and as the endpoint a visualiser builds on (read the state with
+//! [`CoachServer::status`]).
+//!
+//! Like RL's servers it has no limit on the number of values in a line (values are kept in
+//! growable storage; this server is not on a real-time path). A line is bounded by
+//! [`CoachServerConfig::max_line_bytes`] instead: a longer one is dropped up to its newline,
+//! counted and described in [`CoachServerStatus::last_error`] — nothing is dropped silently.
 
 use std::collections::HashMap;
 use std::io::{self, Read, Write};
@@ -13,9 +19,10 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use crate::proto::coach::{LineBuffer, Message, Values};
+use crate::proto::coach::Message;
 
 const POLL: Duration = Duration::from_millis(20);
+const ACCEPT_POLL: Duration = Duration::from_millis(1);
 
 /// How the server writes its replies (to exercise a client's line reassembly).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -29,17 +36,37 @@ pub struct Delivery {
     pub extra_lines: usize,
 }
 
+/// How the server treats its clients (hostile behaviours for tests).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Behaviour {
+    /// Reads every line and answers requests.
+    #[default]
+    Normal,
+    /// Stops reading (the client's lines queue up in the kernel, as behind a stopped process);
+    /// on [`Normal`](Behaviour::Normal) again it reads and answers all of them.
+    Paused,
+    /// Reads lines but never answers.
+    Silent,
+    /// Answers every request with a line that is not Coach.
+    Garbage,
+}
+
 /// Server configuration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CoachServerConfig {
     /// Listen address (RL's visualisers use port 11235).
     pub bind: SocketAddr,
-    /// Models known from the start: index and number of joints (joints start at 0).
-    pub models: Vec<(u32, usize)>,
+    /// Models known from the start (as RL's viewers know the models they loaded): index and
+    /// joint positions, where the robot stands.
+    pub models: Vec<(u32, Vec<f64>)>,
     /// Learn a model from its first `2 <i> q…` line if it is not known.
     pub learn_models: bool,
     /// How replies are written.
     pub delivery: Delivery,
+    /// Longest line accepted, newline excluded; longer ones are dropped and counted.
+    pub max_line_bytes: usize,
+    /// How clients are treated.
+    pub behaviour: Behaviour,
 }
 
 impl CoachServerConfig {
@@ -50,6 +77,8 @@ impl CoachServerConfig {
             models: Vec::new(),
             learn_models: true,
             delivery: Delivery::default(),
+            max_line_bytes: 1 << 20,
+            behaviour: Behaviour::Normal,
         }
     }
 }
@@ -65,6 +94,10 @@ pub struct CoachServerStatus {
     pub bad_lines: u64,
     /// Joint lines ignored because their length differs from the model's joints.
     pub ignored_lines: u64,
+    /// Lines longer than `max_line_bytes`, dropped up to their newline.
+    pub overlong_lines: u64,
+    /// What was wrong with the last bad or overlong line (line number and reason).
+    pub last_error: Option<String>,
     /// `6 <i>` requests answered.
     pub requests: u64,
     /// Joint positions per model.
@@ -83,6 +116,8 @@ pub struct CoachServerStatus {
 struct Shared {
     config: CoachServerConfig,
     status: CoachServerStatus,
+    /// Bumped by `disconnect_clients`: clients of an older generation hang up.
+    generation: u64,
 }
 
 fn lock(shared: &Mutex<Shared>) -> MutexGuard<'_, Shared> {
@@ -105,10 +140,14 @@ impl CoachServer {
         listener.set_nonblocking(true)?;
         let addr = listener.local_addr()?;
         let mut status = CoachServerStatus::default();
-        for &(model, dof) in &config.models {
-            status.joints.insert(model, vec![0.0; dof]);
+        for (model, q) in &config.models {
+            status.joints.insert(*model, q.clone());
         }
-        let shared = Arc::new(Mutex::new(Shared { config, status }));
+        let shared = Arc::new(Mutex::new(Shared {
+            config,
+            status,
+            generation: 0,
+        }));
         let stop = Arc::new(AtomicBool::new(false));
         let (s, st) = (shared.clone(), stop.clone());
         let accept = std::thread::Builder::new()
@@ -142,6 +181,16 @@ impl CoachServer {
         lock(&self.shared).config.delivery = delivery;
     }
 
+    /// Changes how clients are treated.
+    pub fn set_behaviour(&self, behaviour: Behaviour) {
+        lock(&self.shared).config.behaviour = behaviour;
+    }
+
+    /// Closes every client connection (as a server that is killed would), keeps listening.
+    pub fn disconnect_clients(&self) {
+        lock(&self.shared).generation += 1;
+    }
+
     /// Stops accepting and serving (also done on drop).
     pub fn shutdown(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
@@ -171,7 +220,8 @@ fn accept_loop(listener: &TcpListener, shared: &Arc<Mutex<Shared>>, stop: &Arc<A
                     clients.push(t);
                 }
             }
-            Err(_) => std::thread::sleep(POLL),
+            // A new client waits at most this long to be served.
+            Err(_) => std::thread::sleep(ACCEPT_POLL),
         }
     }
     for t in clients {
@@ -184,12 +234,27 @@ fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool
         return;
     }
     let _ = stream.set_nodelay(true);
-    let mut lines = LineBuffer::<65536>::new();
+    let generation = lock(shared).generation;
+    let mut line: Vec<u8> = Vec::new();
+    let mut overlong = false;
     let mut reply = Vec::new();
+    let mut buf = [0u8; 4096];
     while !stop.load(Ordering::Relaxed) {
-        match stream.read(lines.spare()) {
+        let (behaviour, max_line, gen_now) = {
+            let s = lock(shared);
+            (s.config.behaviour, s.config.max_line_bytes, s.generation)
+        };
+        if gen_now != generation {
+            let _ = stream.shutdown(std::net::Shutdown::Both);
+            return;
+        }
+        if behaviour == Behaviour::Paused {
+            std::thread::sleep(Duration::from_millis(5));
+            continue;
+        }
+        let n = match stream.read(&mut buf) {
             Ok(0) => return,
-            Ok(n) => lines.commit(n),
+            Ok(n) => n,
             Err(e)
                 if matches!(
                     e.kind(),
@@ -199,15 +264,31 @@ fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool
                 continue;
             }
             Err(_) => return,
-        }
+        };
         let delivery = lock(shared).config.delivery;
-        while let Some(line) = lines.next_line() {
+        for &b in &buf[..n] {
+            if b != b'\n' {
+                if line.len() < max_line {
+                    line.push(b);
+                } else if !overlong {
+                    overlong = true;
+                }
+                continue;
+            }
             let mut s = lock(shared);
             s.status.lines += 1;
-            match line.and_then(Message::parse) {
-                Ok(m) => s.apply(m, &mut reply),
-                Err(_) => s.status.bad_lines += 1,
+            if std::mem::take(&mut overlong) {
+                s.status.overlong_lines += 1;
+                s.status.last_error = Some(format!(
+                    "line {}: longer than {max_line} bytes, dropped",
+                    s.status.lines
+                ));
+            } else {
+                // The behaviour as it is now, not as it was when the read began.
+                let behaviour = s.config.behaviour;
+                s.apply_line(&line, behaviour, &mut reply);
             }
+            line.clear();
         }
         if !reply.is_empty() && send(&mut stream, &reply, delivery).is_err() {
             return;
@@ -229,8 +310,117 @@ fn send(stream: &mut TcpStream, bytes: &[u8], delivery: Delivery) -> io::Result<
     }
 }
 
+/// A joint line: its code, model and values.
+type JointLine = (u8, u32, Vec<f64>);
+
+/// A joint line (`2`, `3`, `5`, `6`) with any number of values, or `None` for other lines.
+fn joint_line(line: &[u8]) -> Option<Result<JointLine, String>> {
+    let text = core::str::from_utf8(line).ok()?;
+    let mut tokens = text.split_ascii_whitespace();
+    let code = match tokens.next()? {
+        "2" => 2,
+        "3" => 3,
+        "5" => 5,
+        "6" => 6,
+        _ => return None,
+    };
+    let Some(model) = tokens.next() else {
+        return Some(Err("field 1 (model) is missing".into()));
+    };
+    let Ok(model) = model.parse::<u32>() else {
+        return Some(Err("field 1 (model) is not a model index".into()));
+    };
+    let mut values = Vec::new();
+    for (k, t) in tokens.enumerate() {
+        match t.parse::<f64>() {
+            Ok(v) => values.push(v),
+            Err(_) => return Some(Err(format!("field {} is not a number", k + 2))),
+        }
+    }
+    Some(Ok((code, model, values)))
+}
+
 impl Shared {
-    fn apply(&mut self, m: Message, reply: &mut Vec<u8>) {
+    fn apply_line(&mut self, line: &[u8], behaviour: Behaviour, reply: &mut Vec<u8>) {
+        let parsed = match joint_line(line) {
+            Some(Ok((code, model, values))) => Ok(self.apply_joints(code, model, values)),
+            Some(Err(e)) => Err(e),
+            None => Message::parse(line)
+                .map(|m| self.apply(m))
+                .map_err(|e| e.to_string()),
+        };
+        match parsed {
+            Ok(Some(model)) => {
+                self.status.requests += 1;
+                self.answer(model, behaviour, reply);
+            }
+            Ok(None) => {}
+            Err(e) => {
+                self.status.bad_lines += 1;
+                self.status.last_error = Some(format!("line {}: {e}", self.status.lines));
+            }
+        }
+    }
+
+    /// Applies a joint line; returns the model of a request to answer.
+    fn apply_joints(&mut self, code: u8, model: u32, values: Vec<f64>) -> Option<u32> {
+        let st = &mut self.status;
+        match code {
+            2 => match st.joints.get_mut(&model) {
+                Some(q) if q.len() == values.len() => q.copy_from_slice(&values),
+                Some(_) => st.ignored_lines += 1,
+                None if self.config.learn_models => {
+                    st.joints.insert(model, values);
+                }
+                None => st.ignored_lines += 1,
+            },
+            3 => {
+                st.velocities.insert(model, values);
+            }
+            5 => {
+                st.torques.insert(model, values);
+            }
+            // A `6 <i> q…` line from a client is a reply: nothing to do.
+            _ if !values.is_empty() => {}
+            _ => return Some(model),
+        }
+        None
+    }
+
+    /// Writes the answer to a `6 <model>` request (or garbage, or nothing).
+    fn answer(&mut self, model: u32, behaviour: Behaviour, reply: &mut Vec<u8>) {
+        match behaviour {
+            // A pause only stops reading: a line read before it is answered.
+            Behaviour::Paused | Behaviour::Normal => {}
+            Behaviour::Silent => return,
+            Behaviour::Garbage => {
+                reply.extend_from_slice(b"\x01garbage reply\n");
+                return;
+            }
+        }
+        for i in 0..self.config.delivery.extra_lines {
+            // Lines a client must skip: empty lines (as rlSimulator sends) and an echo.
+            if i % 2 == 0 {
+                reply.push(b'\n');
+            } else {
+                reply.extend_from_slice(format!("2 {} 0\n", model + 1000).as_bytes());
+            }
+        }
+        let mut line = format!("6 {model}");
+        if let Some(q) = self.status.joints.get(&model) {
+            for v in q {
+                line.push(' ');
+                let mut g = heapless::String::<32>::new();
+                let _ = crate::proto::coach::write_g6(&mut g, *v);
+                line.push_str(&g);
+            }
+        }
+        line.push('\n');
+        reply.extend_from_slice(line.as_bytes());
+    }
+
+    /// Applies a pose line (joint lines go through `apply_joints`).
+    fn apply(&mut self, m: Message) -> Option<u32> {
         let st = &mut self.status;
         match m {
             Message::BodyPose { model, body, pose } => {
@@ -244,43 +434,14 @@ impl Shared {
             } => {
                 st.shapes.insert((model, body, shape), pose);
             }
-            Message::JointPosition { model, values } => match st.joints.get_mut(&model) {
-                Some(q) if q.len() == values.len() => q.copy_from_slice(&values),
-                Some(_) => st.ignored_lines += 1,
-                None if self.config.learn_models => {
-                    st.joints.insert(model, values.to_vec());
-                }
-                None => st.ignored_lines += 1,
-            },
-            Message::JointVelocity { model, values } => {
-                st.velocities.insert(model, values.to_vec());
-            }
-            Message::JointTorque { model, values } => {
-                st.torques.insert(model, values.to_vec());
-            }
-            Message::Request { model } => {
-                st.requests += 1;
-                for i in 0..self.config.delivery.extra_lines {
-                    // Lines a client must skip: empty lines (as rlSimulator sends) and an echo.
-                    if i % 2 == 0 {
-                        reply.push(b'\n');
-                    } else {
-                        reply.extend_from_slice(format!("2 {} 0\n", model + 1000).as_bytes());
-                    }
-                }
-                let answer = match st.joints.get(&model) {
-                    Some(q) => match Values::from_slice(q) {
-                        Ok(values) => Message::Reply { model, values },
-                        Err(_) => Message::Request { model },
-                    },
-                    None => Message::Request { model },
-                };
-                let mut buf = [0u8; 1024];
-                if let Ok(n) = answer.encode(&mut buf) {
-                    reply.extend_from_slice(&buf[..n]);
-                }
-            }
-            Message::Reply { .. } | Message::Empty => {}
+            // Joint lines are read with growable storage by `joint_line`.
+            Message::JointPosition { .. }
+            | Message::JointVelocity { .. }
+            | Message::JointTorque { .. }
+            | Message::Reply { .. } => {}
+            Message::Request { model } => return Some(model),
+            Message::Empty => {}
         }
+        None
     }
 }

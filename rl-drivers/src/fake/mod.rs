@@ -2,5 +2,7 @@
 //! tested (and tried by a user) without hardware. A fake imitates a remote controller, so unlike
 //! a device it runs its own server threads; it is not meant for the real-time path.
 
+pub mod cia402_drive;
 pub mod coach_server;
+pub mod ecat_segment;
 pub mod h7_controller;

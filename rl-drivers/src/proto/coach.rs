@@ -17,8 +17,9 @@
 
 use core::fmt::{self, Write};
 
-/// Most values one line carries (joints of one model).
-pub const MAX_VALUES: usize = 32;
+/// Most values one line carries (joints of one model): as many as the `rl` tool's largest model
+/// capacity (RL's protocol has no limit; tiago_dual has 101 joints).
+pub const MAX_VALUES: usize = 256;
 
 /// The values of a joint line.
 pub type Values = heapless::Vec<f64, MAX_VALUES>;

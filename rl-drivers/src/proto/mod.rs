@@ -3,6 +3,9 @@
 //! `rl-drivers/fuzz` and property-tested in `tests/proto_properties.rs`).
 #![forbid(unsafe_code)]
 
+pub mod can;
+pub mod canopen;
 pub mod coach;
+pub mod ecat;
 pub mod h7;
 pub mod r3;

@@ -1,8 +1,18 @@
 //! The MELFA R3 text protocol that sets up real-time control over TCP: requests
 //! `<robot>;<slot>;<CMD><args>` without terminator, replies `QoK...` (success) or `QeR<n>`
-//! (error `n`), the `DSTATE` status reply, and the 4-line MXT program RL uploads.
+//! (error `n`), the `DSTATE` status reply, the `JPOSF` joint position reply, and the 4-line MXT
+//! program RL uploads.
 //!
-//! Facts from RL's `MitsubishiR3` / `MitsubishiH7` (see `shared/reference/mitsubishi-h7.md`).
+//! Facts from RL's `MitsubishiR3` / `MitsubishiH7` (see `shared/reference/mitsubishi-h7.md`) and
+//! from MELFA client libraries (sources in `rl-drivers/NOTES.md`):
+//! - A reply ends with a carriage return ([`TERMINATOR`]) on the serial port; on Ethernet the
+//!   end code is a port parameter of the controller, so a reply may come without one. RL reads a
+//!   reply with a single `recv`; [`reply_end`] finds the end of a framed reply.
+//! - `Qok` / `Qer` (lower-case second letter) are the success and error answers of a
+//!   controller that is itself in an error state.
+//! - `JPOSF` answers `QoKJ1;<deg>;J2;<deg>;…;J6;<deg>;;****,****;<ovrd>;<speed>;<limit>`: one
+//!   `J<n>;<value>` pair per axis (degrees, or mm for a linear axis), then fields this crate
+//!   does not use ([`JointReport`]).
 
 use core::fmt::{self, Write};
 use core::net::IpAddr;
@@ -11,6 +21,10 @@ use super::h7::Mode;
 
 /// Most bytes RL reads for one reply.
 pub const MAX_REPLY_LEN: usize = 256;
+/// The byte that ends a reply (carriage return) when the controller sends an end code.
+pub const TERMINATOR: u8 = b'\r';
+/// Most axes a `JPOSF` reply reports (six robot axes and two additional axes).
+pub const MAX_REPORTED_AXES: usize = 8;
 /// Longest `EMDAT` payload RL sends at once.
 pub const EMDAT_CHUNK_LEN: usize = 246;
 /// The program number RL loads the MXT program as.
@@ -91,6 +105,11 @@ pub enum R3Error {
         /// Its length.
         len: usize,
     },
+    /// A `JPOSF` reply is malformed.
+    BadJointReport {
+        /// Where parsing stopped (offset in the text after `QoK`).
+        at: usize,
+    },
 }
 
 impl fmt::Display for R3Error {
@@ -109,6 +128,7 @@ impl fmt::Display for R3Error {
             R3Error::LineTooLong { len } => {
                 write!(f, "program line of {len} bytes exceeds {EMDAT_CHUNK_LEN}")
             }
+            R3Error::BadJointReport { at } => write!(f, "malformed JPOSF reply at byte {at}"),
         }
     }
 }
@@ -217,15 +237,22 @@ pub enum Reply<'a> {
 }
 
 impl<'a> Reply<'a> {
-    /// Parses a reply. Trailing NUL, CR and LF are ignored.
+    /// Parses a reply. Trailing NUL, CR and LF are ignored; `Qok` and `Qer` (sent by a
+    /// controller in an error state) count as `QoK` and `QeR`.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, R3Error> {
         let text = core::str::from_utf8(bytes).map_err(|e| R3Error::NotText {
             at: e.valid_up_to(),
         })?;
         let text = text.trim_end_matches(['\0', '\r', '\n']);
-        if let Some(payload) = text.strip_prefix("QoK") {
+        if let Some(payload) = text
+            .strip_prefix("QoK")
+            .or_else(|| text.strip_prefix("Qok"))
+        {
             Ok(Reply::Ok(payload))
-        } else if let Some(code) = text.strip_prefix("QeR") {
+        } else if let Some(code) = text
+            .strip_prefix("QeR")
+            .or_else(|| text.strip_prefix("Qer"))
+        {
             let digits = code.bytes().take_while(u8::is_ascii_digit).count();
             Ok(Reply::Error(code[..digits].parse().unwrap_or(0)))
         } else {
@@ -239,6 +266,96 @@ impl<'a> Reply<'a> {
             Reply::Ok(p) => Ok(p),
             Reply::Error(code) => Err(R3Error::Controller { code }),
         }
+    }
+}
+
+/// The length of the first complete reply in `bytes` including its [`TERMINATOR`], or `None`
+/// while no terminator has arrived.
+pub fn reply_end(bytes: &[u8]) -> Option<usize> {
+    bytes.iter().position(|&b| b == TERMINATOR).map(|i| i + 1)
+}
+
+/// The axes of a `JPOSF` reply: `J<n>;<value>` pairs for `J1`, `J2`, … in order, values in
+/// degrees (mm for a linear axis) as printed, with the number of decimals each was printed
+/// with (its resolution).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointReport {
+    /// Axes reported.
+    pub axes: usize,
+    /// The values as printed (degrees, or mm for a linear axis); zero beyond `axes`.
+    pub values: [f64; MAX_REPORTED_AXES],
+    /// Decimal places each value was printed with.
+    pub decimals: [u8; MAX_REPORTED_AXES],
+}
+
+impl JointReport {
+    /// Parses the payload after `QoK`: the leading `J<n>;<value>;` pairs, `J1` first and
+    /// numbered in order; what follows the last pair (structure flags, override, speed, limit
+    /// word) is not read. At least one axis is required.
+    pub fn parse(payload: &str) -> Result<Self, R3Error> {
+        let mut r = JointReport::default();
+        let mut at = 0;
+        let mut fields = payload.split(';');
+        while let Some(number) = fields
+            .next()
+            .and_then(|name| name.strip_prefix('J'))
+            .filter(|n| !n.is_empty())
+        {
+            let name_len = number.len() + 1;
+            let bad = R3Error::BadJointReport { at };
+            let n: usize = number.parse().map_err(|_| bad)?;
+            if n != r.axes + 1 || r.axes == MAX_REPORTED_AXES {
+                return Err(bad);
+            }
+            at += name_len + 1;
+            let value = fields.next().ok_or(R3Error::BadJointReport { at })?;
+            let v: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| R3Error::BadJointReport { at })?;
+            if !v.is_finite() {
+                return Err(R3Error::BadJointReport { at });
+            }
+            let decimals = value.trim().split_once('.').map_or(0, |(_, d)| d.len());
+            r.values[r.axes] = v;
+            r.decimals[r.axes] = u8::try_from(decimals).unwrap_or(u8::MAX);
+            r.axes += 1;
+            at += value.len() + 1;
+        }
+        if r.axes == 0 {
+            return Err(R3Error::BadJointReport { at: 0 });
+        }
+        Ok(r)
+    }
+
+    /// Writes a payload (without `QoK`) as a controller does: two decimals per axis, then
+    /// the fields a joint position has no use for (`****,****` flags, override 100, speed 0,
+    /// limit word 0).
+    pub fn encode(&self, out: &mut [u8]) -> Result<usize, R3Error> {
+        let capacity = out.len();
+        let mut w = SliceWriter {
+            out,
+            len: 0,
+            needed: 0,
+        };
+        let mut go = || -> fmt::Result {
+            for (i, v) in self.values.iter().take(self.axes).enumerate() {
+                write!(w, "J{};{v:.2};", i + 1)?;
+            }
+            w.write_str(";****,****;100;0.00;00000000")
+        };
+        go().map_err(|_| R3Error::TooLong {
+            needed: w.needed,
+            capacity,
+        })?;
+        Ok(w.len)
+    }
+
+    /// Half the last printed digit of axis `i`: how far the printed value can be from the
+    /// controller's own (in the printed unit).
+    pub fn resolution(&self, i: usize) -> f64 {
+        let d = self.decimals.get(i).copied().unwrap_or(0);
+        (0..d).fold(0.5, |r, _| r / 10.0)
     }
 }
 
@@ -329,6 +446,69 @@ pub fn write_program(
             mode.code()
         ),
     )
+}
+
+/// What a controller takes from an uploaded MXT program: where to send real-time replies
+/// (`OPEN "ENET:<ip>"`), what the client commands and the filter time constant
+/// (`MXT <file>,<mode>,<filter ms>`; the filter is in milliseconds, 0 when omitted).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProgramInfo {
+    /// The client address of the `ENET:` line.
+    pub client: IpAddr,
+    /// The MXT mode.
+    pub mode: Mode,
+    /// The MXT filter time constant in ms.
+    pub filter_ms: u32,
+}
+
+impl ProgramInfo {
+    /// Reads the `OPEN "ENET:…"` and `MXT` lines of a program (lines separated by
+    /// [`LINE_SEPARATOR`] or newlines, keywords in any case, optional line numbers). The error
+    /// gives the byte offset of the line that is wrong, or the program's length when a line is
+    /// missing.
+    pub fn parse(program: &str) -> Result<Self, R3Error> {
+        let mut client = None;
+        let mut mxt = None;
+        let mut at = 0;
+        for line in program.split([LINE_SEPARATOR, '\n', '\r']) {
+            let bad = R3Error::BadRequest { at };
+            // Drop the line number.
+            let body = line
+                .trim()
+                .trim_start_matches(|c: char| c.is_ascii_digit())
+                .trim();
+            let upper =
+                |s: &str, kw: &str| s.len() >= kw.len() && s[..kw.len()].eq_ignore_ascii_case(kw);
+            if upper(body, "OPEN") {
+                if let Some(rest) = body.find(':').map(|i| &body[i + 1..]) {
+                    let ip = rest.split('"').next().unwrap_or("").trim();
+                    client = Some(ip.parse::<IpAddr>().map_err(|_| bad)?);
+                }
+            } else if upper(body, "MXT") {
+                let mut args = body[3..].split(',').map(str::trim);
+                let _file = args.next();
+                let mode = match args.next().map(str::parse::<u8>) {
+                    Some(Ok(0)) => Mode::Pose,
+                    Some(Ok(1)) => Mode::Joint,
+                    Some(Ok(2)) => Mode::Pulse,
+                    _ => return Err(bad),
+                };
+                let filter_ms = match args.next() {
+                    None => 0,
+                    Some(f) => f.parse().map_err(|_| bad)?,
+                };
+                mxt = Some((mode, filter_ms));
+            }
+            at += line.len() + 1;
+        }
+        let missing = R3Error::BadRequest { at: program.len() };
+        let (mode, filter_ms) = mxt.ok_or(missing)?;
+        Ok(ProgramInfo {
+            client: client.ok_or(missing)?,
+            mode,
+            filter_ms,
+        })
+    }
 }
 
 /// Splits a program into `EMDAT` payloads of at most [`EMDAT_CHUNK_LEN`] bytes, cutting only at
@@ -438,6 +618,69 @@ mod tests {
         );
     }
 
+    /// The reply a serial-port client logged for `1;1;JPOSF` (NOTES.md, sources).
+    #[test]
+    fn jposf_reports_axes_in_degrees_with_their_decimals() {
+        let logged = "J1;10.90;J2;70.76;J3;64.16;J4;-160.00;J5;40.06;J6;-183.40;;****,****;20;30.28;00000000";
+        let r = JointReport::parse(logged).unwrap();
+        assert_eq!(r.axes, 6);
+        assert_eq!(r.values[..6], [10.90, 70.76, 64.16, -160.0, 40.06, -183.40]);
+        assert_eq!(r.decimals[..6], [2; 6]);
+        assert!((r.resolution(0) - 0.005).abs() < 1e-15);
+        let mut buf = [0u8; 128];
+        let n = r.encode(&mut buf).unwrap();
+        assert_eq!(
+            core::str::from_utf8(&buf[..n]).unwrap(),
+            logged.replace(";20;30.28;", ";100;0.00;")
+        );
+        assert_eq!(
+            JointReport::parse(core::str::from_utf8(&buf[..n]).unwrap()),
+            Ok(r)
+        );
+        // Seven and eight axes (additional axes), and no trailing fields.
+        assert_eq!(
+            JointReport::parse("J1;1;J2;2;J3;3;J4;4;J5;5;J6;6;J7;7.5;J8;8")
+                .unwrap()
+                .axes,
+            8
+        );
+        assert_eq!(JointReport::parse("J1;0.1").unwrap().decimals[0], 1);
+        // Out of order, missing value, not a number, nothing at all.
+        assert_eq!(
+            JointReport::parse("J2;1.00;"),
+            Err(R3Error::BadJointReport { at: 0 })
+        );
+        assert_eq!(
+            JointReport::parse("J1;1.00;J3;2.00"),
+            Err(R3Error::BadJointReport { at: 8 })
+        );
+        assert_eq!(
+            JointReport::parse("J1"),
+            Err(R3Error::BadJointReport { at: 3 })
+        );
+        assert_eq!(
+            JointReport::parse("J1;x;"),
+            Err(R3Error::BadJointReport { at: 3 })
+        );
+        assert_eq!(
+            JointReport::parse("J1;inf;"),
+            Err(R3Error::BadJointReport { at: 3 })
+        );
+        assert_eq!(
+            JointReport::parse(";****"),
+            Err(R3Error::BadJointReport { at: 0 })
+        );
+    }
+
+    #[test]
+    fn a_reply_ends_at_its_carriage_return() {
+        assert_eq!(reply_end(b"QoK20"), None);
+        assert_eq!(reply_end(b"QoK20000;0;1\rQoK"), Some(13));
+        assert_eq!(Reply::parse(b"QoK20000;0;1\r"), Ok(Reply::Ok("20000;0;1")));
+        assert_eq!(Reply::parse(b"Qok"), Ok(Reply::Ok("")));
+        assert_eq!(Reply::parse(b"Qer0041\r"), Ok(Reply::Error(41)));
+    }
+
     #[test]
     fn the_program_is_rls_four_lines_in_one_chunk() {
         let mut buf = [0u8; 128];
@@ -450,6 +693,31 @@ mod tests {
         let mut chunks = EmdatChunks::new(p);
         assert_eq!(chunks.next(), Some(Ok(p)));
         assert_eq!(chunks.next(), None);
+        let info = ProgramInfo::parse(p).unwrap();
+        assert_eq!(
+            info,
+            ProgramInfo {
+                client: "127.0.0.1".parse().unwrap(),
+                mode: Mode::Joint,
+                filter_ms: 2
+            }
+        );
+        // The program of Mitsubishi's ROS driver documentation: no filter given, mixed case.
+        let melfa = "Open \"ENET:192.168.0.12\" As #1\nMxt 1,0\nEnd";
+        let info = ProgramInfo::parse(melfa).unwrap();
+        assert_eq!((info.mode, info.filter_ms), (Mode::Pose, 0));
+        assert_eq!(
+            ProgramInfo::parse("10 MXT 1,1,0"),
+            Err(R3Error::BadRequest { at: 12 })
+        );
+        assert_eq!(
+            ProgramInfo::parse("10 OPEN \"ENET:x\" AS #1\u{b}20 MXT 1,1"),
+            Err(R3Error::BadRequest { at: 0 })
+        );
+        assert_eq!(
+            ProgramInfo::parse("10 OPEN \"ENET:1.2.3.4\" AS #1\u{b}20 MXT 1,7,0"),
+            Err(R3Error::BadRequest { at: 29 })
+        );
     }
 
     #[test]

@@ -1,5 +1,7 @@
 //! Socket transports (std): non-blocking sockets where every wait is bounded by a deadline.
 
+pub mod can;
+pub mod packet;
 pub mod tcp;
 pub mod udp;
 
@@ -10,6 +12,7 @@ use std::time::Instant;
 use nix::poll::{PollFd, PollFlags, ppoll};
 use nix::sys::time::TimeSpec;
 
+pub use packet::{PacketCounters, PacketLink};
 pub use tcp::TcpLink;
 pub use udp::{UdpCounters, UdpLink};
 

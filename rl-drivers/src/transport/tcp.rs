@@ -3,7 +3,7 @@
 
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpStream};
-use std::os::fd::AsFd;
+use std::os::fd::{AsFd, BorrowedFd};
 use std::time::{Duration, Instant};
 
 use socket2::{Domain, Protocol, Socket, Type};
@@ -17,8 +17,16 @@ pub struct TcpLink {
     peer: SocketAddr,
 }
 
-fn timed_out(what: &'static str) -> io::Error {
-    io::Error::new(io::ErrorKind::TimedOut, what)
+/// An expired deadline. Built from the kind alone, which allocates nothing (an
+/// `io::Error::new` with a message allocates three times).
+fn timed_out() -> io::Error {
+    io::Error::from(io::ErrorKind::TimedOut)
+}
+
+impl AsFd for TcpLink {
+    fn as_fd(&self) -> BorrowedFd<'_> {
+        self.stream.as_fd()
+    }
 }
 
 impl TcpLink {
@@ -55,7 +63,7 @@ impl TcpLink {
                 Ok(n) => bytes = &bytes[n..],
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                     if !wait(self.stream.as_fd(), Readiness::Writable, deadline)? {
-                        return Err(timed_out("send timed out"));
+                        return Err(timed_out());
                     }
                 }
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -66,8 +74,12 @@ impl TcpLink {
     }
 
     /// Reads what is available without waiting: `Ok(None)` if nothing, `Ok(Some(0))` if the
-    /// peer closed the connection.
+    /// peer closed the connection. `buf` must not be empty (a read into nothing would look
+    /// like a closed connection).
     pub fn try_recv(&mut self, buf: &mut [u8]) -> io::Result<Option<usize>> {
+        if buf.is_empty() {
+            return Err(io::Error::from(io::ErrorKind::InvalidInput));
+        }
         loop {
             match self.stream.read(buf) {
                 Ok(n) => return Ok(Some(n)),
@@ -78,14 +90,18 @@ impl TcpLink {
         }
     }
 
-    /// Reads at least one byte before `deadline` (`Ok(0)` means the peer closed).
+    /// Reads at least one byte before `deadline` (`Ok(0)` means the peer closed; an expired
+    /// deadline is `ErrorKind::TimedOut`, made without allocating). `buf` must not be empty.
     pub fn recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<usize> {
+        if buf.is_empty() {
+            return Err(io::Error::from(io::ErrorKind::InvalidInput));
+        }
         loop {
             if let Some(n) = self.try_recv(buf)? {
                 return Ok(n);
             }
             if !wait(self.stream.as_fd(), Readiness::Readable, deadline)? {
-                return Err(timed_out("receive timed out"));
+                return Err(timed_out());
             }
         }
     }

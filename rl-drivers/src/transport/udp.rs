@@ -72,15 +72,22 @@ impl UdpLink {
     }
 
     /// Receives one pending datagram from the peer, if any, without waiting. Foreign datagrams
-    /// are dropped and counted. Returns its length (datagrams longer than `buf` are cut).
-    pub fn try_recv(&mut self, buf: &mut [u8]) -> io::Result<Option<usize>> {
+    /// are dropped and counted — but only until `deadline`: a flood of them cannot hold the
+    /// caller past it (`Ok(None)` then, with the rest left queued). Returns the datagram's
+    /// length (datagrams longer than `buf` are cut).
+    pub fn try_recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<Option<usize>> {
         loop {
             match self.socket.recv_from(buf) {
                 Ok((n, from)) if from == self.peer => {
                     self.counters.received += 1;
                     return Ok(Some(n));
                 }
-                Ok(_) => self.counters.foreign += 1,
+                Ok(_) => {
+                    self.counters.foreign += 1;
+                    if Instant::now() >= deadline {
+                        return Ok(None);
+                    }
+                }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(None),
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(e) => return Err(e),
@@ -88,10 +95,11 @@ impl UdpLink {
         }
     }
 
-    /// Waits until a datagram from the peer arrives or `deadline` passes (`Ok(None)`).
+    /// Waits until a datagram from the peer arrives or `deadline` passes (`Ok(None)`); foreign
+    /// datagrams on the way are dropped and counted.
     pub fn recv_until(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<Option<usize>> {
         loop {
-            if let Some(n) = self.try_recv(buf)? {
+            if let Some(n) = self.try_recv(buf, deadline)? {
                 return Ok(Some(n));
             }
             if !wait(self.socket.as_fd(), Readiness::Readable, deadline)? {
@@ -124,5 +132,26 @@ mod tests {
         let short = start + Duration::from_millis(20);
         assert_eq!(link.recv_until(&mut buf, short).unwrap(), None);
         assert!(start.elapsed() >= Duration::from_millis(20));
+    }
+
+    #[test]
+    fn a_flood_of_foreign_datagrams_stops_at_the_deadline() {
+        let any: SocketAddr = "127.0.0.1:0".parse().unwrap();
+        let peer = UdpSocket::bind(any).unwrap();
+        let stranger = UdpSocket::bind(any).unwrap();
+        let mut link = UdpLink::bind(any, peer.local_addr().unwrap()).unwrap();
+        let me = link.local_addr().unwrap();
+        for _ in 0..200 {
+            stranger.send_to(b"flood", me).unwrap();
+        }
+        let mut buf = [0u8; 16];
+        // A deadline already passed: one foreign datagram is read, then the call returns.
+        let past = Instant::now();
+        assert_eq!(link.try_recv(&mut buf, past).unwrap(), None);
+        assert_eq!(link.counters().foreign, 1);
+        // With time left, the whole flood is drained and counted.
+        let later = Instant::now() + Duration::from_secs(5);
+        assert_eq!(link.try_recv(&mut buf, later).unwrap(), None);
+        assert_eq!(link.counters().foreign, 200);
     }
 }
