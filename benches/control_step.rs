@@ -17,18 +17,17 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rl::controller::{Controller, MotionLimits, Plan, default_waypoints, rv6sl};
 use rl::core::traj::Trajectory;
 use rl::core::{Data, algo};
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
 
 fn control_step(c: &mut Criterion) {
     let loaded = rv6sl().expect("embedded model");
     let model = loaded.model;
     let dof = model.dof();
-    let fake = FakeH7::spawn(FakeH7Config::loopback(dof)).expect("fake H7");
+    let fake = common::immediate_fake(dof);
     let robot = common::started_h7(&fake, dof);
     let mut start = vec![0.0; dof];
     robot.joint_position(&mut start).expect("joints");
-    let limits = MotionLimits::from_model(&model, 0.25).expect("limits");
+    let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
     let plan =
         Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
     let trajectory = plan.trajectory().clone();

@@ -1,14 +1,23 @@
 //! rl-rs: one consistent API from spatial mathematics to real-time control of robot hardware.
 //!
-//! This facade re-exports the three crates of the workspace:
+//! This facade re-exports the crates of the workspace:
 //! - [`core`] (`rl-core`): spatial algebra, models, kinematics, dynamics, trajectories;
 //! - [`rt`] (`rl-rt`): Linux real-time threads and absolute-deadline loops;
-//! - [`drivers`] (`rl-drivers`): cyclic devices, protocol codecs and fake robots.
+//! - [`drivers`] (`rl-drivers`): cyclic devices, protocol codecs and fake robots;
+//! - [`sg`] (`rl-sg`): the scene graph — geometry, collision, distance, raycasts.
+
+#![recursion_limit = "256"]
 
 pub mod controller;
+// Inlined, so that `cargo doc --no-deps` documents the three crates as modules of this one and
+// every link from here lands on a page that exists.
+#[doc(inline)]
 pub use rl_core as core;
+#[doc(inline)]
 pub use rl_drivers as drivers;
+#[doc(inline)]
 pub use rl_rt as rt;
+pub use rl_sg as sg;
 
 /// The README's examples, compiled and run as doc tests so they cannot rot.
 #[cfg(doctest)]

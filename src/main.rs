@@ -3,7 +3,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod cli;
 
@@ -20,6 +20,9 @@ enum Command {
     /// Inspect, evaluate and benchmark a robot model (URDF or RL XML).
     #[command(subcommand)]
     Model(cli::model::ModelCommand),
+    /// Scene geometry: collision, distance and timing for a robot and its surroundings.
+    #[command(subcommand)]
+    Scene(cli::scene::SceneCommand),
     /// Sample a trajectory through waypoints from a CSV file.
     Traj(cli::traj::TrajArgs),
     /// Measure wake-up jitter of this crate's real-time loop (cyclictest-equivalent).
@@ -29,25 +32,49 @@ enum Command {
     /// Run a fake robot controller on loopback until Ctrl-C.
     #[command(subcommand)]
     FakeRobot(cli::fake_robot::FakeRobotCommand),
+    /// Plan a collision-free path (MoveIt scene and request, or an RL scenario); `plan bench`
+    /// runs a MotionBenchMaker set.
+    Plan(Box<cli::plan::PlanArgs>),
     /// Run a complete controller against a robot (the default: a fake robot on loopback).
     Run(cli::run::RunArgs),
 }
 
+/// `command` and all its subcommands, recursively, with negative numbers accepted as values
+/// (`--rate -5` reaches the range check instead of clap's "unexpected argument" tip).
+fn allow_negative_numbers(command: clap::Command) -> clap::Command {
+    let names: Vec<String> = command
+        .get_subcommands()
+        .map(|c| c.get_name().to_string())
+        .collect();
+    names
+        .into_iter()
+        .fold(command.allow_negative_numbers(true), |command, name| {
+            command.mut_subcommand(name, allow_negative_numbers)
+        })
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = allow_negative_numbers(Cli::command()).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Some(Command::Model(cmd)) => cli::model::run(cmd),
+        Some(Command::Scene(cmd)) => cli::scene::run(cmd),
         Some(Command::Traj(args)) => cli::traj::run(args),
         Some(Command::Jitter(args)) => cli::jitter::run_jitter(args),
         Some(Command::Preflight(args)) => cli::jitter::run_preflight(args),
         Some(Command::FakeRobot(cmd)) => cli::fake_robot::run(cmd),
+        Some(Command::Plan(args)) => cli::plan::run(*args),
         Some(Command::Run(args)) => cli::run::run(args),
         None => cli::run::run(cli::run::RunArgs::default()),
     };
     match result {
         Ok(code) => code,
+        Err(e) if e.is_closed_output() => ExitCode::from(e.exit_code()),
         Err(e) => {
-            eprintln!("rl: {e}");
+            cli::output::errln!("rl: {e}");
             ExitCode::from(e.exit_code())
         }
     }

@@ -7,7 +7,6 @@ mod common;
 use common::PERIOD;
 use rl::controller::{Controller, RunEnd};
 use rl::drivers::Device;
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl::drivers::mitsubishi_h7::MitsubishiH7;
 
 /// Commanded positions, one per cycle, until the run ends (bounded).
@@ -28,7 +27,7 @@ fn run(control: &mut Controller<MitsubishiH7>, halt_at: Option<u64>) -> Vec<[f64
 
 #[test]
 fn a_stop_request_brings_the_arm_to_rest_within_the_planned_limits() {
-    let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake");
+    let fake = common::immediate_fake(6);
     let mut control = common::demo_controller(&fake);
     let limits = *control.plan().limits();
     // Cycle 120 is mid-motion (the first move takes about 1.6 s = 230 cycles).
@@ -70,12 +69,18 @@ fn a_stop_request_brings_the_arm_to_rest_within_the_planned_limits() {
     let mut robot = control.into_robot();
     robot.stop().expect("stop");
     robot.close().expect("close");
+    // The end packet is sent without waiting for an answer: give the fake's thread (bounded)
+    // time to take it.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(2);
+    while fake.status().ends == 0 && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
     assert_eq!(fake.status().ends, 1, "end packet");
 }
 
 #[test]
 fn a_cycle_limit_ends_at_rest_on_its_last_cycle() {
-    let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake");
+    let fake = common::immediate_fake(6);
     let mut control = common::demo_controller(&fake);
     control.limit_cycles(300);
     let commanded = run(&mut control, None);

@@ -6,7 +6,6 @@ mod common;
 
 use rl::controller::{Controller, CycleRecord, rv6sl};
 use rl::drivers::Device;
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl::drivers::mitsubishi_h7::MitsubishiH7;
 use rl::rt::exchange::{mailbox, queue};
 use rl_testkit::CountingAllocator;
@@ -25,7 +24,7 @@ fn steady_state_control_cycle_allocates_nothing() {
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
     let dof = rv6sl().expect("embedded model").model.dof();
-    let fake = FakeH7::spawn(FakeH7Config::loopback(dof)).expect("fake H7");
+    let fake = common::immediate_fake(dof);
     let mut control = Box::new(common::demo_controller(&fake));
     let (mut telemetry, mut sink) = queue::<CycleRecord>(1024);
     let (mut progress, _reader) = mailbox((0u64, 0.0f64));

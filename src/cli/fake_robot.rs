@@ -11,8 +11,10 @@ use std::time::{Duration, Instant};
 use clap::{Args, Subcommand};
 use nix::sys::signal::{SigSet, Signal};
 use rl_drivers::fake::coach_server::{CoachServer, CoachServerConfig};
-use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, ForwardKinematics};
 
+use super::capacity::WithModel;
+use super::output::outln;
 use super::{CliError, CliResult};
 
 /// Which fake robot to run.
@@ -22,6 +24,33 @@ pub enum FakeRobotCommand {
     H7(H7Args),
     /// A Coach server (RL's visualisation protocol).
     Coach(CoachArgs),
+    /// CiA 402 servo drives on a CAN bus (CANopen over cannelloni UDP/TCP or SocketCAN).
+    Canopen(CanopenArgs),
+    /// A fake EtherCAT segment of CiA 402 drives on a network interface (raw Ethernet; needs
+    /// root or CAP_NET_RAW).
+    Ethercat(EthercatArgs),
+}
+
+/// Arguments of `rl fake-robot ethercat`.
+#[derive(Args, Debug)]
+pub struct EthercatArgs {
+    /// The network interface the segment answers on (e.g. one end of a veth pair).
+    #[arg(long)]
+    pub interface: String,
+    /// Number of CiA 402 drives (taken from --model when one is given).
+    #[arg(long, default_value_t = 6)]
+    pub devices: usize,
+    /// A robot model (URDF or RL XML): one drive per joint, its limits as the drives'
+    /// software position limits.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
+    /// Drives that run without distributed clocks (free run) instead of refusing SAFE-OP until
+    /// SYNC0 is configured.
+    #[arg(long)]
+    pub free_run: bool,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
 }
 
 /// Arguments of `rl fake-robot h7`.
@@ -36,13 +65,14 @@ pub struct H7Args {
     /// Number of simulated joints (1 to 8; taken from --model when one is given).
     #[arg(long, default_value_t = 6)]
     pub dof: usize,
-    /// A robot model (URDF or RL XML) whose joint count and position and speed limits the
-    /// simulated arm takes.
+    /// A robot model (URDF or RL XML) whose joint count, position and speed limits the
+    /// simulated arm takes, and whose forward kinematics (to its last frame) the pose replies
+    /// come from.
     #[arg(long)]
     pub model: Option<std::path::PathBuf>,
-    /// Time constant of the controller's filter, in 7.11 ms cycles.
-    #[arg(long, default_value_t = 2)]
-    pub filter_cycles: u32,
+    /// Filter time constant in ms until a client's program sets its own (MXT's third argument).
+    #[arg(long, default_value_t = 0)]
+    pub filter_ms: u32,
     /// Stop after this many seconds instead of waiting for Ctrl-C.
     #[arg(long)]
     pub seconds: Option<u64>,
@@ -54,6 +84,12 @@ pub struct CoachArgs {
     /// TCP address to listen on.
     #[arg(long, default_value = "127.0.0.1:11235")]
     pub bind: SocketAddr,
+    /// A robot model (URDF or RL XML) the viewer has loaded, as model 0 standing at its home
+    /// position (or the neutral one): a client can ask where it stands (`6 0`) before sending
+    /// anything, as `rl run --device coach://` does. Without it, a model becomes known from
+    /// its first joint line.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
     /// Stop after this many seconds instead of waiting for Ctrl-C.
     #[arg(long)]
     pub seconds: Option<u64>,
@@ -67,6 +103,8 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
     match cmd {
         FakeRobotCommand::H7(args) => run_h7(&args, &stop),
         FakeRobotCommand::Coach(args) => run_coach(&args, &stop),
+        FakeRobotCommand::Canopen(args) => run_canopen(&args, &stop),
+        FakeRobotCommand::Ethercat(args) => run_ethercat(&args, &stop),
     }
 }
 
@@ -89,20 +127,88 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, CliError> {
     Ok(flag)
 }
 
-/// Calls `status` once per second until Ctrl-C or `seconds` have passed.
-fn every_second(stop: &AtomicBool, seconds: Option<u64>, mut status: impl FnMut(u64)) {
+/// Calls `status` once per second until Ctrl-C, `seconds` have passed or `status` fails
+/// (standard output closed), and returns that failure.
+fn every_second(
+    stop: &AtomicBool,
+    seconds: Option<u64>,
+    mut status: impl FnMut(u64) -> Result<(), CliError>,
+) -> Result<(), CliError> {
     let start = Instant::now();
     let mut next = 1;
     while !stop.load(Ordering::Relaxed) {
         std::thread::sleep(Duration::from_millis(50));
         let elapsed = start.elapsed().as_secs();
         if elapsed >= next {
-            status(elapsed);
+            status(elapsed)?;
             next = elapsed + 1;
         }
         if seconds.is_some_and(|s| elapsed >= s) {
             break;
         }
+    }
+    Ok(())
+}
+
+/// What the fake robots take from a model file: its joints' limits, whether they are all plain
+/// (one coordinate per degree of freedom: no quaternion joints), and the forward kinematics to
+/// its tool.
+struct Arm {
+    limits: Vec<rl_core::model::JointLimits>,
+    /// Where it stands at first: its home position, else the neutral one.
+    home: Vec<f64>,
+    plain: bool,
+    kinematics: Option<ForwardKinematics>,
+}
+
+impl Arm {
+    /// Loads `path` (in the tool's capacity choice) for the fake named `what`, refusing quaternion
+    /// joints.
+    fn load(path: &std::path::Path, what: &str) -> Result<Self, CliError> {
+        let arm = super::model::ModelFile::with_defaults(path.to_path_buf()).load(ArmJob)?;
+        if !arm.plain {
+            return Err(CliError::usage(format!(
+                "--model {}: {what} plain joints; this model has quaternion joints",
+                path.display()
+            )));
+        }
+        Ok(arm)
+    }
+}
+
+/// The [`WithModel`] job behind [`Arm::load`].
+struct ArmJob;
+
+impl WithModel for ArmJob {
+    type Output = Arm;
+
+    fn run<const N: usize>(
+        self,
+        loaded: Box<rl_core::loader::LoadedModel<N>>,
+    ) -> Result<Arm, CliError> {
+        let m = &loaded.model;
+        // A speed limit not given in the file is infinite (the loaders decide it).
+        let limits = (0..m.dof()).map(|k| *m.limits(k)).collect();
+        // The tool: the last frame (depth-first) on a moving body, else the last body.
+        let tip = loaded
+            .frames
+            .iter()
+            .rev()
+            .find(|f| f.body != rl_core::model::ROOT)
+            .map(|f| (f.body, f.placement))
+            .or_else(|| {
+                m.body_count()
+                    .checked_sub(1)
+                    .map(|b| (b, rl_core::spatial::PlueckerTransform::IDENTITY))
+            });
+        let kinematics =
+            tip.map(|(body, placement)| ForwardKinematics::from_model(m.clone(), body, placement));
+        Ok(Arm {
+            limits,
+            home: loaded.home_or_neutral(),
+            plain: m.nq() == m.dof(),
+            kinematics,
+        })
     }
 }
 
@@ -117,31 +223,20 @@ fn joints(q: &[f64]) -> String {
 
 fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     let mut limits = None;
+    let mut kinematics = None;
     let mut dof = args.dof;
     if let Some(path) = &args.model {
-        let file = super::model::ModelFile {
-            file: path.clone(),
-            floating_base: false,
-            joint_order: super::model::Order::File,
-            mimic_independent: false,
+        let arm = Arm::load(path, "the fake H7 simulates")?;
+        dof = arm.limits.len();
+        let limit = |f: fn(&rl_core::model::JointLimits) -> f64| -> Vec<f64> {
+            arm.limits.iter().map(f).collect()
         };
-        let loaded = super::model::load(&file)?;
-        let m = &loaded.model;
-        if m.nq() != m.dof() {
-            return Err(CliError::usage(format!(
-                "--model {}: the fake H7 simulates plain joints; this model has quaternion joints",
-                path.display()
-            )));
-        }
-        dof = m.dof();
-        let lower: Vec<f64> = (0..dof).map(|k| m.limits(k).lower).collect();
-        let upper: Vec<f64> = (0..dof).map(|k| m.limits(k).upper).collect();
-        // A model without a speed limit (RL writes 0 for "none") leaves the joint unlimited.
-        let speed: Vec<f64> = (0..dof)
-            .map(|k| m.limits(k).velocity)
-            .map(|v| if v > 0.0 { v } else { f64::INFINITY })
-            .collect();
-        limits = Some((lower, upper, speed));
+        limits = Some((
+            limit(|l| l.lower),
+            limit(|l| l.upper),
+            limit(|l| l.velocity),
+        ));
+        kinematics = arm.kinematics;
     }
     if dof == 0 || dof > 8 {
         return Err(CliError::usage(format!("--dof {dof}: must be 1 to 8")));
@@ -154,69 +249,348 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     }
     config.udp_bind = args.bind;
     config.r3_bind = Some(args.r3_bind);
-    config.filter_cycles = args.filter_cycles;
+    config.filter_ms = args.filter_ms;
+    // A real arm lags its command by its servo loop.
+    config.servo_time_constant_s = rl_drivers::fake::h7_controller::SERVO_TIME_CONSTANT_S;
+    config.kinematics = kinematics;
     let mut fake = FakeH7::spawn(config).map_err(|e| {
         CliError::failed(format!("fake H7 on {} / {}: {e}", args.bind, args.r3_bind))
     })?;
-    println!(
+    let shown = outln!(
         "fake H7 controller ({} joints): real-time UDP on {}, R3 on {}; Ctrl-C to stop",
         dof,
         fake.udp_addr(),
         fake.r3_addr()
     );
     let mut last = 0;
-    every_second(stop, args.seconds, |t| {
-        let s = fake.status();
-        let rate = s.packets - last;
-        last = s.packets;
-        println!(
-            "t={t}s packets={} ({rate}/s) moves={} ends={} bad={} servo={} program={} commanded={} actual={}",
-            s.packets,
-            s.moves,
-            s.ends,
-            s.bad_packets,
-            if s.servo_on { "on" } else { "off" },
-            if s.program_running {
-                "running"
-            } else {
-                "stopped"
-            },
-            joints(&s.commanded_rad[..s.dof]),
-            joints(&s.actual_rad[..s.dof]),
-        );
+    let shown = shown.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let rate = s.packets - last;
+            last = s.packets;
+            let program = match (s.program_running, s.program_info) {
+                (true, Some(p)) => format!(
+                    "running (mode {}, filter {} ms)",
+                    p.mode.code(),
+                    p.filter_ms
+                ),
+                (true, None) => "running".to_owned(),
+                (false, _) => "stopped".to_owned(),
+            };
+            outln!(
+                "t={t}s packets={} ({rate}/s) replies={} moves={} ends={} servo={} program={} \
+             limit_hits={} speed_clamps={} rejected={} outside_program={} wrong_mode={} bad={} \
+             dropped_frozen={} r3_clients={} r3_not_implemented={} commanded={} actual={}",
+                s.packets,
+                s.replies,
+                s.moves,
+                s.ends,
+                if s.servo_on { "on" } else { "off" },
+                program,
+                s.limit_hits,
+                s.speed_clamps,
+                s.rejected,
+                s.packets_outside_program,
+                s.wrong_mode,
+                s.bad_packets,
+                s.dropped_frozen,
+                s.r3_clients,
+                s.r3_not_implemented,
+                joints(&s.commanded_rad[..s.dof]),
+                joints(&s.actual_rad[..s.dof]),
+            )
+        })
     });
     fake.shutdown();
-    println!("fake H7 controller stopped");
+    shown?;
+    outln!("fake H7 controller stopped")?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn run_coach(args: &CoachArgs, stop: &AtomicBool) -> CliResult {
+    let mut models = Vec::new();
+    if let Some(path) = &args.model {
+        models.push((0, Arm::load(path, "the viewer shows")?.home));
+    }
     let config = CoachServerConfig {
         bind: args.bind,
+        models,
         ..CoachServerConfig::loopback()
     };
     let mut server = CoachServer::spawn(config)
         .map_err(|e| CliError::failed(format!("Coach server on {}: {e}", args.bind)))?;
-    println!("Coach server on {}; Ctrl-C to stop", server.addr());
-    every_second(stop, args.seconds, |t| {
-        let s = server.status();
-        let mut models: Vec<_> = s.joints.iter().collect();
-        models.sort_by_key(|(m, _)| **m);
-        let mut line = format!(
-            "t={t}s clients={} lines={} requests={} bad={} bodies={} shapes={}",
-            s.clients,
-            s.lines,
-            s.requests,
-            s.bad_lines,
-            s.bodies.len(),
-            s.shapes.len()
-        );
-        for (m, q) in models {
-            let _ = write!(line, " model{m}={}", joints(q));
-        }
-        println!("{line}");
+    let shown = outln!("Coach server on {}; Ctrl-C to stop", server.addr());
+    let shown = shown.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = server.status();
+            let mut models: Vec<_> = s.joints.iter().collect();
+            models.sort_by_key(|(m, _)| **m);
+            let mut line = format!(
+                "t={t}s clients={} lines={} requests={} bad={} overlong={} ignored={} bodies={} shapes={}",
+                s.clients,
+                s.lines,
+                s.requests,
+                s.bad_lines,
+                s.overlong_lines,
+                s.ignored_lines,
+                s.bodies.len(),
+                s.shapes.len()
+            );
+            if let Some(e) = &s.last_error {
+                let _ = write!(line, " last_error=\"{e}\"");
+            }
+            for (m, q) in models {
+                let _ = write!(line, " model{m}={}", joints(q));
+            }
+            outln!("{line}")
+        })
     });
     server.shutdown();
-    println!("Coach server stopped");
+    shown?;
+    outln!("Coach server stopped")?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Arguments of `rl fake-robot canopen`.
+#[derive(Args, Debug)]
+pub struct CanopenArgs {
+    /// The bus: cannelloni+udp://HOST:PORT (bound here; answers whoever sends),
+    /// cannelloni+tcp://HOST:PORT (listens) or socketcan://IFACE.
+    #[arg(long, default_value = "cannelloni+udp://127.0.0.1:20000")]
+    pub bus: String,
+    /// Node ids: a range `1-6`, a list `1,3,5`, or both (`1-3,7`). Default: 1 to the model's
+    /// joint count, or 1-6.
+    #[arg(long)]
+    pub nodes: Option<String>,
+    /// A robot model (URDF or RL XML) whose joint position and speed limits the simulated
+    /// motors take (one node per joint).
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
+    /// An EDS to give every node (default: the one shipped for this fake).
+    #[arg(long)]
+    pub eds: Option<std::path::PathBuf>,
+    /// Delay between a SYNC and the TPDOs it triggers.
+    #[arg(long, default_value = "100us", value_parser = super::parse_duration)]
+    pub tpdo_delay: Duration,
+    /// Record every frame to this pcap file (SocketCAN link type, for Wireshark).
+    #[arg(long)]
+    pub pcap: Option<std::path::PathBuf>,
+    /// Record every frame to this candump log (for can-utils).
+    #[arg(long)]
+    pub candump: Option<std::path::PathBuf>,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
+}
+
+/// `1-6`, `1,3,5`, `1-3,7` to node ids (each 1..=127, no repeats, at most 8).
+fn parse_nodes(text: &str) -> Result<Vec<u8>, CliError> {
+    rl_drivers::canopen::parse_node_list(text)
+        .map_err(|e| CliError::usage(format!("--nodes {text}: {e}")))
+}
+
+fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
+    use rl_drivers::proto::canopen::eds::Eds;
+    use rl_drivers::transport::can::CanAddress;
+
+    let address =
+        CanAddress::parse(&args.bus).map_err(|e| CliError::usage(format!("--bus: {e}")))?;
+    let mut limits = None;
+    if let Some(path) = &args.model {
+        limits = Some(Arm::load(path, "the fake drives simulate")?.limits);
+    }
+    let nodes = match (&args.nodes, &limits) {
+        (Some(text), _) => parse_nodes(text)?,
+        (None, Some(l)) => (1..=l.len() as u8).collect(),
+        (None, None) => (1..=6).collect(),
+    };
+    if nodes.is_empty() || nodes.len() > rl_drivers::canopen::MAX_AXES {
+        return Err(CliError::usage(format!(
+            "--nodes: {} nodes; 1 to {} are simulated",
+            nodes.len(),
+            rl_drivers::canopen::MAX_AXES
+        )));
+    }
+    let mut config = FakeCia402Config::new(&nodes).map_err(|e| CliError::failed(e.to_string()))?;
+    if let Some(l) = &limits {
+        if l.len() != nodes.len() {
+            return Err(CliError::usage(format!(
+                "--model has {} joints but --nodes names {} nodes",
+                l.len(),
+                nodes.len()
+            )));
+        }
+        for (a, j) in config.axes.iter_mut().zip(l) {
+            if !j.wraparound {
+                a.lower = j.lower;
+                a.upper = j.upper;
+            }
+            // An unknown speed limit (infinite, or RL's 0) keeps the fake's default.
+            if j.velocity.is_finite() && j.velocity > 0.0 {
+                a.max_velocity = j.velocity;
+            }
+            a.initial = 0.0_f64.clamp(a.lower, a.upper);
+        }
+    }
+    if let Some(path) = &args.eds {
+        let eds = Eds::load(path).map_err(|e| CliError::usage(format!("--eds: {e}")))?;
+        config.eds = std::sync::Arc::new(eds);
+    }
+    config.tpdo_delay = args.tpdo_delay;
+    config.pcap = args.pcap.clone();
+    config.candump = args.candump.clone();
+    let mut fake = FakeCia402::serve(config, &address)
+        .map_err(|e| CliError::failed(format!("fake CiA 402 drives on {}: {e}", args.bus)))?;
+    let shown = match (&address, fake.local_addr()) {
+        (CanAddress::CannelloniUdp { .. }, Some(a)) => format!("cannelloni+udp://{a}"),
+        (CanAddress::CannelloniTcp { .. }, Some(a)) => format!("cannelloni+tcp://{a}"),
+        _ => address.to_string(),
+    };
+    let printed = outln!(
+        "fake CiA 402 drives, nodes {nodes:?}, on {shown}; TPDOs {} µs after SYNC; Ctrl-C to stop",
+        args.tpdo_delay.as_micros()
+    );
+    let mut last = 0;
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let rate = s.frames_received - last;
+            last = s.frames_received;
+            let mut line = format!(
+                "t={t}s frames in={} ({rate}/s) out={}",
+                s.frames_received, s.frames_sent
+            );
+            for n in &s.nodes {
+                let _ = write!(
+                    line,
+                    " | {}: {} {} q={:.4}",
+                    n.node, n.nmt, n.power, n.position
+                );
+            }
+            if let Some(e) = &s.last_error {
+                let _ = write!(line, " | last error: {e}");
+            }
+            outln!("{line}")
+        })
+    });
+    fake.shutdown();
+    printed?;
+    outln!("fake CiA 402 drives stopped")?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn fake_segment_thread() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-ecat")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(85)
+        .best_effort(true)
+        .apply_to_current();
+}
+
+fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::ecat_segment::description::Profile;
+    use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
+    let mut devices = args.devices;
+    let mut limits = None;
+    if let Some(path) = &args.model {
+        let arm = Arm::load(path, "the fake drives move")?;
+        devices = arm.limits.len();
+        limits = Some(
+            arm.limits
+                .iter()
+                .map(|l| (l.lower, l.upper))
+                .collect::<Vec<_>>(),
+        );
+    }
+    if devices == 0 || devices > 64 {
+        return Err(CliError::usage(format!(
+            "--devices {devices}: must be 1 to 64"
+        )));
+    }
+    let mut config = FakeSegmentConfig::drives(&args.interface, devices);
+    for (k, d) in config.devices.iter_mut().enumerate() {
+        if let Profile::Cia402 {
+            motor,
+            limits: l,
+            requires_dc,
+            initial_position,
+        } = &mut d.profile
+        {
+            *requires_dc = !args.free_run;
+            if let Some(lim) = &limits {
+                let per_rad = motor.counts_per_rev / std::f64::consts::TAU;
+                let (lo, hi) = lim[k];
+                if lo.is_finite() && hi.is_finite() && lo < hi {
+                    *l = ((lo * per_rad) as i32, (hi * per_rad) as i32);
+                    // Start inside the limits.
+                    *initial_position = (*initial_position).clamp(l.0, l.1);
+                }
+            }
+        }
+    }
+    // Hardware answers without being delayed by other programs: the segment's thread runs at a
+    // real-time priority when the process may (root), like the controller's.
+    config.on_thread_start = Some(fake_segment_thread);
+    let fake = FakeSegment::spawn(config).map_err(|e| {
+        let mut msg = format!("fake EtherCAT segment on {}: {e}", args.interface);
+        if rl_drivers::transport::packet::is_permission_error(&e) {
+            msg.push_str("; ");
+            msg.push_str(rl_drivers::transport::packet::PERMISSION_REMEDY);
+        }
+        CliError::failed(msg)
+    })?;
+    let printed = outln!(
+        "fake EtherCAT segment: {devices} CiA 402 drives on {}{}; Ctrl-C to stop",
+        args.interface,
+        if args.free_run {
+            " (free run)"
+        } else {
+            " (DC SYNC0 required)"
+        }
+    );
+    let mut last = 0;
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let c = fake.counters();
+            let rate = c.frames - last;
+            last = c.frames;
+            let mut line = format!(
+                "t={t}s frames={} ({rate}/s) lost={} falsified={} malformed={}",
+                c.frames, c.dropped, c.falsified, c.malformed
+            );
+            for d in fake.status() {
+                let _ = write!(
+                    line,
+                    " [{:#06x} {}{}{}]",
+                    d.station,
+                    d.state,
+                    d.error.map(|e| format!(" error {e}")).unwrap_or_default(),
+                    d.power.map(|p| format!(" {p}")).unwrap_or_default()
+                );
+            }
+            outln!("{line}")
+        })
+    });
+    let c = fake.counters();
+    fake.shutdown()
+        .map_err(|e| CliError::failed(format!("fake EtherCAT segment: {e}")))?;
+    printed?;
+    outln!("fake EtherCAT segment stopped after {} frames", c.frames)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_nodes;
+
+    #[test]
+    fn node_lists_and_ranges() {
+        assert_eq!(parse_nodes("1-6").unwrap(), vec![1, 2, 3, 4, 5, 6]);
+        assert_eq!(parse_nodes("1-3,7").unwrap(), vec![1, 2, 3, 7]);
+        assert_eq!(parse_nodes("5").unwrap(), vec![5]);
+        for bad in ["0", "128", "3-1", "1,1", "x", "1-", ""] {
+            assert_eq!(parse_nodes(bad).unwrap_err().exit_code(), 2, "{bad}");
+        }
+    }
 }

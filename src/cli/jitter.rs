@@ -15,7 +15,11 @@ use rl_rt::{
     StopFlag,
 };
 
+use super::output::{errln, out, outln};
 use super::{CliError, CliResult, parse_duration};
+
+/// Largest `--histogram-range-us`: one second in 1 µs bins (8 MB of counters).
+pub const MAX_HISTOGRAM_RANGE_US: usize = 1_000_000;
 
 /// Scheduling policy of the measuring thread.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -63,7 +67,8 @@ pub struct JitterArgs {
     /// Write the wake-up latency histogram to FILE in cyclictest's -h format.
     #[arg(long, value_name = "FILE")]
     pub histogram: Option<PathBuf>,
-    /// Histogram range in µs (1 µs bins; cyclictest -h N).
+    /// Histogram range in µs (1 µs bins; cyclictest -h N), 1 to 1 000 000; later wake-ups are
+    /// counted as overflows.
     #[arg(long, default_value_t = 10_000)]
     pub histogram_range_us: usize,
     /// Overrun policy of the loop.
@@ -95,6 +100,12 @@ pub struct PreflightArgs {
 pub fn run_jitter(args: JitterArgs) -> CliResult {
     if args.interval_us == 0 {
         return Err(CliError::usage("--interval-us must be at least 1"));
+    }
+    if !(1..=MAX_HISTOGRAM_RANGE_US).contains(&args.histogram_range_us) {
+        return Err(CliError::usage(format!(
+            "--histogram-range-us {}: give 1 to {MAX_HISTOGRAM_RANGE_US} µs",
+            args.histogram_range_us
+        )));
     }
     let period = Duration::from_micros(args.interval_us);
     let cycles = match args.cycles {
@@ -130,6 +141,16 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
     builder
         .validate()
         .map_err(|e| CliError::usage(e.to_string()))?;
+    // So is a histogram file that cannot be created: found before the measurement, not after.
+    let mut histogram = match &args.histogram {
+        Some(path) => Some(BufWriter::new(File::create(path).map_err(|e| {
+            CliError::usage(format!(
+                "--histogram: cannot create {}: {e}",
+                path.display()
+            ))
+        })?)),
+        None => None,
+    };
 
     let stop = StopFlag::new();
     stop.raise_on_termination_signals()
@@ -146,7 +167,7 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         match rl_rt::cpu_latency::CpuLatencyHint::hold(0) {
             Ok(hint) => Some(hint),
             Err(e) => {
-                eprintln!(
+                errln!(
                     "rl jitter: note: cannot hold {} at 0 µs ({e}); deep idle states may add latency",
                     rl_rt::cpu_latency::CPU_DMA_LATENCY
                 );
@@ -182,25 +203,23 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
     };
     drop(latency_hint);
 
-    if let Some(path) = &args.histogram {
-        let file = File::create(path)
-            .map_err(|e| CliError::usage(format!("cannot create {}: {e}", path.display())))?;
-        let mut w = BufWriter::new(file);
+    if let (Some(path), Some(w)) = (&args.histogram, &mut histogram) {
         report
             .stats
             .wakeup
-            .write_cyclictest(&mut w)
+            .write_cyclictest(&mut *w)
             .and_then(|()| w.flush())
             .map_err(|e| CliError::failed(format!("cannot write {}: {e}", path.display())))?;
     }
+    drop(histogram);
 
     let stats = &report.stats;
     let interrupted = report.end == LoopEnd::StopRequested;
     if args.json {
         let value = jitter_json(&report, &granted, &args, cpu_dma_latency_us);
-        println!("{value}");
+        outln!("{value}")?;
     } else {
-        println!(
+        outln!(
             "rl jitter: {} cycles of {} µs, {}, mlockall {}, cpu_dma_latency {}, overrun policy {}{}",
             stats.cycles(),
             args.interval_us,
@@ -209,18 +228,20 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
             cpu_dma_latency_us.map_or("not held".to_owned(), |us| format!("{us} µs")),
             overrun,
             if interrupted { " (interrupted)" } else { "" }
-        );
-        println!("{stats}");
+        )?;
+        outln!("{stats}")?;
         if let Some(c) = report.counters {
-            println!("loop thread: {c}");
+            outln!("loop thread: {c}")?;
         }
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// The `rl jitter --json` object: the documented keys `cycles`, `overruns`, `min_us`,
-/// `mean_us`, `p50_us`, `p99_us`, `p999_us`, `p9999_us`, `max_us` (wake-up latency), then the
-/// settings and the loop thread's health counters.
+/// The `rl jitter --json` object: `loop`, the loop statistics in rl-rt's one schema
+/// ([`rl_rt::LoopStats::to_json`], the same object as `rl run --json`'s `loop`); the documented
+/// short keys `cycles`, `overruns`, `min_us`, `mean_us`, `p50_us`, `p99_us`, `p999_us`,
+/// `p9999_us`, `max_us` (wake-up latency); then the settings and the loop thread's health
+/// counters.
 fn jitter_json(
     report: &LoopReport,
     granted: &Scheduling,
@@ -231,7 +252,11 @@ fn jitter_json(
     let w = stats.wakeup.summary();
     let step = stats.step.summary();
     let us = |ns: u64| ns as f64 / 1_000.0;
+    // rl-rt writes the schema; it is valid JSON by construction (tested there and below).
+    let loop_stats: serde_json::Value =
+        serde_json::from_str(&stats.to_json()).unwrap_or(serde_json::Value::Null);
     serde_json::json!({
+        "loop": loop_stats,
         "cycles": stats.cycles(),
         "overruns": stats.overruns,
         "min_us": us(w.min_ns),
@@ -264,18 +289,18 @@ fn jitter_json(
 pub fn run_preflight(args: PreflightArgs) -> CliResult {
     let report = preflight::check();
     if args.json {
-        println!("{}", report.to_json());
+        outln!("{}", report.to_json())?;
     } else {
-        print!("{report}");
+        out!("{report}")?;
         let worst = report.worst();
-        println!(
+        outln!(
             "\nverdict: {}",
             match worst {
                 Status::Ok | Status::Info => "ready for hard real time",
                 Status::Warn => "runs, but latency is not bounded as on a tuned PREEMPT_RT machine",
                 Status::Fail => "real-time scheduling is not possible as configured",
             }
-        );
+        )?;
     }
     if args.strict && report.worst() >= Status::Warn {
         return Ok(ExitCode::from(1));

@@ -1,9 +1,13 @@
 //! One module per `rl` subcommand. Each exposes its clap arguments and a `run` function.
 
+pub mod capacity;
 pub mod fake_robot;
 pub mod jitter;
 pub mod model;
+pub mod output;
+pub mod plan;
 pub mod run;
+pub mod scene;
 pub mod traj;
 
 use std::fmt;
@@ -17,6 +21,9 @@ pub struct CliError {
     message: String,
     code: u8,
 }
+
+/// The exit code when standard output was closed by its reader (`rl … | head`).
+const CLOSED_OUTPUT: u8 = 0;
 
 impl CliError {
     /// Bad usage: a flag, a file or a value the user gave is wrong (exit code 2).
@@ -32,6 +39,31 @@ impl CliError {
         Self {
             message: message.into(),
             code: 1,
+        }
+    }
+
+    /// Standard output was closed by its reader: the command stops, nothing more is shown
+    /// and the exit status is 0 (see [`output`]).
+    pub fn closed_output() -> Self {
+        Self {
+            message: String::new(),
+            code: CLOSED_OUTPUT,
+        }
+    }
+
+    /// Whether this is [`CliError::closed_output`].
+    pub fn is_closed_output(&self) -> bool {
+        self.message.is_empty() && self.code == CLOSED_OUTPUT
+    }
+
+    /// The same error with `what: ` before its message (the flag a file came from, say).
+    pub fn prefixed(self, what: &str) -> Self {
+        if self.is_closed_output() {
+            return self;
+        }
+        Self {
+            message: format!("{what}: {}", self.message),
+            code: self.code,
         }
     }
 

@@ -16,32 +16,24 @@ mod device;
 mod plot;
 mod progress;
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use nix::sys::signal::{SigSet, Signal};
 use rl::controller::plan::joint_name;
-use rl::controller::report::{RunReport, Shutdown};
 use rl::controller::{
-    Controller, CycleRecord, JointRobot, MAX_BODIES, MotionLimits, Plan, RobotModel, RunEnd,
-    default_waypoints, telemetry,
+    ControlRun, CycleRecord, JointRobot, RV6SL_XML, RunError, RunOptions, Supervision,
+    TelemetryFile,
 };
-use rl_core::loader::{self, LoadedModel, UrdfOptions};
-use rl_drivers::coach::{Coach, CoachConfig};
-use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
-use rl_rt::exchange::{QueueSender, mailbox, queue};
-use rl_rt::{CyclicLoop, LoopStats, MonoTime, OverrunPolicy, Policy, RtThreadBuilder, ThreadError};
+use rl_core::Model;
+use rl_core::loader::{LoadOptions, LoadedModel};
+use rl_rt::{StopFlag, StopLevel};
 
 use self::device::DeviceSpec;
-use self::progress::{Progress, ProgressDisplay};
+use self::progress::ProgressDisplay;
+use super::capacity::{self, WithModel};
+use super::output::{out, outln};
 use super::{CliError, CliResult};
 
 /// A positive duration: the shared [`super::parse_duration`] units, zero refused.
@@ -52,13 +44,6 @@ fn parse_duration(text: &str) -> Result<Duration, String> {
     }
 }
 
-/// Default real-time priority of the control thread.
-const DEFAULT_PRIORITY: i32 = 80;
-/// Default fraction of the model's speed limits the plan uses.
-const DEFAULT_SPEED: f64 = 0.25;
-/// Telemetry records the queue holds (about a minute at 140 Hz; the writer drains it every
-/// 100 ms).
-const TELEMETRY_CAPACITY: usize = 8192;
 /// Rows kept in memory for the plot (older ones are thinned out when it fills).
 const PLOT_ROWS: usize = 50_000;
 
@@ -69,8 +54,9 @@ pub struct RunArgs {
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
     /// The robot: fake-h7 (in-process fake controller), h7://HOST[:PORT][?r3=PORT] (a MELFA
-    /// controller; ports 10000 and 10001 by default) or coach://HOST[:PORT] (stream the
-    /// commanded joints to an RL visualiser; port 11235) [default: fake-h7].
+    /// controller; ports 10000 and 10001 by default), coach://HOST[:PORT] (stream the
+    /// commanded joints to an RL visualiser; port 11235) or ethercat://IF (CiA 402 drives on an
+    /// EtherCAT segment on interface IF; needs root or CAP_NET_RAW) [default: fake-h7].
     #[arg(long, value_name = "DEVICE")]
     pub device: Option<String>,
     /// Waypoints in rad (m for prismatic joints): a header row, then one row per waypoint with a
@@ -107,191 +93,332 @@ pub struct RunArgs {
     /// Do not lock memory (mlockall).
     #[arg(long)]
     pub no_mlock: bool,
+    /// Tracking error bound in rad (or m), one value for every joint or one per joint
+    /// [default: 4 cycles at each joint's speed limit].
+    #[arg(long, value_name = "RAD[,RAD...]", value_delimiter = ',')]
+    pub tracking_bound: Vec<f64>,
+    /// Do not end the run on faults (tracking error, bad feedback, link loss); for bench set-ups
+    /// only: a real arm needs supervision.
+    #[arg(long)]
+    pub no_supervision: bool,
+    /// Longest trajectory to accept: e.g. 10m, 1h [default: 1h].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
+    pub max_plan_duration: Option<Duration>,
 }
 
-/// Everything checked before anything starts.
+/// Flags and files checked before anything starts.
 struct Setup {
-    args: RunArgs,
     device: DeviceSpec,
-    loaded: LoadedModel<MAX_BODIES>,
-    model_name: String,
-    joints: Vec<String>,
-    waypoints: Option<Vec<Vec<f64>>>,
-    limits: MotionLimits,
-    thread: RtThreadBuilder,
-    telemetry_file: Option<BufWriter<File>>,
+    period: Option<Duration>,
+    telemetry: Option<TelemetryFile>,
 }
 
 /// Runs `rl run`.
 pub fn run(args: RunArgs) -> CliResult {
-    let mut setup = check(args)?;
-    // Block SIGINT/SIGTERM before any thread starts (threads inherit the mask); one thread
-    // takes them with sigwait: the first asks for a controlled stop, the second for an
-    // immediate one. No signal handler runs.
-    let signals = watch_signals()?;
-    match setup.device.clone() {
-        DeviceSpec::FakeH7 => {
-            let model = &setup.loaded.model;
-            let dof = model.dof();
-            let lower: Vec<f64> = (0..dof).map(|k| model.limits(k).lower).collect();
-            let upper: Vec<f64> = (0..dof).map(|k| model.limits(k).upper).collect();
-            let speed: Vec<f64> = (0..dof).map(|k| model.limits(k).velocity).collect();
-            let mut config = FakeH7Config::loopback(dof)
-                .with_limits(&lower, &upper)
-                .and_then(|c| c.with_speed_limits(&speed))
-                .map_err(|e| CliError::failed(format!("fake H7 from the model: {e}")))?;
-            let home = setup.loaded.home_or_neutral();
-            for (k, (initial, h)) in config.initial_rad.iter_mut().zip(&home).enumerate() {
-                *initial = model.limits(k).clamp(*h);
-            }
-            let fake = FakeH7::spawn(config)
-                .map_err(|e| CliError::failed(format!("cannot start the fake H7: {e}")))?;
-            let robot = MitsubishiH7::new(MitsubishiH7Config::new(
-                dof,
-                fake.udp_addr(),
-                fake.r3_addr(),
-            ))
-            .map_err(|e| CliError::failed(format!("H7 device: {e}")))?;
-            let name = format!(
-                "fake H7 in-process on {} (R3 {})",
-                fake.udp_addr(),
-                fake.r3_addr()
-            );
-            drive(robot, name, &mut setup, &signals, Some(&fake), None)
+    let setup = check(&args)?;
+    // SIGINT/SIGTERM: the first brings the arm to rest along its path, the second stops at
+    // once (rl-rt's two-level stop; no signal handler runs).
+    let stop = StopFlag::new();
+    stop.raise_on_termination_signals()
+        .map_err(|e| CliError::failed(format!("cannot watch SIGINT/SIGTERM: {e}")))?;
+    // The model goes into the tool's one capacity choice (src/cli/capacity.rs), the smallest
+    // that holds it; the controller, its planner and its telemetry take that capacity for both
+    // bodies and joints.
+    let options = LoadOptions::default();
+    match &args.model {
+        None => {
+            let job = Drive {
+                args: &args,
+                setup,
+                stop,
+                name: None,
+            };
+            capacity::load_text("the embedded RV-6SL", RV6SL_XML, &options, job)
         }
-        DeviceSpec::H7 { server, r3 } => {
-            let robot = MitsubishiH7::new(MitsubishiH7Config::new(
-                setup.loaded.model.dof(),
-                server,
-                r3,
-            ))
-            .map_err(|e| CliError::usage(format!("--device: {e}")))?;
-            let name = format!("H7 at {server} (R3 {r3})");
-            drive(robot, name, &mut setup, &signals, None, None)
-        }
-        DeviceSpec::Coach { server } => {
-            let mut config = CoachConfig::new(setup.loaded.model.dof());
-            config.server = server;
-            config.update_period = period_for(&setup, config.update_period);
-            let robot =
-                Coach::new(config).map_err(|e| CliError::usage(format!("--device: {e}")))?;
-            // A visualiser shows what it is sent: start it at the model's home position.
-            let model = &setup.loaded.model;
-            let home: Vec<f64> = (0..model.dof())
-                .zip(setup.loaded.home_or_neutral())
-                .map(|(k, h)| model.limits(k).clamp(h))
-                .collect();
-            let name = format!("Coach at {server}");
-            drive(robot, name, &mut setup, &signals, None, Some(home))
+        Some(path) => {
+            let job = Drive {
+                args: &args,
+                setup,
+                stop,
+                name: Some(path),
+            };
+            capacity::load_for("--model", path, &options, job)
         }
     }
 }
 
-/// The loop period: `--rate` or the device's own.
-fn period_for(setup: &Setup, device_period: Duration) -> Duration {
-    setup
-        .args
-        .rate
-        .map_or(device_period, |hz| Duration::from_secs_f64(1.0 / hz))
+/// The run, for a model in whichever capacity holds it.
+struct Drive<'a> {
+    args: &'a RunArgs,
+    setup: Setup,
+    stop: StopFlag,
+    /// The file, or `None` for the embedded model.
+    name: Option<&'a Path>,
+}
+
+impl WithModel for Drive<'_> {
+    type Output = ExitCode;
+
+    fn run<const N: usize>(self, loaded: Box<LoadedModel<N>>) -> CliResult {
+        for w in &loaded.warnings {
+            eprintln!("rl run: warning: {w}");
+        }
+        let name = match self.name {
+            None => "Mitsubishi RV-6SL (embedded)".to_owned(),
+            Some(path) => model_name(&loaded.model, path),
+        };
+        drive::<N, N>(self.args, self.setup, *loaded, name, self.stop)
+    }
+}
+
+fn model_name<const B: usize>(model: &Model<B>, path: &Path) -> String {
+    if model.name().is_empty() {
+        path.display().to_string()
+    } else {
+        format!("{} ({})", model.name(), path.display())
+    }
 }
 
 /// Validates flags and files (exit code 2 for anything wrong) before anything starts.
-fn check(args: RunArgs) -> Result<Setup, CliError> {
+fn check(args: &RunArgs) -> Result<Setup, CliError> {
     let device = DeviceSpec::parse(args.device.as_deref().unwrap_or("fake-h7"))?;
+    let mut period = None;
     if let Some(hz) = args.rate {
         if !(hz.is_finite() && (0.1..=20_000.0).contains(&hz)) {
             return Err(CliError::usage(format!(
                 "--rate {hz}: give a control rate in Hz between 0.1 and 20000"
             )));
         }
-        if matches!(device, DeviceSpec::H7 { .. }) {
+        if device.fixed_period() {
             return Err(CliError::usage(
-                "--rate: an H7 controller runs at its own 7.11 ms cycle; --rate applies to \
-                 fake-h7 and coach://",
+                "--rate: an H7 controller (and the fake one) runs at its own 7.11 ms cycle; \
+                 --rate applies to coach://",
             ));
         }
+        period = Some(Duration::from_secs_f64(1.0 / hz));
     }
-    let speed = args.speed.unwrap_or(DEFAULT_SPEED);
-    let priority = args.priority.unwrap_or(DEFAULT_PRIORITY);
-    let mut probe = RtThreadBuilder::new("rl-control")
-        .policy(Policy::Fifo)
-        .priority(priority);
-    if let Some(cpu) = args.cpu {
-        probe = probe.cpus([cpu]);
-    }
-    // Try the scheduling on a throw-away thread before anything starts: a bad CPU is a usage
-    // error, a missing privilege a fallback to SCHED_OTHER with one warning.
-    let thread = match probe.clone().spawn(|| ()).map(|t| t.join()) {
-        Ok(_) => probe,
-        Err(e @ ThreadError::PermissionDenied { .. }) => {
-            eprintln!(
-                "rl run: warning: {e}; running the loop at SCHED_OTHER, so its latency is not \
-                 bounded"
-            );
-            probe.policy(Policy::Other).priority(0)
+    if let Some(s) = args.speed {
+        if !(s > 0.0 && s <= 1.0) {
+            return Err(CliError::usage(format!(
+                "--speed {s}: give a fraction of the model's speed limits above 0 and at most 1"
+            )));
         }
-        Err(e) => return Err(CliError::usage(format!("--priority/--cpu: {e}"))),
-    };
+    }
+    if let Some(bad) = args
+        .tracking_bound
+        .iter()
+        .find(|b| !(b.is_finite() && **b > 0.0))
+    {
+        return Err(CliError::usage(format!(
+            "--tracking-bound {bad}: give positive bounds in rad (or m)"
+        )));
+    }
+    if let Some(path) = &args.plot {
+        check_writable(path).map_err(|e| CliError::usage(format!("--plot: {e}")))?;
+    }
+    Ok(Setup {
+        device,
+        period,
+        telemetry: None,
+    })
+}
 
-    let (loaded, model_name) = match &args.model {
-        None => (
-            rl::controller::rv6sl()
-                .map_err(|e| CliError::failed(format!("embedded model: {e}")))?,
-            "Mitsubishi RV-6SL (embedded)".to_owned(),
-        ),
-        Some(path) => {
-            let loaded = loader::load_file_with::<MAX_BODIES>(path, &UrdfOptions::default())
-                .map_err(|e| CliError::usage(format!("--model: {e}")))?;
-            let name = if loaded.model.name().is_empty() {
-                path.display().to_string()
-            } else {
-                format!("{} ({})", loaded.model.name(), path.display())
-            };
-            (loaded, name)
-        }
-    };
+/// Checks that `path` can be written without touching it: its directory exists and accepts a
+/// new file.
+fn check_writable(path: &Path) -> Result<(), String> {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    let probe = path.with_file_name(name);
+    std::fs::File::create(&probe).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Builds the device, runs the controller through the library's [`ControlRun`], writes
+/// telemetry and progress while it runs, and prints the report.
+fn drive<const B: usize, const J: usize>(
+    args: &RunArgs,
+    mut setup: Setup,
+    loaded: LoadedModel<B>,
+    model_name: String,
+    stop: StopFlag,
+) -> CliResult {
     let model = &loaded.model;
-    let limits = MotionLimits::from_model(model, speed).map_err(|e| {
-        CliError::usage(match e {
-            rl::controller::PlanError::SpeedFraction(_) => format!("--speed: {e}"),
-            e => format!("model: {e}"),
-        })
-    })?;
     let joints: Vec<String> = (0..model.dof()).map(|k| joint_name(model, k)).collect();
     let waypoints = match &args.waypoints {
         None => None,
         Some(path) => Some(read_waypoints(path, model)?),
     };
-    let telemetry_file = match &args.telemetry {
-        None => None,
-        Some(path) => Some(BufWriter::new(File::create(path).map_err(|e| {
+    if let Some(path) = &args.telemetry {
+        setup.telemetry = Some(TelemetryFile::create(path, &joints).map_err(|e| {
             CliError::usage(format!(
                 "--telemetry: cannot create {}: {e}",
                 path.display()
             ))
-        })?)),
-    };
-    if let Some(path) = &args.plot {
-        File::create(path).map_err(|e| {
-            CliError::usage(format!("--plot: cannot create {}: {e}", path.display()))
-        })?;
+        })?);
     }
-    Ok(Setup {
-        args,
-        device,
-        loaded,
-        model_name,
-        joints,
+    let opened = setup.device.build(&loaded, setup.period)?;
+    let fake = opened.fake;
+    let mut supervision = Supervision::default();
+    if args.no_supervision {
+        supervision.enabled = false;
+    }
+    if !args.tracking_bound.is_empty() {
+        supervision.tracking_error = match args.tracking_bound.as_slice() {
+            [one] => vec![*one; joints.len()],
+            many if many.len() == joints.len() => many.to_vec(),
+            many => {
+                return Err(CliError::usage(format!(
+                    "--tracking-bound: {} values for {} joints (give one, or one per joint)",
+                    many.len(),
+                    joints.len()
+                )));
+            }
+        };
+    }
+    let mut options = RunOptions {
         waypoints,
-        limits,
-        thread,
-        telemetry_file,
-    })
+        duration: args.duration,
+        period: setup.period,
+        cpus: args.cpu.into_iter().collect(),
+        lock_memory: !args.no_mlock,
+        supervision,
+        telemetry: setup.telemetry.is_some() || args.plot.is_some(),
+        stop: stop.clone(),
+        model_name,
+        device_name: opened.name,
+        ..RunOptions::default()
+    };
+    if let Some(s) = args.speed {
+        options.speed = s;
+    }
+    if let Some(p) = args.priority {
+        options.priority = p;
+    }
+    if let Some(d) = args.max_plan_duration {
+        options.max_plan_duration = d;
+    }
+    let robot: Box<dyn JointRobot + Send> = opened.robot;
+    let mut run = match ControlRun::<_, B, J>::start(robot, loaded, options) {
+        Ok(run) => run,
+        Err(e) => {
+            return Err(match e {
+                RunError::Cancelled => {
+                    eprintln!("rl run: {e}");
+                    return Ok(ExitCode::from(130));
+                }
+                RunError::Options(why) => CliError::usage(why),
+                e => CliError::failed(e.to_string()),
+            });
+        }
+    };
+    for warning in run.warnings() {
+        eprintln!("rl run: warning: {warning}");
+    }
+
+    // This (non-real-time) thread writes telemetry and shows progress while the loop runs.
+    let mut display = ProgressDisplay::new(run.plan_duration_s());
+    let mut plot_rows: Vec<CycleRecord<J>> = Vec::new();
+    let mut stride = 1u64;
+    let want_plot = args.plot.is_some();
+    let mut sink = |r: &CycleRecord<J>| {
+        if let Some(file) = &mut setup.telemetry {
+            file.write(r);
+        }
+        if want_plot && r.cycle % stride == 0 {
+            if plot_rows.len() >= PLOT_ROWS {
+                stride *= 2;
+                plot_rows.retain(|r| r.cycle % stride == 0);
+            }
+            if r.cycle % stride == 0 {
+                plot_rows.push(*r);
+            }
+        }
+    };
+    let started = Instant::now();
+    let mut told = StopLevel::None;
+    while let Some(p) = run.poll(Duration::from_millis(50)) {
+        run.drain_telemetry(&mut sink);
+        display.update(&p, started.elapsed());
+        let level = stop.level();
+        if level > told {
+            told = level;
+            match level {
+                StopLevel::Rest => eprintln!(
+                    "\nrl run: stopping: bringing the arm to rest along its path (Ctrl-C again \
+                     to stop at once)"
+                ),
+                StopLevel::Now => eprintln!("\nrl run: stopping at once"),
+                StopLevel::None => {}
+            }
+        }
+    }
+    let mut report = run.join_with(&mut sink);
+    display.finish();
+    if let Some(file) = setup.telemetry.take() {
+        match file.finish() {
+            Ok(rows) => report.telemetry_rows = Some(rows),
+            Err(e) => report.fail(format!("telemetry: {e}")),
+        }
+    }
+    let fake_json = fake.as_ref().map(|fake| {
+        let seen = fake.after_run(report.shutdown.stopped);
+        report.notes.push(seen.note);
+        if let Err(why) = seen.safe {
+            report.fail(why);
+        }
+        seen.json
+    });
+    drop(fake);
+    if let Some(path) = &args.plot {
+        if let Err(e) = draw_plot(path, &report, &plot_rows) {
+            eprintln!("rl run: warning: cannot draw {}: {e}", path.display());
+        }
+    }
+    let printed = if args.json {
+        let mut json = report.to_json();
+        if let (Some(obj), Some(serde_json::Value::Object(seen))) =
+            (json.as_object_mut(), fake_json)
+        {
+            obj.extend(seen);
+        }
+        outln!("{json}")
+    } else {
+        out!("{report}")
+    };
+    // A closed standard output ends quietly with the run's own status.
+    printed.or_else(|e| if e.is_closed_output() { Ok(()) } else { Err(e) })?;
+    Ok(ExitCode::from(report.exit_code() as u8))
+}
+
+/// Draws the plot next to `path` and moves it into place once drawn.
+fn draw_plot<const J: usize>(
+    path: &Path,
+    report: &rl::controller::RunReport,
+    rows: &[CycleRecord<J>],
+) -> Result<(), String> {
+    if rows.is_empty() {
+        return Err("no cycles to draw".into());
+    }
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    let partial = path.with_file_name(name);
+    let drawn = plot::draw(&partial, report, rows);
+    match drawn {
+        Ok(()) => std::fs::rename(&partial, path).map_err(|e| e.to_string()),
+        Err(e) => {
+            let _ = std::fs::remove_file(&partial);
+            Err(e)
+        }
+    }
 }
 
 /// Reads waypoints: a header row, then one row per waypoint, one column per joint (rad or m);
 /// `#` starts a comment. Each waypoint must lie within the model's position limits.
-fn read_waypoints(path: &Path, model: &RobotModel) -> Result<Vec<Vec<f64>>, CliError> {
+fn read_waypoints<const B: usize>(
+    path: &Path,
+    model: &Model<B>,
+) -> Result<Vec<Vec<f64>>, CliError> {
     let shown = path.display();
     let usage = |m: String| CliError::usage(format!("--waypoints {shown}{m}"));
     let mut reader = csv::ReaderBuilder::new()
@@ -354,329 +481,6 @@ fn read_waypoints(path: &Path, model: &RobotModel) -> Result<Vec<Vec<f64>>, CliE
         )));
     }
     Ok(points)
-}
-
-/// Stop requests so far (SIGINT or SIGTERM).
-type Signals = Arc<AtomicU8>;
-
-fn watch_signals() -> Result<Signals, CliError> {
-    let mut set = SigSet::empty();
-    set.add(Signal::SIGINT);
-    set.add(Signal::SIGTERM);
-    set.thread_block()
-        .map_err(|e| CliError::failed(format!("cannot block SIGINT/SIGTERM: {e}")))?;
-    let count = Arc::new(AtomicU8::new(0));
-    let seen = count.clone();
-    std::thread::Builder::new()
-        .name("rl-signals".into())
-        .stack_size(64 << 10)
-        .spawn(move || {
-            while set.wait().is_ok() {
-                let n = seen.fetch_add(1, Ordering::AcqRel) + 1;
-                if n == 1 {
-                    eprintln!(
-                        "\nrl run: stopping: bringing the arm to rest along its path (Ctrl-C \
-                         again to stop at once)"
-                    );
-                }
-            }
-        })
-        .map_err(|e| CliError::failed(format!("cannot start the signal thread: {e}")))?;
-    Ok(count)
-}
-
-/// What the control thread hands back.
-struct LoopOutcome<R> {
-    controller: Box<Controller<R>>,
-    stats: LoopStats,
-    loop_error: Option<String>,
-}
-
-/// Opens, starts and primes the device, plans, runs the loop, stops the device and reports.
-fn drive<R: JointRobot + Send + 'static>(
-    mut robot: R,
-    device_name: String,
-    setup: &mut Setup,
-    signals: &Signals,
-    fake: Option<&FakeH7>,
-    initial_command: Option<Vec<f64>>,
-) -> CliResult {
-    let model = setup.loaded.model.clone();
-    let dof = model.dof();
-    let period = period_for(setup, robot.update_period());
-    robot
-        .open()
-        .map_err(|e| CliError::failed(format!("cannot open {device_name}: {e}")))?;
-    if let Err(e) = robot.start() {
-        let _ = robot.close();
-        return Err(CliError::failed(format!("cannot start {device_name}: {e}")));
-    }
-    // The first exchange tells where the arm is; the plan starts there. (A robot is never
-    // sent a position before that; a visualiser is sent its initial one.)
-    let mut start = vec![0.0; dof];
-    if let Err(e) = initial_command
-        .map_or(Ok(()), |q| robot.set_joint_position(&q))
-        .and_then(|()| robot.step())
-        .and_then(|()| robot.joint_position(&mut start))
-    {
-        let _ = shut_down(&mut robot, fake);
-        return Err(CliError::failed(format!(
-            "no joint positions from {device_name}: {e}"
-        )));
-    }
-    let waypoints = setup
-        .waypoints
-        .clone()
-        .unwrap_or_else(|| default_waypoints(&model, &start));
-    let plan = match Plan::new(&model, &start, &waypoints, &setup.limits) {
-        Ok(plan) => plan,
-        Err(e) => {
-            let _ = shut_down(&mut robot, fake);
-            return Err(CliError::failed(format!("refusing to move: {e}")));
-        }
-    };
-    if signals.load(Ordering::Acquire) > 0 {
-        let _ = shut_down(&mut robot, fake);
-        return Ok(ExitCode::from(130));
-    }
-    let plan_duration_s = plan.duration_s();
-    let mut controller = Box::new(
-        Controller::new(robot, model, plan, period)
-            .map_err(|e| CliError::failed(format!("controller: {e}")))?,
-    );
-    if let Some(d) = setup.args.duration {
-        controller.limit_cycles((d.as_secs_f64() / period.as_secs_f64()).round() as u64);
-    }
-
-    // Real-time set-up, with a fallback when this process may not have it.
-    let memory_locked = !setup.args.no_mlock
-        && match rl_rt::memory::lock_memory() {
-            Ok(()) => true,
-            Err(e) => {
-                eprintln!(
-                    "rl run: warning: {e}; running without locked memory (or pass --no-mlock)"
-                );
-                false
-            }
-        };
-    let builder = setup.thread.clone();
-
-    let collect = setup.telemetry_file.is_some() || setup.args.plot.is_some();
-    let (tx, mut rx) = if collect {
-        let (tx, rx) = queue::<CycleRecord>(TELEMETRY_CAPACITY);
-        (Some(tx), Some(rx))
-    } else {
-        (None, None)
-    };
-    let (mut progress_tx, mut progress_rx) = mailbox(Progress::default());
-    let looped = CyclicLoop::new(period)
-        .map_err(|e| CliError::usage(format!("--rate: {e}")))?
-        .overrun_policy(OverrunPolicy::Skip);
-    let signals_rt = signals.clone();
-    let thread = builder.spawn(move || {
-        let mut controller = controller;
-        let mut tx: Option<QueueSender<CycleRecord>> = tx;
-        let mut stats = looped.new_stats();
-        let mut worst_latency_ns = 0u64;
-        let mut halted = false;
-        let result = looped.run_into(&mut stats, |cycle| {
-            match signals_rt.load(Ordering::Acquire) {
-                0 => {}
-                1 => {
-                    if !halted {
-                        controller.request_halt();
-                        halted = true;
-                    }
-                }
-                _ => controller.abort(),
-            }
-            let out = controller.cycle();
-            let mut record = out.record;
-            record.wakeup_latency_ns = cycle.wakeup_latency_ns;
-            record.step_ns = MonoTime::now().nanos_since(cycle.woke);
-            worst_latency_ns = worst_latency_ns.max(cycle.wakeup_latency_ns);
-            if let Some(tx) = &mut tx {
-                // A full queue hands the record back and counts the drop.
-                let _ = tx.try_send(record);
-            }
-            progress_tx.publish(Progress {
-                cycle: record.cycle,
-                time_s: record.time_s,
-                error_max_rad: controller.tracking().max_error(),
-                worst_latency_ns,
-                lost: controller.failed_steps(),
-                halting: controller.clock().halting().is_some(),
-            });
-            if out.finished {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        });
-        drop(tx);
-        LoopOutcome {
-            controller,
-            stats,
-            loop_error: result.err().map(|e| e.to_string()),
-        }
-    });
-    let thread = match thread {
-        Ok(t) => t,
-        Err(e) => {
-            return Err(CliError::failed(format!(
-                "cannot start the control thread: {e}"
-            )));
-        }
-    };
-    let scheduling = thread.granted().to_string();
-
-    // This (non-real-time) thread writes telemetry and shows progress while the loop runs.
-    let mut display = ProgressDisplay::new(plan_duration_s);
-    let mut rows_written = 0u64;
-    let mut plot_rows: Vec<CycleRecord> = Vec::new();
-    let mut stride = 1u64;
-    let mut write_error: Option<String> = None;
-    if let Some(w) = &mut setup.telemetry_file {
-        if let Err(e) = telemetry::write_header(w, &setup.joints) {
-            write_error = Some(e.to_string());
-        }
-    }
-    let mut drain = |rx: &mut Option<rl_rt::exchange::QueueReceiver<CycleRecord>>,
-                     setup: &mut Setup| {
-        let Some(rx) = rx else { return };
-        while let Some(r) = rx.try_recv() {
-            if let Some(w) = &mut setup.telemetry_file {
-                if write_error.is_none() {
-                    match telemetry::write_row(&mut *w, &r, dof) {
-                        Ok(()) => rows_written += 1,
-                        Err(e) => write_error = Some(e.to_string()),
-                    }
-                }
-            }
-            if setup.args.plot.is_some() && r.cycle % stride == 0 {
-                if plot_rows.len() >= PLOT_ROWS {
-                    stride *= 2;
-                    plot_rows.retain(|r| r.cycle % stride == 0);
-                }
-                if r.cycle % stride == 0 {
-                    plot_rows.push(r);
-                }
-            }
-        }
-    };
-    let started = Instant::now();
-    while !thread.is_finished() {
-        std::thread::sleep(Duration::from_millis(50));
-        drain(&mut rx, setup);
-        display.update(progress_rx.read(), started.elapsed());
-    }
-    let outcome = match thread.join() {
-        Ok(o) => o,
-        Err(_) => return Err(CliError::failed("the control thread panicked")),
-    };
-    drain(&mut rx, setup);
-    let dropped = rx.as_ref().map_or(0, |rx| rx.dropped());
-    display.finish();
-    if let Some(w) = &mut setup.telemetry_file {
-        if let Err(e) = w.flush() {
-            write_error.get_or_insert(e.to_string());
-        }
-    }
-
-    let LoopOutcome {
-        mut controller,
-        stats,
-        loop_error,
-    } = outcome;
-    let shutdown = shut_down(controller.robot_mut(), fake);
-    let end = controller.end();
-    let tracking = *controller.tracking();
-    let mut failure = loop_error.map(|e| format!("control loop: {e}"));
-    if let Some(RunEnd::DeviceFault(e)) = end {
-        failure.get_or_insert(format!("device fault: {e}"));
-    }
-    if tracking.violations() > 0 {
-        failure.get_or_insert(format!(
-            "the measured motion crossed the model's limits {} times",
-            tracking.violations()
-        ));
-    }
-    if !shutdown.stopped {
-        failure.get_or_insert(format!(
-            "the device did not stop cleanly: {}",
-            shutdown.error.as_deref().unwrap_or("unknown")
-        ));
-    }
-    if let Some(e) = &write_error {
-        failure.get_or_insert(format!("telemetry: {e}"));
-    }
-    let report = RunReport {
-        model: setup.model_name.clone(),
-        device: device_name,
-        joints: setup.joints.clone(),
-        period_s: period.as_secs_f64(),
-        scheduling,
-        memory_locked,
-        plan_duration_s,
-        trajectory_time_s: controller.clock().time_s(),
-        end,
-        stats,
-        link: controller.robot().link_statistics(),
-        lost_packets: controller.failed_steps(),
-        tracking,
-        shutdown,
-        telemetry: setup
-            .telemetry_file
-            .as_ref()
-            .map(|_| (rows_written, dropped)),
-        failure,
-    };
-    if let Some(path) = &setup.args.plot {
-        if let Err(e) = plot::draw(path, &report, &plot_rows) {
-            eprintln!("rl run: warning: cannot draw {}: {e}", path.display());
-        }
-    }
-    if setup.args.json {
-        println!("{}", report.to_json());
-    } else {
-        print!("{report}");
-    }
-    Ok(if report.failure.is_some() {
-        ExitCode::from(1)
-    } else if matches!(end, Some(RunEnd::Stopped | RunEnd::Aborted)) {
-        ExitCode::from(130)
-    } else {
-        ExitCode::SUCCESS
-    })
-}
-
-/// Stops and closes the device (for the H7: end packet, program stop, servo off), and reads
-/// what the in-process fake saw.
-fn shut_down<R: JointRobot>(robot: &mut R, fake: Option<&FakeH7>) -> Shutdown {
-    let mut shutdown = Shutdown {
-        detail: robot.stop_description().to_owned(),
-        ..Shutdown::default()
-    };
-    match robot.stop() {
-        Ok(()) => shutdown.stopped = true,
-        Err(e) => shutdown.error = Some(e.to_string()),
-    }
-    if let Err(e) = robot.close() {
-        shutdown.error.get_or_insert(e.to_string());
-    }
-    if let Some(fake) = fake {
-        // The end packet is a datagram sent without waiting; give the fake a moment.
-        let deadline = Instant::now() + Duration::from_millis(500);
-        let mut status = fake.status();
-        while shutdown.stopped && status.ends == 0 && Instant::now() < deadline {
-            std::thread::sleep(Duration::from_millis(5));
-            status = fake.status();
-        }
-        shutdown.fake_end_packets = Some(status.ends);
-        shutdown.fake_servo_on = Some(status.servo_on);
-        shutdown.fake_limit_hits = Some(status.limit_hits);
-    }
-    shutdown
 }
 
 #[cfg(test)]

@@ -19,6 +19,8 @@ pub enum HaltReason {
     Requested,
     /// The run's cycle budget (`--duration`) ends.
     CycleLimit,
+    /// The supervisor found a fault that allows coming to rest.
+    Fault,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,6 +100,11 @@ impl TrajectoryClock {
     /// Starts a halt now (no effect if one is running).
     pub fn request_halt(&mut self) {
         self.begin_halt(HaltReason::Requested, self.halt_cycles);
+    }
+
+    /// Starts a halt now for `reason` (no effect if one is running).
+    pub fn request_halt_for(&mut self, reason: HaltReason) {
+        self.begin_halt(reason, self.halt_cycles);
     }
 
     fn begin_halt(&mut self, reason: HaltReason, cycles: u64) {

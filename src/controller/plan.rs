@@ -4,16 +4,24 @@
 //! jerk-limited rest-to-rest moves synchronised over the joints (Biagiotti & Melchiorri's
 //! 7-segment profile). Each move is monotonic per joint, so the path stays between its two
 //! waypoints: waypoints inside the position limits keep the whole path inside. The plan is
-//! also sampled every millisecond and checked against position, speed and (where the model has
-//! them) effort limits with inverse dynamics, so nothing moves before all of that holds.
+//! also sampled (every millisecond, or more coarsely for very long plans so the check stays
+//! bounded) and checked against position, speed and (where the model has them) effort limits
+//! with inverse dynamics, so nothing moves before all of that holds. The check is bounded in
+//! time by a [`PlanBudget`] (the longest trajectory accepted, a cancelling [`StopFlag`]) and
+//! runs before the device is started.
+//!
+//! Joint vectors are `[f64; J]` for the controller's joint capacity `J`.
 
 use core::fmt;
+
+use std::time::Duration;
 
 use rl_core::algo::rnea;
 use rl_core::traj::{JerkLimited, Limits, Piecewise, Trajectory, TrajectoryError};
 use rl_core::{Data, Model};
+use rl_rt::StopFlag;
 
-use super::{MAX_JOINTS, MAX_WAYPOINTS};
+use super::{DEFAULT_JOINTS, MAX_WAYPOINTS};
 
 /// Speed assumed for a joint whose model has no speed limit (rad/s or m/s).
 pub const UNKNOWN_SPEED: f64 = 0.5;
@@ -23,20 +31,45 @@ pub const ACCEL_TIME_S: f64 = 0.5;
 pub const JERK_TIME_S: f64 = 0.15;
 /// Sampling step of the pre-motion limit check.
 pub const CHECK_STEP_S: f64 = 1e-3;
+/// Most samples the pre-motion check takes (longer plans are sampled more coarsely).
+pub const MAX_CHECK_SAMPLES: usize = 200_000;
+/// The longest trajectory a plan accepts by default.
+pub const DEFAULT_MAX_PLAN_DURATION: Duration = Duration::from_secs(3600);
 
 /// Segments a plan holds: start → waypoints → start.
 const SEGMENTS: usize = MAX_WAYPOINTS + 1;
 
-/// The jerk-limited trajectory type of a plan.
-pub type PlanTrajectory = Piecewise<JerkLimited<MAX_JOINTS>, SEGMENTS>;
+/// The jerk-limited trajectory type of a plan for `J` joints.
+pub type PlanTrajectory<const J: usize> = Piecewise<JerkLimited<J>, SEGMENTS>;
+
+/// What planning may spend: the longest trajectory accepted and a flag that cancels it (Ctrl-C
+/// during planning).
+#[derive(Clone, Debug)]
+pub struct PlanBudget {
+    /// The longest trajectory accepted.
+    pub max_duration: Duration,
+    /// Raised: planning ends with [`PlanError::Cancelled`].
+    pub stop: Option<StopFlag>,
+}
+
+impl Default for PlanBudget {
+    fn default() -> Self {
+        Self {
+            max_duration: DEFAULT_MAX_PLAN_DURATION,
+            stop: None,
+        }
+    }
+}
 
 /// Why a plan was refused; joints are named as in the model.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PlanError {
-    /// The model has more joints than the controller drives.
+    /// The model has more joints than the controller's capacity.
     TooManyJoints {
         /// Joints of the model.
         dof: usize,
+        /// The controller's joint capacity.
+        capacity: usize,
     },
     /// The model has joints whose configuration is not a plain vector (spherical, free-flyer).
     NotJointSpace {
@@ -89,14 +122,51 @@ pub enum PlanError {
     },
     /// The trajectory could not be built.
     Trajectory(TrajectoryError),
+    /// The trajectory would last longer than the budget allows (e.g. a model with a tiny speed
+    /// limit).
+    TooLong {
+        /// Its duration, s.
+        duration_s: f64,
+        /// The longest accepted, s.
+        max_s: f64,
+        /// The slowest joint (its speed limit sets the pace).
+        joint: String,
+        /// That joint's planned speed.
+        speed: f64,
+    },
+    /// A stop was requested while planning.
+    Cancelled,
+    /// The model and the device have different numbers of joints.
+    DeviceJoints {
+        /// Joints of the model.
+        model: usize,
+        /// Axes of the device.
+        device: usize,
+    },
+    /// One control period's step exceeds what the joint may move in one cycle of the device:
+    /// the control period is longer than the device's and the device would execute each step
+    /// within its own, shorter cycle.
+    StepTooLarge {
+        /// The joint's name.
+        joint: String,
+        /// The planned step per control period.
+        step: f64,
+        /// What the speed limit allows in one device cycle.
+        allowed: f64,
+        /// Control period, s.
+        period_s: f64,
+        /// Device cycle, s.
+        device_period_s: f64,
+    },
 }
 
 impl fmt::Display for PlanError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Self::TooManyJoints { dof } => write!(
+            Self::TooManyJoints { dof, capacity } => write!(
                 f,
-                "the model has {dof} joints; the controller drives at most {MAX_JOINTS}"
+                "the model has {dof} joints; this controller was built for at most {capacity} \
+                 (choose a larger joint capacity)"
             ),
             Self::NotJointSpace { nq, dof } => write!(
                 f,
@@ -143,6 +213,39 @@ impl fmt::Display for PlanError {
                  {value} (limit {limit})"
             ),
             Self::Trajectory(e) => write!(f, "cannot plan the trajectory: {e}"),
+            Self::TooLong {
+                duration_s,
+                max_s,
+                joint,
+                speed,
+            } => write!(
+                f,
+                "the trajectory would take {duration_s:.3e} s, more than the {max_s} s allowed \
+                 (joint {joint} is planned at {speed:e}: check the model's speed limits or the \
+                 speed fraction)"
+            ),
+            Self::Cancelled => f.write_str("planning was cancelled by a stop request"),
+            Self::DeviceJoints { model, device } => write!(
+                f,
+                "the model has {model} joints but the device has {device} axes: refusing to \
+                 drive it (an axis the model does not describe would be commanded blindly)"
+            ),
+            Self::StepTooLarge {
+                joint,
+                step,
+                allowed,
+                period_s,
+                device_period_s,
+            } => write!(
+                f,
+                "joint {joint} would be commanded steps of up to {step:.4} per control period \
+                 ({:.2} ms), but the device executes each within its {:.2} ms cycle, where its \
+                 speed limit allows {allowed:.4}: use a control period of at most {:.2} ms or a \
+                 lower speed",
+                period_s * 1e3,
+                device_period_s * 1e3,
+                period_s * 1e3 * allowed / step
+            ),
         }
     }
 }
@@ -160,11 +263,14 @@ pub fn joint_name<const N: usize>(model: &Model<N>, k: usize) -> String {
     model.joint_name(model.dof_body(k)).to_owned()
 }
 
-/// Checks that the controller can drive `model`: at most [`MAX_JOINTS`] joints of one
+/// Checks that a controller of joint capacity `J` can drive `model`: at most `J` joints of one
 /// coordinate each.
-pub fn check_model<const N: usize>(model: &Model<N>) -> Result<(), PlanError> {
-    if model.dof() > MAX_JOINTS {
-        return Err(PlanError::TooManyJoints { dof: model.dof() });
+pub fn check_model<const N: usize, const J: usize>(model: &Model<N>) -> Result<(), PlanError> {
+    if model.dof() > J {
+        return Err(PlanError::TooManyJoints {
+            dof: model.dof(),
+            capacity: J,
+        });
     }
     if model.nq() != model.dof() {
         return Err(PlanError::NotJointSpace {
@@ -178,38 +284,45 @@ pub fn check_model<const N: usize>(model: &Model<N>) -> Result<(), PlanError> {
 /// Per-joint speed, acceleration and jerk limits of a plan, derived from the model's speed
 /// limits: `vmax = fraction × speed limit`, `amax = vmax / 0.5 s`, `jmax = amax / 0.15 s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MotionLimits {
+pub struct MotionLimits<const J: usize = DEFAULT_JOINTS> {
     /// Joints used.
     pub dof: usize,
+    /// The fraction of the speed limits planned with.
+    pub fraction: f64,
+    /// The speed limit per joint: the model's, or [`UNKNOWN_SPEED`] where it gives none.
+    pub speed_limit: [f64; J],
     /// Planned speed limit per joint.
-    pub velocity: [f64; MAX_JOINTS],
+    pub velocity: [f64; J],
     /// Planned acceleration limit per joint.
-    pub acceleration: [f64; MAX_JOINTS],
+    pub acceleration: [f64; J],
     /// Planned jerk limit per joint.
-    pub jerk: [f64; MAX_JOINTS],
+    pub jerk: [f64; J],
     /// Joints whose model has no speed limit ([`UNKNOWN_SPEED`] was assumed).
-    pub assumed_speed: [bool; MAX_JOINTS],
+    pub assumed_speed: [bool; J],
 }
 
-impl MotionLimits {
+impl<const J: usize> MotionLimits<J> {
     /// Limits at `fraction` (0, 1] of the model's speed limits.
     pub fn from_model<const N: usize>(model: &Model<N>, fraction: f64) -> Result<Self, PlanError> {
-        check_model(model)?;
+        check_model::<N, J>(model)?;
         if !(fraction > 0.0 && fraction <= 1.0) {
             return Err(PlanError::SpeedFraction(fraction));
         }
         let mut limits = Self {
             dof: model.dof(),
-            velocity: [1.0; MAX_JOINTS],
-            acceleration: [1.0; MAX_JOINTS],
-            jerk: [1.0; MAX_JOINTS],
-            assumed_speed: [false; MAX_JOINTS],
+            fraction,
+            speed_limit: [1.0; J],
+            velocity: [1.0; J],
+            acceleration: [1.0; J],
+            jerk: [1.0; J],
+            assumed_speed: [false; J],
         };
         for k in 0..model.dof() {
             let speed = model.limits(k).velocity;
             let known = speed.is_finite() && speed > 0.0;
             limits.assumed_speed[k] = !known;
-            let v = fraction * if known { speed } else { UNKNOWN_SPEED };
+            limits.speed_limit[k] = if known { speed } else { UNKNOWN_SPEED };
+            let v = fraction * limits.speed_limit[k];
             limits.velocity[k] = v;
             limits.acceleration[k] = v / ACCEL_TIME_S;
             limits.jerk[k] = v / ACCEL_TIME_S / JERK_TIME_S;
@@ -217,7 +330,12 @@ impl MotionLimits {
         Ok(limits)
     }
 
-    fn trajectory_limits(&self) -> Limits<MAX_JOINTS> {
+    /// Whether any joint's speed was assumed ([`UNKNOWN_SPEED`]).
+    pub fn any_assumed(&self) -> bool {
+        self.assumed_speed[..self.dof].iter().any(|&a| a)
+    }
+
+    fn trajectory_limits(&self) -> Limits<J> {
         // Unused axes do not move; their limits only need to be valid.
         Limits {
             velocity: self.velocity,
@@ -257,24 +375,38 @@ pub fn default_waypoints<const N: usize>(model: &Model<N>, start: &[f64]) -> Vec
 
 /// A checked jerk-limited trajectory from `start` through waypoints and back to `start`.
 #[derive(Clone, Debug)]
-pub struct Plan {
+pub struct Plan<const J: usize = DEFAULT_JOINTS> {
     dof: usize,
-    trajectory: PlanTrajectory,
-    points: Vec<[f64; MAX_JOINTS]>,
-    limits: MotionLimits,
-    peak_velocity: [f64; MAX_JOINTS],
-    peak_effort: [f64; MAX_JOINTS],
+    /// Boxed: a segment per waypoint for every joint (about 1 MB at 256 joints) is no stack
+    /// value.
+    trajectory: Box<PlanTrajectory<J>>,
+    points: Vec<[f64; J]>,
+    limits: MotionLimits<J>,
+    peak_velocity: [f64; J],
+    peak_effort: [f64; J],
 }
 
-impl Plan {
-    /// Plans and checks against `model`'s limits; `start` is where the robot is.
+impl<const J: usize> Plan<J> {
+    /// Plans and checks against `model`'s limits within the default [`PlanBudget`]; `start`
+    /// is where the robot is.
     pub fn new<const N: usize>(
         model: &Model<N>,
         start: &[f64],
         waypoints: &[Vec<f64>],
-        limits: &MotionLimits,
+        limits: &MotionLimits<J>,
     ) -> Result<Self, PlanError> {
-        check_model(model)?;
+        Self::with_budget(model, start, waypoints, limits, &PlanBudget::default())
+    }
+
+    /// Plans and checks against `model`'s limits within `budget`.
+    pub fn with_budget<const N: usize>(
+        model: &Model<N>,
+        start: &[f64],
+        waypoints: &[Vec<f64>],
+        limits: &MotionLimits<J>,
+        budget: &PlanBudget,
+    ) -> Result<Self, PlanError> {
+        check_model::<N, J>(model)?;
         let dof = model.dof();
         if waypoints.len() > MAX_WAYPOINTS {
             return Err(PlanError::TooManyWaypoints {
@@ -287,32 +419,62 @@ impl Plan {
             points.push(to_point(model, format!("waypoint {}", i + 1), w)?);
         }
         points.push(points[0]);
-        let mut trajectory = PlanTrajectory::new();
+        let mut trajectory = Box::new(PlanTrajectory::<J>::new());
         let tl = limits.trajectory_limits();
+        let max_s = budget.max_duration.as_secs_f64();
         for pair in points.windows(2) {
-            trajectory.push(JerkLimited::new(pair[0], pair[1], &tl)?)?;
+            let segment = JerkLimited::new(pair[0], pair[1], &tl)?;
+            let total = trajectory.duration() + segment.duration();
+            if total.is_nan() || total > max_s {
+                // The slowest joint sets the pace.
+                let k = (0..dof)
+                    .min_by(|&a, &b| limits.velocity[a].total_cmp(&limits.velocity[b]))
+                    .unwrap_or(0);
+                return Err(PlanError::TooLong {
+                    duration_s: total,
+                    max_s,
+                    joint: joint_name(model, k),
+                    speed: limits.velocity[k],
+                });
+            }
+            trajectory.push(segment)?;
         }
         let mut plan = Self {
             dof,
             trajectory,
             points,
             limits: *limits,
-            peak_velocity: [0.0; MAX_JOINTS],
-            peak_effort: [0.0; MAX_JOINTS],
+            peak_velocity: [0.0; J],
+            peak_effort: [0.0; J],
         };
-        plan.check(model)?;
+        plan.check(model, budget)?;
         Ok(plan)
     }
 
-    /// Samples the trajectory every [`CHECK_STEP_S`] (and at its end) and checks positions,
-    /// speeds, and inverse-dynamics efforts against the model's limits; records the peaks.
-    fn check<const N: usize>(&mut self, model: &Model<N>) -> Result<(), PlanError> {
+    /// Samples the trajectory every [`CHECK_STEP_S`] (at most [`MAX_CHECK_SAMPLES`] samples,
+    /// and at its end) and checks positions, speeds, and inverse-dynamics efforts against the
+    /// model's limits; records the peaks. Ends early with [`PlanError::Cancelled`] when the
+    /// budget's stop flag is raised.
+    fn check<const N: usize>(
+        &mut self,
+        model: &Model<N>,
+        budget: &PlanBudget,
+    ) -> Result<(), PlanError> {
         let dof = self.dof;
         let mut data = Box::new(Data::<N>::new());
         let duration = self.trajectory.duration();
-        let steps = (duration / CHECK_STEP_S).ceil() as usize;
+        let step = CHECK_STEP_S.max(duration / MAX_CHECK_SAMPLES as f64);
+        let steps = (duration / step).ceil() as usize;
         for i in 0..=steps {
-            let t = (i as f64 * CHECK_STEP_S).min(duration);
+            if i % 1024 == 0
+                && budget
+                    .stop
+                    .as_ref()
+                    .is_some_and(StopFlag::is_stop_requested)
+            {
+                return Err(PlanError::Cancelled);
+            }
+            let t = (i as f64 * step).min(duration);
             let s = self.trajectory.sample(t);
             let tau = rnea(
                 model,
@@ -340,8 +502,9 @@ impl Plan {
                     return Err(exceeds("position", q, limit));
                 }
                 let v = s.velocity[k].abs();
-                if v > l.velocity * (1.0 + 1e-9) {
-                    return Err(exceeds("speed", v, l.velocity));
+                let speed_limit = self.limits.speed_limit[k];
+                if v > speed_limit * (1.0 + 1e-9) {
+                    return Err(exceeds("speed", v, speed_limit));
                 }
                 let e = tau_k.abs();
                 if e > l.effort {
@@ -359,8 +522,37 @@ impl Plan {
         self.dof
     }
 
+    /// Refuses the plan if one control period's step would exceed what a joint may move in
+    /// one cycle of the device (`period` longer than `device_period`: the device executes each
+    /// command within its own cycle).
+    pub fn check_step<const N: usize>(
+        &self,
+        model: &Model<N>,
+        period: Duration,
+        device_period: Duration,
+    ) -> Result<(), PlanError> {
+        let (p, d) = (period.as_secs_f64(), device_period.as_secs_f64());
+        if p <= d {
+            return Ok(());
+        }
+        for k in 0..self.dof {
+            let step = self.peak_velocity[k] * p;
+            let allowed = self.limits.speed_limit[k] * d;
+            if step > allowed * (1.0 + 1e-9) {
+                return Err(PlanError::StepTooLarge {
+                    joint: joint_name(model, k),
+                    step,
+                    allowed,
+                    period_s: p,
+                    device_period_s: d,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// The trajectory (axes beyond [`dof`](Self::dof) stay at zero).
-    pub fn trajectory(&self) -> &PlanTrajectory {
+    pub fn trajectory(&self) -> &PlanTrajectory<J> {
         &self.trajectory
     }
 
@@ -370,12 +562,12 @@ impl Plan {
     }
 
     /// The start, the waypoints and the start again.
-    pub fn points(&self) -> &[[f64; MAX_JOINTS]] {
+    pub fn points(&self) -> &[[f64; J]] {
         &self.points
     }
 
     /// The limits it was planned with.
-    pub fn limits(&self) -> &MotionLimits {
+    pub fn limits(&self) -> &MotionLimits<J> {
         &self.limits
     }
 
@@ -390,11 +582,11 @@ impl Plan {
     }
 }
 
-fn to_point<const N: usize>(
+fn to_point<const N: usize, const J: usize>(
     model: &Model<N>,
     what: String,
     q: &[f64],
-) -> Result<[f64; MAX_JOINTS], PlanError> {
+) -> Result<[f64; J], PlanError> {
     let dof = model.dof();
     if q.len() != dof {
         return Err(PlanError::Length {
@@ -403,7 +595,7 @@ fn to_point<const N: usize>(
             got: q.len(),
         });
     }
-    let mut p = [0.0; MAX_JOINTS];
+    let mut p = [0.0; J];
     for (k, &v) in q.iter().enumerate() {
         let l = model.limits(k);
         if !v.is_finite() || !l.contains(v) {
@@ -424,7 +616,7 @@ fn to_point<const N: usize>(
 mod tests {
     use super::*;
 
-    fn model() -> super::super::RobotModel {
+    fn model() -> rl_core::Model<16> {
         super::super::rv6sl().expect("embedded model loads").model
     }
 
@@ -432,7 +624,7 @@ mod tests {
     fn default_plan_of_the_rv6sl_is_within_limits_and_a_few_seconds_long() {
         let m = model();
         let start = [0.0; 6];
-        let limits = MotionLimits::from_model(&m, 0.25).expect("limits");
+        let limits = MotionLimits::<8>::from_model(&m, 0.25).expect("limits");
         let plan = Plan::new(&m, &start, &default_waypoints(&m, &start), &limits).expect("plan");
         assert!(
             (4.0..=9.0).contains(&plan.duration_s()),
@@ -449,7 +641,7 @@ mod tests {
     #[test]
     fn waypoints_outside_limits_are_refused_with_the_joint_named() {
         let m = model();
-        let limits = MotionLimits::from_model(&m, 0.25).expect("limits");
+        let limits = MotionLimits::<8>::from_model(&m, 0.25).expect("limits");
         let mut w = vec![0.0; 6];
         w[1] = 3.0; // joint1 is limited to [-92°, 135°]
         let e = Plan::new(&m, &[0.0; 6], &[w], &limits).expect_err("outside");
@@ -466,6 +658,6 @@ mod tests {
                 ..
             }
         ));
-        assert!(MotionLimits::from_model(&m, 1.5).is_err());
+        assert!(MotionLimits::<8>::from_model(&m, 1.5).is_err());
     }
 }

@@ -1,34 +1,32 @@
-//! The end-of-run report: loop timing, link health, tracking, feed-forward, and how the run
-//! ended, as text for a person and JSON for a script.
+//! The end-of-run report: loop timing, link health, tracking, feed-forward, supervision, how
+//! the run ended and how the device was brought to a safe state, as text for a person and JSON
+//! for a script. The loop statistics use rl-rt's one JSON schema ([`LoopStats::to_json`]),
+//! shared with `rl jitter`.
 
 use std::fmt::{self, Write as _};
 
+use rl_drivers::LinkStatistics;
 use rl_rt::LoopStats;
 use serde_json::json;
 
-use rl_drivers::LinkStatistics;
-
 use super::control::RunEnd;
-use super::tracking::Tracking;
+use super::tracking::Violation;
 
-/// How the device was shut down.
+/// How the device was brought to a safe state after the loop.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Shutdown {
-    /// `stop()` succeeded (for the H7: end packet sent, program stopped, servo off).
+    /// `stop()` succeeded.
     pub stopped: bool,
-    /// What a clean stop meant for this device (shown in the report).
-    pub detail: String,
+    /// What a clean stop means for this device (e.g. "end packet sent, program stopped, servo
+    /// off").
+    pub description: String,
     /// Why `stop()` or `close()` failed.
     pub error: Option<String>,
-    /// What the in-process fake controller saw, if there is one: end packets received.
-    pub fake_end_packets: Option<u64>,
-    /// The fake's servo state after the stop.
-    pub fake_servo_on: Option<bool>,
-    /// Joint commands the fake had to clamp to its limits.
-    pub fake_limit_hits: Option<u64>,
+    /// The device's own fault before it was stopped, if it had one.
+    pub fault_before_stop: Option<String>,
 }
 
-/// Everything `rl run` reports.
+/// Everything a run reports.
 #[derive(Clone, Debug)]
 pub struct RunReport {
     /// Model name and source.
@@ -39,29 +37,60 @@ pub struct RunReport {
     pub joints: Vec<String>,
     /// Control period, s.
     pub period_s: f64,
-    /// Scheduling the loop got (e.g. `SCHED_FIFO 80 on CPUs [1]`).
+    /// The device's cycle, s.
+    pub device_period_s: f64,
+    /// Scheduling the loop got (e.g. `SCHED_FIFO priority 80 on CPUs [1]`).
     pub scheduling: String,
+    /// What the real-time set-up could not get, each with its fix.
+    pub warnings: Vec<String>,
     /// Whether memory was locked.
     pub memory_locked: bool,
     /// Planned trajectory duration, s.
     pub plan_duration_s: f64,
     /// Trajectory time reached, s.
     pub trajectory_time_s: f64,
+    /// Wall time of the loop, s.
+    pub wall_time_s: f64,
     /// How the run ended (`None`: the loop itself failed, see `failure`).
     pub end: Option<RunEnd>,
     /// Loop timing: wake-up latency, step duration, overruns, missed deadlines.
     pub stats: LoopStats,
-    /// Packet counts of the link.
+    /// The device link's counts (read after the device was closed: nothing is lost).
     pub link: LinkStatistics,
     /// Steps without a usable reply.
     pub lost_packets: u64,
-    /// Tracking and feed-forward statistics.
-    pub tracking: Tracking,
-    /// Device shutdown.
+    /// Largest tracking error per joint.
+    pub tracking_max: Vec<f64>,
+    /// RMS tracking error per joint.
+    pub tracking_rms: Vec<f64>,
+    /// Tracking error of the last cycle per joint.
+    pub tracking_final: Vec<f64>,
+    /// The supervisor's tracking bound per joint.
+    pub tracking_bound: Vec<f64>,
+    /// Largest feed-forward torque per joint.
+    pub peak_feed_forward: Vec<f64>,
+    /// Largest tracking error of any joint.
+    pub tracking_error_max: f64,
+    /// RMS tracking error over all joints and cycles.
+    pub tracking_error_rms: f64,
+    /// Limits crossed by the measured motion.
+    pub limit_violations: u64,
+    /// The first crossed limit.
+    pub first_violation: Option<Violation>,
+    /// Whether the supervisor acted on faults.
+    pub supervised: bool,
+    /// The speed assumed (rad/s or m/s) for joints whose model gives no speed limit, and those
+    /// joints.
+    pub assumed_speed: Option<(f64, Vec<String>)>,
+    /// How the device was stopped.
     pub shutdown: Shutdown,
-    /// Telemetry rows written and records dropped (queue full), if telemetry was on.
-    pub telemetry: Option<(u64, u64)>,
-    /// Why the run failed, if it did (device fault, limits crossed, loop error, stop failed).
+    /// Telemetry rows written (by the caller).
+    pub telemetry_rows: Option<u64>,
+    /// Telemetry records dropped because the queue was full.
+    pub telemetry_dropped: Option<u64>,
+    /// Lines the caller adds (e.g. what a fake device saw).
+    pub notes: Vec<String>,
+    /// Why the run failed, if it did (fault, loop error, stop failed).
     pub failure: Option<String>,
 }
 
@@ -70,12 +99,74 @@ fn us(ns: u64) -> f64 {
 }
 
 impl RunReport {
+    /// A report for a run whose loop did not come back (the thread panicked).
+    pub fn failed_early(model: String, device: String, joints: Vec<String>, why: &str) -> Self {
+        let n = joints.len();
+        Self {
+            model,
+            device,
+            joints,
+            period_s: 0.0,
+            device_period_s: 0.0,
+            scheduling: String::new(),
+            warnings: Vec::new(),
+            memory_locked: false,
+            plan_duration_s: 0.0,
+            trajectory_time_s: 0.0,
+            wall_time_s: 0.0,
+            end: None,
+            stats: LoopStats::new(1, 1),
+            link: LinkStatistics::default(),
+            lost_packets: 0,
+            tracking_max: vec![0.0; n],
+            tracking_rms: vec![0.0; n],
+            tracking_final: vec![0.0; n],
+            tracking_bound: vec![0.0; n],
+            peak_feed_forward: vec![0.0; n],
+            tracking_error_max: 0.0,
+            tracking_error_rms: 0.0,
+            limit_violations: 0,
+            first_violation: None,
+            supervised: true,
+            assumed_speed: None,
+            shutdown: Shutdown::default(),
+            telemetry_rows: None,
+            telemetry_dropped: None,
+            notes: Vec::new(),
+            failure: Some(why.to_owned()),
+        }
+    }
+
+    /// Marks the run failed for `why` (the first reason is kept).
+    pub fn fail(&mut self, why: impl Into<String>) {
+        if self.failure.is_none() {
+            self.failure = Some(why.into());
+        }
+    }
+
+    /// The process exit code: 1 failed, 130 interrupted by a stop request, 0 done.
+    pub fn exit_code(&self) -> i32 {
+        if self.failure.is_some() {
+            1
+        } else if self.end.is_some_and(|e| e.is_interrupted()) {
+            130
+        } else {
+            0
+        }
+    }
+
     /// The report as JSON: `cycles`, `overruns`, `lost_packets`, `latency_us` {min, mean, p99,
-    /// p999, max}, `tracking_error_rad` {max, rms, per joint}, and the rest.
+    /// p999, max}, `tracking_error_rad` {max, rms, per joint, bound per joint}, `loop` (rl-rt's
+    /// loop statistics schema), `link` (the device's counts), `fault`, and the rest.
     pub fn to_json(&self) -> serde_json::Value {
         let w = self.stats.wakeup.summary();
         let s = self.stats.step.summary();
-        let rms = self.tracking.rms_per_joint();
+        let loop_stats: serde_json::Value =
+            serde_json::from_str(&self.stats.to_json()).unwrap_or(serde_json::Value::Null);
+        let fault = match self.end {
+            Some(RunEnd::Fault(f)) => Some(f),
+            _ => None,
+        };
         json!({
             "cycles": self.stats.cycles(),
             "overruns": self.stats.overruns,
@@ -83,8 +174,15 @@ impl RunReport {
             "lost_packets": self.lost_packets,
             "late_packets": self.link.late,
             "rejected_packets": self.link.rejected,
+            "corrupt_packets": self.link.corrupt,
             "packets_sent": self.link.sent,
             "replies": self.link.received,
+            "link": {
+                "sent": self.link.sent, "received": self.link.received, "lost": self.link.lost,
+                "late": self.link.late, "rejected": self.link.rejected,
+                "corrupt": self.link.corrupt, "loss_rate": self.link.loss_rate(),
+            },
+            "loop": loop_stats,
             "latency_us": {
                 "min": us(w.min_ns), "mean": us(w.mean_ns), "p50": us(w.p50_ns),
                 "p99": us(w.p99_ns), "p999": us(w.p999_ns), "max": us(w.max_ns),
@@ -95,30 +193,42 @@ impl RunReport {
                 "p999": us(s.p999_ns), "max": us(s.max_ns),
             },
             "tracking_error_rad": {
-                "max": self.tracking.max_error(),
-                "rms": self.tracking.rms_error(),
-                "max_per_joint": self.tracking.max_per_joint(),
-                "rms_per_joint": &rms[..self.tracking.dof()],
-                "final_per_joint": self.tracking.last_error(),
+                "max": self.tracking_error_max,
+                "rms": self.tracking_error_rms,
+                "max_per_joint": self.tracking_max,
+                "rms_per_joint": self.tracking_rms,
+                "final_per_joint": self.tracking_final,
+                "bound_per_joint": self.tracking_bound,
             },
-            "peak_feed_forward_torque": self.tracking.peak_feed_forward(),
-            "limit_violations": self.tracking.violations(),
+            "peak_feed_forward_torque": self.peak_feed_forward,
+            "limit_violations": self.limit_violations,
+            "supervised": self.supervised,
+            "fault": fault.map(|f| f.describe(&self.joints)),
+            "fault_joint": fault.and_then(|f| f.joint()).and_then(|k| self.joints.get(k)),
+            "stopped_at_once": fault.map(|f| f.stops_at_once()),
+            "assumed_speed": self.assumed_speed.as_ref().map(|(v, joints)| json!({
+                "speed": v, "joints": joints,
+            })),
             "joints": self.joints,
             "model": self.model,
             "device": self.device,
             "period_s": self.period_s,
+            "device_period_s": self.device_period_s,
             "scheduling": self.scheduling,
+            "warnings": self.warnings,
             "memory_locked": self.memory_locked,
             "plan_duration_s": self.plan_duration_s,
             "trajectory_time_s": self.trajectory_time_s,
+            "wall_time_s": self.wall_time_s,
             "end": self.end.map(|e| e.to_string()),
-            "interrupted": matches!(self.end, Some(RunEnd::Stopped | RunEnd::Aborted)),
+            "interrupted": self.end.is_some_and(|e| e.is_interrupted()),
             "device_stopped": self.shutdown.stopped,
-            "fake_end_packets": self.shutdown.fake_end_packets,
-            "fake_servo_on": self.shutdown.fake_servo_on,
-            "fake_limit_hits": self.shutdown.fake_limit_hits,
-            "telemetry_rows": self.telemetry.map(|t| t.0),
-            "telemetry_dropped": self.telemetry.map(|t| t.1),
+            "device_stop": self.shutdown.description,
+            "device_stop_error": self.shutdown.error,
+            "device_fault": self.shutdown.fault_before_stop,
+            "telemetry_rows": self.telemetry_rows,
+            "telemetry_dropped": self.telemetry_dropped,
+            "notes": self.notes,
             "failed": self.failure.is_some(),
             "failure": self.failure,
         })
@@ -148,23 +258,48 @@ impl fmt::Display for RunReport {
             self.scheduling,
             if self.memory_locked { "yes" } else { "no" }
         );
+        for warning in &self.warnings {
+            let _ = writeln!(out, "warning: {warning}");
+        }
+        if let Some((v, joints)) = &self.assumed_speed {
+            let _ = writeln!(
+                out,
+                "note: the model gives no speed limit for {}; assumed {v} rad/s (or m/s)",
+                joints.join(", ")
+            );
+        }
         let _ = writeln!(
             out,
             "end: {} after {:.2} s of a {:.2} s trajectory",
-            self.end
-                .map_or_else(|| "loop failed".to_owned(), |e| e.to_string()),
+            self.end.map_or_else(
+                || "loop failed".to_owned(),
+                |e| match e {
+                    RunEnd::Fault(fault) => format!(
+                        "fault ({}): {}",
+                        if fault.stops_at_once() {
+                            "stopped at once"
+                        } else {
+                            "brought to rest"
+                        },
+                        fault.describe(&self.joints)
+                    ),
+                    e => e.to_string(),
+                }
+            ),
             self.trajectory_time_s,
             self.plan_duration_s
         );
         let _ = writeln!(
             out,
-            "cycles {}  overruns {}  missed deadlines {}  lost packets {}  late {}  rejected {}",
+            "cycles {}  overruns {}  missed deadlines {}  lost packets {}  late {}  rejected {}  \
+             corrupt {}",
             self.stats.cycles(),
             self.stats.overruns,
             self.stats.missed_deadlines,
             self.lost_packets,
             self.link.late,
-            self.link.rejected
+            self.link.rejected,
+            self.link.corrupt
         );
         let _ = writeln!(
             out,
@@ -189,36 +324,52 @@ impl fmt::Display for RunReport {
             let _ = write!(out, " {:>9}", truncate(j, 9));
         }
         out.push('\n');
-        let t = &self.tracking;
         row(
             &mut out,
             "tracking error max mrad",
-            t.max_per_joint(),
+            &self.tracking_max,
             1e3,
             3,
         );
         row(
             &mut out,
             "tracking error rms mrad",
-            &t.rms_per_joint()[..t.dof()],
+            &self.tracking_rms,
             1e3,
             3,
         );
         row(
             &mut out,
+            "tracking bound mrad",
+            &self.tracking_bound,
+            1e3,
+            1,
+        );
+        row(
+            &mut out,
             "peak feed-forward N·m",
-            t.peak_feed_forward(),
+            &self.peak_feed_forward,
             1.0,
             2,
         );
         let _ = writeln!(
             out,
-            "tracking error: max {:.3} mrad, rms {:.3} mrad; limit violations {}",
-            t.max_error() * 1e3,
-            t.rms_error() * 1e3,
-            t.violations()
+            "tracking error{}: max {:.3} mrad, rms {:.3} mrad; limit violations {}{}",
+            if matches!(self.end, Some(RunEnd::Fault(_))) {
+                " up to the fault"
+            } else {
+                ""
+            },
+            self.tracking_error_max * 1e3,
+            self.tracking_error_rms * 1e3,
+            self.limit_violations,
+            if self.supervised {
+                ""
+            } else {
+                "; supervision OFF"
+            }
         );
-        if let Some(v) = t.first_violation() {
+        if let Some(v) = self.first_violation {
             let _ = writeln!(
                 out,
                 "first violation: cycle {}, joint {}, {} {:.5} beyond limit {:.5}",
@@ -239,28 +390,25 @@ impl fmt::Display for RunReport {
                 "NOT stopped cleanly"
             }
         );
-        if sd.stopped && !sd.detail.is_empty() {
-            let _ = write!(out, " ({})", sd.detail);
+        if sd.stopped && !sd.description.is_empty() {
+            let _ = write!(out, " ({})", sd.description);
         }
         if let Some(e) = &sd.error {
             let _ = write!(out, " ({e})");
         }
-        if let Some(n) = sd.fake_end_packets {
-            let _ = write!(
-                out,
-                "; fake H7 saw {n} end packet{}, servo {}, {} limit hits",
-                if n == 1 { "" } else { "s" },
-                if sd.fake_servo_on == Some(true) {
-                    "on"
-                } else {
-                    "off"
-                },
-                sd.fake_limit_hits.unwrap_or(0)
-            );
+        if let Some(fault) = &sd.fault_before_stop {
+            let _ = write!(out, "; it had faulted: {fault}");
         }
         out.push('\n');
-        if let Some((rows, dropped)) = self.telemetry {
-            let _ = writeln!(out, "telemetry: {rows} rows written, {dropped} dropped");
+        for note in &self.notes {
+            let _ = writeln!(out, "{note}");
+        }
+        if let Some(rows) = self.telemetry_rows {
+            let _ = writeln!(
+                out,
+                "telemetry: {rows} rows written, {} dropped",
+                self.telemetry_dropped.unwrap_or(0)
+            );
         }
         match &self.failure {
             Some(why) => {

@@ -1,24 +1,27 @@
 //! One record per control cycle, small and `Copy`, for a lock-free queue from the real-time
 //! thread to a writer thread, and its CSV form (written by the writer, never on the real-time
-//! thread).
+//! thread). [`TelemetryFile`] writes the CSV next to its destination and moves it into place
+//! only once it has rows, so a run that fails early never empties an existing file.
 
-use std::io::{self, Write};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
 
-use super::MAX_JOINTS;
+use super::DEFAULT_JOINTS;
 
-/// What one control cycle saw and did.
+/// What one control cycle saw and did, for up to `J` joints.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CycleRecord {
+pub struct CycleRecord<const J: usize = DEFAULT_JOINTS> {
     /// Cycle index.
     pub cycle: u64,
     /// Trajectory time of the cycle, s.
     pub time_s: f64,
     /// The position commanded for this time (sent one cycle earlier).
-    pub commanded: [f64; MAX_JOINTS],
+    pub commanded: [f64; J],
     /// The measured position (the device's last reply).
-    pub measured: [f64; MAX_JOINTS],
+    pub measured: [f64; J],
     /// Inverse-dynamics feed-forward torque for the position commanded in this cycle.
-    pub feed_forward: [f64; MAX_JOINTS],
+    pub feed_forward: [f64; J],
     /// How late the cycle woke after its deadline, ns (filled by the loop).
     pub wakeup_latency_ns: u64,
     /// From wake-up to the end of the control step, device exchange included, ns (filled by
@@ -26,14 +29,14 @@ pub struct CycleRecord {
     pub step_ns: u64,
 }
 
-impl CycleRecord {
+impl<const J: usize> CycleRecord<J> {
     /// A zeroed record.
     pub const ZERO: Self = Self {
         cycle: 0,
         time_s: 0.0,
-        commanded: [0.0; MAX_JOINTS],
-        measured: [0.0; MAX_JOINTS],
-        feed_forward: [0.0; MAX_JOINTS],
+        commanded: [0.0; J],
+        measured: [0.0; J],
+        feed_forward: [0.0; J],
         wakeup_latency_ns: 0,
         step_ns: 0,
     };
@@ -51,7 +54,11 @@ pub fn write_header<W: Write>(mut w: W, joints: &[String]) -> io::Result<()> {
 }
 
 /// Writes one record as a CSV row for `dof` joints.
-pub fn write_row<W: Write>(mut w: W, r: &CycleRecord, dof: usize) -> io::Result<()> {
+pub fn write_row<W: Write, const J: usize>(
+    mut w: W,
+    r: &CycleRecord<J>,
+    dof: usize,
+) -> io::Result<()> {
     write!(w, "{},{:.6}", r.cycle, r.time_s)?;
     for values in [&r.commanded, &r.measured] {
         for v in &values[..dof] {
@@ -80,4 +87,96 @@ fn sanitize(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// A telemetry CSV being written: rows go to `<file>.partial` beside the destination, which is
+/// replaced only when [`finish`](Self::finish) has rows to put there. Creating it checks that
+/// the directory is writable before anything runs.
+#[derive(Debug)]
+pub struct TelemetryFile {
+    path: PathBuf,
+    partial: PathBuf,
+    writer: Option<BufWriter<File>>,
+    dof: usize,
+    rows: u64,
+    error: Option<String>,
+}
+
+impl TelemetryFile {
+    /// Creates `<path>.partial` and writes the header for `joints`.
+    pub fn create(path: &Path, joints: &[String]) -> io::Result<Self> {
+        let mut name = path.file_name().unwrap_or_default().to_os_string();
+        name.push(".partial");
+        let partial = path.with_file_name(name);
+        let mut writer = BufWriter::new(File::create(&partial)?);
+        if let Err(e) = write_header(&mut writer, joints) {
+            drop(writer);
+            let _ = std::fs::remove_file(&partial);
+            return Err(e);
+        }
+        Ok(Self {
+            path: path.to_owned(),
+            partial,
+            writer: Some(writer),
+            dof: joints.len(),
+            rows: 0,
+            error: None,
+        })
+    }
+
+    /// The destination.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Appends a record; the first write error is kept and later rows are skipped.
+    pub fn write<const J: usize>(&mut self, record: &CycleRecord<J>) {
+        if self.error.is_some() {
+            return;
+        }
+        if let Some(w) = &mut self.writer {
+            match write_row(w, record, self.dof.min(J)) {
+                Ok(()) => self.rows += 1,
+                Err(e) => self.error = Some(e.to_string()),
+            }
+        }
+    }
+
+    /// Flushes and, if any row was written, moves the file into place (replacing what was
+    /// there); with no rows the destination is left as it was. Returns the rows written, or
+    /// the first write error.
+    pub fn finish(mut self) -> Result<u64, String> {
+        let flushed = self.writer.take().map_or(Ok(()), |mut w| w.flush());
+        if let (Err(e), None) = (flushed, &self.error) {
+            self.error = Some(e.to_string());
+        }
+        if self.rows > 0 {
+            std::fs::rename(&self.partial, &self.path).map_err(|e| {
+                format!(
+                    "cannot move {} to {}: {e}",
+                    self.partial.display(),
+                    self.path.display()
+                )
+            })?;
+        }
+        match self.error.take() {
+            Some(e) => Err(e),
+            None => Ok(self.rows),
+        }
+    }
+}
+
+impl Drop for TelemetryFile {
+    fn drop(&mut self) {
+        // Unfinished, or finished without rows: the partial file goes, the destination stays.
+        self.writer = None;
+        if self.partial.exists() {
+            let _ = std::fs::remove_file(&self.partial);
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! How well the robot followed: tracking error per joint (max and RMS), peak feed-forward
 //! torque per joint, and limit checks of the measured motion. Allocation-free.
 
-use super::MAX_JOINTS;
+use super::DEFAULT_JOINTS;
 
 /// A limit the measured motion crossed (the first one is kept).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,29 +18,29 @@ pub struct Violation {
     pub limit: f64,
 }
 
-/// Tracking and limit statistics of a run.
+/// Tracking and limit statistics of a run for up to `J` joints.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tracking {
+pub struct Tracking<const J: usize = DEFAULT_JOINTS> {
     dof: usize,
     samples: u64,
-    max_abs: [f64; MAX_JOINTS],
-    sum_sq: [f64; MAX_JOINTS],
-    last: [f64; MAX_JOINTS],
-    peak_feed_forward: [f64; MAX_JOINTS],
+    max_abs: [f64; J],
+    sum_sq: [f64; J],
+    last: [f64; J],
+    peak_feed_forward: [f64; J],
     violations: u64,
     first_violation: Option<Violation>,
 }
 
-impl Tracking {
+impl<const J: usize> Tracking<J> {
     /// Empty statistics for `dof` joints.
     pub fn new(dof: usize) -> Self {
         Self {
-            dof: dof.min(MAX_JOINTS),
+            dof: dof.min(J),
             samples: 0,
-            max_abs: [0.0; MAX_JOINTS],
-            sum_sq: [0.0; MAX_JOINTS],
-            last: [0.0; MAX_JOINTS],
-            peak_feed_forward: [0.0; MAX_JOINTS],
+            max_abs: [0.0; J],
+            sum_sq: [0.0; J],
+            last: [0.0; J],
+            peak_feed_forward: [0.0; J],
             violations: 0,
             first_violation: None,
         }
@@ -91,7 +91,7 @@ impl Tracking {
     }
 
     /// RMS error per joint.
-    pub fn rms_per_joint(&self) -> [f64; MAX_JOINTS] {
+    pub fn rms_per_joint(&self) -> [f64; J] {
         let n = self.samples.max(1) as f64;
         core::array::from_fn(|k| (self.sum_sq[k] / n).sqrt())
     }
@@ -134,7 +134,7 @@ mod tests {
 
     #[test]
     fn max_and_rms_per_joint() {
-        let mut t = Tracking::new(2);
+        let mut t = Tracking::<8>::new(2);
         t.record_error(&[1.0, 0.0], &[0.0, 0.0]);
         t.record_error(&[0.0, 0.0], &[1.0, 0.5]);
         assert_eq!(t.max_per_joint(), &[1.0, 0.5]);

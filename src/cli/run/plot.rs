@@ -8,7 +8,11 @@ use rl::controller::report::RunReport;
 
 /// Draws positions (commanded thin, measured thick), tracking error per joint, and the
 /// latency histogram (log counts) into `path`.
-pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(), String> {
+pub fn draw<const J: usize>(
+    path: &Path,
+    report: &RunReport,
+    rows: &[CycleRecord<J>],
+) -> Result<(), String> {
     let e = |e: &dyn std::fmt::Display| e.to_string();
     let root = SVGBackend::new(path, (1200, 1100)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
@@ -83,8 +87,8 @@ pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(),
         .caption(
             format!(
                 "tracking error (commanded − measured): max {:.3} mrad, rms {:.3} mrad",
-                report.tracking.max_error() * 1e3,
-                report.tracking.rms_error() * 1e3
+                report.tracking_error_max * 1e3,
+                report.tracking_error_rms * 1e3
             ),
             ("sans-serif", 20),
         )
@@ -111,18 +115,7 @@ pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(),
 
     // Wake-up latency histogram, 1 µs bins merged into about 100 bars, log counts.
     let w = report.stats.wakeup.summary();
-    let bins = report.stats.wakeup.bins();
-    let shown_us = ((w.max_ns / 1000 + 1) as usize).min(bins.len()).max(10);
-    let per_bar = shown_us.div_ceil(100).max(1);
-    let bars: Vec<(f64, f64, u64)> = bins[..shown_us]
-        .chunks(per_bar)
-        .enumerate()
-        .map(|(i, c)| {
-            let x0 = (i * per_bar) as f64;
-            (x0, x0 + c.len() as f64, c.iter().sum())
-        })
-        .filter(|b| b.2 > 0)
-        .collect();
+    let (bars, x_end) = latency_bars(report.stats.wakeup.bins(), w.max_ns);
     let top_count = bars.iter().map(|b| b.2).max().unwrap_or(1) as f64;
     let mut chart = ChartBuilder::on(&bottom)
         .caption(
@@ -145,7 +138,7 @@ pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(),
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..shown_us as f64, (0.5..top_count * 2.0).log_scale())
+        .build_cartesian_2d(0.0..x_end, (0.5..top_count * 2.0).log_scale())
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
@@ -159,4 +152,51 @@ pub fn draw(path: &Path, report: &RunReport, rows: &[CycleRecord]) -> Result<(),
         }))
         .map_err(|x| e(&x))?;
     root.present().map_err(|x| e(&x))
+}
+
+/// The latency histogram's bars (1 µs bins merged into about 100: start µs, end µs, count;
+/// empty ones left out) up to the worst wake-up `max_ns`, and where the x axis ends: after the
+/// last bar (the worst wake-up), so it stands inside the frame, not on it.
+fn latency_bars(bins: &[u64], max_ns: u64) -> (Vec<(f64, f64, u64)>, f64) {
+    let shown_us = ((max_ns / 1000 + 1) as usize).min(bins.len()).max(10);
+    let per_bar = shown_us.div_ceil(100).max(1);
+    let bars = bins[..shown_us.min(bins.len())]
+        .chunks(per_bar)
+        .enumerate()
+        .map(|(i, c)| {
+            let x0 = (i * per_bar) as f64;
+            (x0, x0 + c.len() as f64, c.iter().sum())
+        })
+        .filter(|b| b.2 > 0)
+        .collect();
+    let x_end = shown_us as f64 + (per_bar as f64).max(0.03 * shown_us as f64);
+    (bars, x_end)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::latency_bars;
+
+    /// The bar of the worst wake-up ends inside the frame, with room after it, whatever the
+    /// worst wake-up is.
+    #[test]
+    fn the_last_latency_bar_stands_inside_the_frame() {
+        for max_us in [3_usize, 9, 10, 57, 99, 100, 101, 999, 4_321, 9_999] {
+            let mut bins = vec![0_u64; 10_000];
+            bins[0] = 5;
+            bins[max_us] = 1;
+            let (bars, x_end) = latency_bars(&bins, max_us as u64 * 1000 + 400);
+            let last = bars.last().expect("bars");
+            assert!(
+                last.0 <= max_us as f64 && (max_us as f64) < last.1,
+                "{max_us} µs in its bar {last:?}"
+            );
+            assert!(
+                last.1 < x_end && x_end - last.1 >= 0.01 * x_end,
+                "{max_us} µs: the bar ends at {}, the frame at {x_end}",
+                last.1
+            );
+            assert_eq!(bars.iter().map(|b| b.2).sum::<u64>(), 6);
+        }
+    }
 }

@@ -4,22 +4,7 @@
 use std::io::{IsTerminal, Write};
 use std::time::Duration;
 
-/// What the control thread publishes every cycle (through a latest-value mailbox).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Progress {
-    /// Cycle index.
-    pub cycle: u64,
-    /// Trajectory time, s.
-    pub time_s: f64,
-    /// Largest tracking error so far, rad.
-    pub error_max_rad: f64,
-    /// Worst wake-up latency so far, ns.
-    pub worst_latency_ns: u64,
-    /// Failed steps so far.
-    pub lost: u64,
-    /// Whether the arm is being brought to rest.
-    pub halting: bool,
-}
+pub use rl::controller::Progress;
 
 /// Prints progress at a rate that suits where standard error goes.
 pub struct ProgressDisplay {

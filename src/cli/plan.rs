@@ -1,0 +1,517 @@
+//! `rl plan`: plan a collision-free path for a robot among obstacles (rl-plan), print what it
+//! found as JSON, and write the path and its trajectory as CSV; `rl plan bench` runs a
+//! MotionBenchMaker problem set and writes OMPL's benchmark logs and RL's CSV.
+//!
+//! - `rl plan ROBOT.urdf --scene SCENE.yaml --request REQUEST.yaml`: a MoveIt planning scene
+//!   and motion plan request (MotionBenchMaker's format); the SRDF beside the URDF and the
+//!   `_spherized.urdf` beside it are used when present.
+//! - `rl plan SCENARIO.xml`: one of RL's rlplan scenarios (planner, model, scene, start, goal).
+//!
+//! All the logic lives in rl-plan; this file parses arguments and prints.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Args, Subcommand, ValueEnum};
+use rl_core::traj::Trajectory;
+use rl_plan::bench::{self, BenchOptions, CheckerKind, Run};
+use rl_plan::execute::{Execution, ExecutionLimits};
+use rl_plan::optimizer::OptimizerKind;
+use rl_plan::planner::{DynamicDomain, PlannerKind};
+use rl_plan::problem::moveit::MotionRequest;
+use rl_plan::problem::rlplan::Scenario;
+use rl_plan::problem::{COVER_SPACING, Robot, mbm};
+use rl_plan::sampler::SamplerKind;
+use rl_plan::verifier::Verifier;
+use rl_plan::{JointSpace, Path as PlanPath, PlanOptions, PlanResult, plan};
+use serde_json::json;
+
+use super::{CliError, CliResult, parse_duration};
+
+/// Arguments of `rl plan`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct PlanArgs {
+    /// Run a problem set instead of one problem.
+    #[command(subcommand)]
+    pub command: Option<PlanCommand>,
+    /// The robot (URDF) or one of RL's planning scenarios (rlplan XML).
+    pub model: Option<PathBuf>,
+    /// MoveIt planning scene (YAML) with the obstacles.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// MoveIt motion plan request (YAML) with start state and joint goal.
+    #[arg(long)]
+    pub request: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Write the path as CSV: a header of joint names, one row per waypoint (rad or m).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write a jerk-limited trajectory along the path as CSV (`t`, positions, velocities,
+    /// accelerations), sampled every --dt.
+    #[arg(long)]
+    pub trajectory: Option<PathBuf>,
+    /// Sampling period of --trajectory.
+    #[arg(long, value_parser = parse_duration, default_value = "10ms")]
+    pub dt: Duration,
+    /// Fraction of the model's speed limits for --trajectory, in (0, 1].
+    #[arg(long, default_value_t = 0.5)]
+    pub speed: f64,
+}
+
+/// Settings shared by `rl plan` and `rl plan bench`.
+#[derive(Args, Debug, Clone)]
+pub struct CommonArgs {
+    /// SRDF with the allowed collision pairs (default: the .srdf beside the URDF).
+    #[arg(long)]
+    pub srdf: Option<PathBuf>,
+    /// Planner: rrt-connect (Kuffner & LaValle's extend-connect, RL's rrtExtCon), rrt-con-con,
+    /// rrt-ext-ext, rrt-dual, rrt-goal-bias, rrt, prm.
+    #[arg(long, default_value = "rrt-connect")]
+    pub planner: String,
+    /// Random seed (the same seed gives the same path).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Time budget for planning (and again for optimising).
+    #[arg(long, value_parser = parse_duration, default_value = "1s")]
+    pub time: Duration,
+    /// Collision checker: hybrid (spheres that cover the meshes, the file's spheres, then the
+    /// exact meshes where they disagree: exact results at sphere speed), spheres (SIMD only;
+    /// conservative unless --raw-spheres), or exact (meshes only).
+    #[arg(long, value_enum, default_value = "hybrid")]
+    pub checker: Checker,
+    /// Spherized URDF with the robot's spheres (default: NAME_spherized.urdf beside the URDF,
+    /// else spheres fitted around the meshes).
+    #[arg(long)]
+    pub spheres: Option<PathBuf>,
+    /// Use the spherized URDF's spheres as they are, without adding spheres where the meshes
+    /// stick out of them (VAMP's model: faster, not conservative).
+    #[arg(long)]
+    pub raw_spheres: bool,
+    /// Sampler: halton (VAMP's), uniform, gaussian, bridge.
+    #[arg(long, default_value = "halton")]
+    pub sampler: String,
+    /// Optimiser: simple (shortcutting), advanced (RL's), none.
+    #[arg(long, default_value = "simple")]
+    pub optimizer: String,
+    /// Edge check resolution, rad (largest step between checked configurations).
+    #[arg(long, default_value_t = 1.0 / 32.0)]
+    pub resolution: f64,
+    /// RRT step (RL's delta, VAMP's range), rad.
+    #[arg(long)]
+    pub range: Option<f64>,
+    /// Plain RRT extensions instead of dynamic-domain ones (VAMP's default, on here too).
+    #[arg(long)]
+    pub no_dynamic_domain: bool,
+}
+
+/// The collision checker.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Checker {
+    /// Covering spheres, the file's spheres, then the exact meshes.
+    Hybrid,
+    /// Spheres in SIMD lanes.
+    Spheres,
+    /// rl-sg's exact geometry.
+    Exact,
+}
+
+/// Subcommands of `rl plan`.
+#[derive(Subcommand, Debug)]
+pub enum PlanCommand {
+    /// Run every problem of a MotionBenchMaker set and print VAMP's summary table.
+    Bench(BenchArgs),
+}
+
+/// Arguments of `rl plan bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Directory of problems (sceneNNNN.yaml + requestNNNN.yaml, in scenario folders).
+    pub dir: PathBuf,
+    /// The robot's URDF (default: the only non-spherized .urdf in DIR or a parent of it).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Runs per problem (seeds seed, seed+1, …).
+    #[arg(long, default_value_t = 1)]
+    pub runs: usize,
+    /// Only the first N problems.
+    #[arg(long)]
+    pub limit: Option<usize>,
+    /// Check every returned path with the exact meshes at a resolution 10× finer.
+    #[arg(long)]
+    pub fine_check: bool,
+    /// Write OMPL benchmark logs (one per problem) and RL's benchmark.csv into this directory.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print one line per run.
+    #[arg(long)]
+    pub verbose: bool,
+}
+
+fn failed(e: impl std::fmt::Display) -> CliError {
+    CliError::failed(e.to_string())
+}
+
+fn usage(e: impl std::fmt::Display) -> CliError {
+    CliError::usage(e.to_string())
+}
+
+/// The planning options of the common arguments.
+fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
+    let mut planner =
+        PlannerKind::parse(&c.planner).map_err(|e| usage(format!("--planner: {e}")))?;
+    if let Some(s) = planner.rrt_settings_mut() {
+        // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain.
+        s.delta = c.range.unwrap_or(1.0);
+        s.balance = true;
+        if !c.no_dynamic_domain {
+            s.dynamic_domain = Some(DynamicDomain::VAMP);
+        }
+    }
+    let sampler = match c.sampler.as_str() {
+        "halton" => SamplerKind::Halton,
+        "uniform" => SamplerKind::Uniform,
+        "gaussian" => SamplerKind::Gaussian(None),
+        "bridge" => SamplerKind::Bridge(None, 5.0 / 6.0),
+        other => {
+            return Err(usage(format!(
+                "--sampler {other}: use halton, uniform, gaussian or bridge"
+            )));
+        }
+    };
+    let optimizer = OptimizerKind::parse(&c.optimizer).ok_or_else(|| {
+        usage(format!(
+            "--optimizer {}: use simple, advanced or none",
+            c.optimizer
+        ))
+    })?;
+    if !(c.resolution.is_finite() && c.resolution > 0.0) {
+        return Err(usage("--resolution must be positive"));
+    }
+    Ok(PlanOptions {
+        planner,
+        sampler,
+        verifier: Verifier::recursive(c.resolution),
+        optimizer,
+        optimizer_verifier: None,
+        seed: c.seed,
+        time: c.time,
+        optimize_time: c.time,
+        try_direct: true,
+    })
+}
+
+fn load_robot(urdf: &Path, c: &CommonArgs) -> Result<Robot, CliError> {
+    let cover = (!c.raw_spheres).then_some(COVER_SPACING);
+    Robot::load_urdf_with(urdf, c.srdf.as_deref(), c.spheres.as_deref(), cover).map_err(failed)
+}
+
+/// Runs `rl plan`.
+pub fn run(args: PlanArgs) -> CliResult {
+    if let Some(PlanCommand::Bench(b)) = args.command {
+        return run_bench(b);
+    }
+    let model = args.model.as_ref().ok_or_else(|| {
+        usage("give a robot (URDF with --scene and --request) or an rlplan scenario")
+    })?;
+    let is_scenario = std::fs::read_to_string(model)
+        .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
+        .map_err(|e| usage(format!("{}: {e}", model.display())))?;
+    let (space, result, names, checker_name) = if is_scenario {
+        let sc = Scenario::load(model).map_err(failed)?;
+        let (space, mut checker) = sc.build().map_err(failed)?;
+        let mut opts = sc.options(args.common.seed);
+        if args.common.time != Duration::from_secs(1) {
+            opts.time = args.common.time;
+            opts.optimize_time = args.common.time;
+        }
+        let r = plan(&space, &mut checker, &sc.start, &sc.goal, &opts).map_err(failed)?;
+        let names = names_of(&space);
+        (space, r, names, "exact")
+    } else {
+        let (scene, request) = match (&args.scene, &args.request) {
+            (Some(s), Some(r)) => (s, r),
+            _ => {
+                return Err(usage(
+                    "a URDF needs --scene SCENE.yaml and --request REQUEST.yaml",
+                ));
+            }
+        };
+        let robot = load_robot(model, &args.common)?;
+        let env = rl_sg::load::moveit::load_environment(scene).map_err(failed)?;
+        let req = MotionRequest::load(request).map_err(failed)?;
+        let (start, goal) = req.configurations(&robot.space).map_err(failed)?;
+        let opts = options(&args.common)?;
+        let r = match args.common.checker {
+            Checker::Hybrid => {
+                let mut c = robot.hybrid_checker(&env).map_err(failed)?;
+                plan(&robot.space, &mut c, &start, &goal, &opts)
+            }
+            Checker::Spheres => {
+                let mut c = robot.sphere_checker(&env).map_err(failed)?;
+                plan(&robot.space, &mut c, &start, &goal, &opts)
+            }
+            Checker::Exact => {
+                let mut c = robot.exact_checker(env).map_err(failed)?;
+                plan(&robot.space, &mut c, &start, &goal, &opts)
+            }
+        }
+        .map_err(failed)?;
+        let names = names_of(&robot.space);
+        let name = match args.common.checker {
+            Checker::Hybrid => "hybrid",
+            Checker::Spheres if args.common.raw_spheres => "spheres (raw)",
+            Checker::Spheres => "spheres",
+            Checker::Exact => "exact",
+        };
+        if let (Some(t), Some(path)) = (&args.trajectory, &r.optimized) {
+            write_trajectory(t, &robot, path, args.speed, args.dt, &names)?;
+        }
+        (robot.space, r, names, name)
+    };
+    if let (Some(out), Some(path)) = (&args.out, &result.optimized) {
+        write_path(out, &names, path)?;
+    }
+    if args.trajectory.is_some() && is_scenario {
+        eprintln!("rl plan: --trajectory is written for URDF robots only");
+    }
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&result_json(
+            &space,
+            &result,
+            checker_name,
+            args.common.seed
+        ))
+        .unwrap_or_default()
+    );
+    Ok(if result.solved {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+fn names_of(space: &JointSpace) -> Vec<String> {
+    space.coordinates().iter().map(|c| c.name.clone()).collect()
+}
+
+fn result_json(space: &JointSpace, r: &PlanResult, checker: &str, seed: u64) -> serde_json::Value {
+    let finite = |x: f64| if x.is_finite() { json!(x) } else { json!(null) };
+    json!({
+        "solved": r.solved,
+        "planner": r.planner,
+        "checker": checker,
+        "seed": seed,
+        "planning_time_us": r.planning_time.as_secs_f64() * 1e6,
+        "optimization_time_us": r.optimization_time.as_secs_f64() * 1e6,
+        "iterations": r.iterations,
+        "vertices": r.vertices,
+        "collision_checks": r.planning_checks,
+        "optimization_collision_checks": r.optimization_checks,
+        "length_before": finite(r.length_before),
+        "length_after": finite(r.length_after),
+        "waypoints_before": r.path.as_ref().map_or(0, PlanPath::len),
+        "waypoints_after": r.optimized.as_ref().map_or(0, PlanPath::len),
+        "joints": names_of(space),
+    })
+}
+
+fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| failed(format!("{}: {e}", path.display())))
+}
+
+fn write_path(out: &Path, names: &[String], path: &PlanPath) -> Result<(), CliError> {
+    let io = |e: std::io::Error| failed(format!("{}: {e}", out.display()));
+    let mut f = create(out)?;
+    writeln!(f, "{}", names.join(",")).map_err(io)?;
+    for i in 0..path.len() {
+        let row: Vec<String> = path.point(i).iter().map(|x| format!("{x}")).collect();
+        writeln!(f, "{}", row.join(",")).map_err(io)?;
+    }
+    f.flush().map_err(io)
+}
+
+fn write_trajectory(
+    out: &Path,
+    robot: &Robot,
+    path: &PlanPath,
+    speed: f64,
+    dt: Duration,
+    names: &[String],
+) -> Result<(), CliError> {
+    let limits = ExecutionLimits::from_model(&robot.kinematics.model, speed).map_err(usage)?;
+    let ex = Execution::new(&robot.space, path, limits).map_err(failed)?;
+    let tr = ex.trajectory::<16, 256>().map_err(failed)?;
+    let io = |e: std::io::Error| failed(format!("{}: {e}", out.display()));
+    let mut f = create(out)?;
+    let n = names.len();
+    let mut header = vec!["t".to_string()];
+    for suffix in ["", "/v", "/a"] {
+        header.extend(names.iter().map(|nm| format!("{nm}{suffix}")));
+    }
+    writeln!(f, "{}", header.join(",")).map_err(io)?;
+    let dt = dt.as_secs_f64().max(1e-6);
+    let steps = (tr.duration() / dt).ceil() as usize;
+    for i in 0..=steps {
+        let t = (i as f64 * dt).min(tr.duration());
+        let s = tr.sample(t);
+        let mut row = vec![format!("{t}")];
+        for v in [&s.position, &s.velocity, &s.acceleration] {
+            row.extend(v[..n].iter().map(|x| format!("{x}")));
+        }
+        writeln!(f, "{}", row.join(",")).map_err(io)?;
+    }
+    f.flush().map_err(io)
+}
+
+/// The URDF for a problem directory: given, or the only plain `.urdf` in DIR or an ancestor.
+fn find_urdf(dir: &Path, given: &Option<PathBuf>) -> Result<PathBuf, CliError> {
+    if let Some(m) = given {
+        return Ok(m.clone());
+    }
+    for d in dir.ancestors() {
+        let Ok(rd) = std::fs::read_dir(d) else {
+            continue;
+        };
+        let urdfs: Vec<PathBuf> = rd
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| {
+                p.extension().is_some_and(|e| e == "urdf")
+                    && !p.to_string_lossy().ends_with("_spherized.urdf")
+            })
+            .collect();
+        if urdfs.len() == 1 {
+            return Ok(urdfs[0].clone());
+        }
+    }
+    Err(usage(format!(
+        "no robot URDF found in {} or above it; give --model",
+        dir.display()
+    )))
+}
+
+fn run_bench(b: BenchArgs) -> CliResult {
+    let urdf = find_urdf(&b.dir, &b.model)?;
+    let robot = load_robot(&urdf, &b.common)?;
+    let mut problems = mbm::find_problems(&b.dir).map_err(failed)?;
+    if let Some(n) = b.limit {
+        problems.truncate(n);
+    }
+    if problems.is_empty() {
+        return Err(usage(format!(
+            "no problems (requestNNNN.yaml) under {}",
+            b.dir.display()
+        )));
+    }
+    let opts = BenchOptions {
+        plan: options(&b.common)?,
+        runs: b.runs,
+        checker: match b.common.checker {
+            Checker::Hybrid => CheckerKind::Hybrid,
+            Checker::Spheres => CheckerKind::Spheres,
+            Checker::Exact => CheckerKind::Exact,
+        },
+        fine_check: b.fine_check.then_some(10.0),
+    };
+    let spheres = match (&b.common.checker, b.common.raw_spheres) {
+        (Checker::Exact, _) => "exact meshes".to_string(),
+        (Checker::Hybrid, _) => format!(
+            "hybrid: {} covering spheres, {} file spheres, exact meshes",
+            robot.spheres.len(),
+            robot.inner_spheres.as_ref().map_or(0, |s| s.len())
+        ),
+        (_, true) => format!("{} spheres as in the file (raw)", robot.spheres.len()),
+        (_, false) => format!("{} spheres covering the meshes", robot.spheres.len()),
+    };
+    eprintln!(
+        "rl plan bench: {} problems × {} runs, {} ({}), {} backend",
+        problems.len(),
+        b.runs,
+        urdf.display(),
+        spheres,
+        rl_plan::fast::Backend::detect().name()
+    );
+    let verbose = b.verbose;
+    let runs = bench::run_mbm(&robot, &problems, &opts, &mut |r: &Run| {
+        if verbose {
+            match &r.result {
+                Some(res) => eprintln!(
+                    "{} run {}: solved {} {:.1} µs, {} iterations, {} checks{}",
+                    r.problem,
+                    r.run,
+                    res.solved,
+                    res.planning_time.as_secs_f64() * 1e6,
+                    res.iterations,
+                    res.planning_checks,
+                    match r.fine_valid {
+                        Some(true) => ", fine check: valid",
+                        Some(false) => ", fine check: COLLISION",
+                        None => "",
+                    }
+                ),
+                None => eprintln!("{} run {}: invalid start or goal", r.problem, r.run),
+            }
+        }
+    })
+    .map_err(failed)?;
+    println!("{}", bench::vamp_table(&runs));
+    if let Some(out) = &b.out {
+        std::fs::create_dir_all(out).map_err(|e| failed(format!("{}: {e}", out.display())))?;
+        let setup = format!(
+            "robot {}\nchecker {spheres}\nplanner {} (range {:?}), sampler {}, resolution {} rad, optimiser {}, time {:?}",
+            urdf.display(),
+            b.common.planner,
+            b.common.range.unwrap_or(1.0),
+            b.common.sampler,
+            b.common.resolution,
+            b.common.optimizer,
+            b.common.time
+        );
+        for p in &problems {
+            let mine: Vec<Run> = runs
+                .iter()
+                .filter(|r| r.problem == p.name)
+                .cloned()
+                .collect();
+            let planner = mine
+                .iter()
+                .find_map(|r| r.result.as_ref().map(|x| x.planner))
+                .filter(|n| !n.is_empty())
+                .unwrap_or("RRT Extend Connect");
+            let file = out.join(format!(
+                "{}.log",
+                p.name.replace(['/', '.'], "_").trim_start_matches('_')
+            ));
+            let mut f = create(&file)?;
+            bench::write_ompl_log(&mut f, &p.name, planner, &setup, &mine)
+                .and_then(|_| f.flush())
+                .map_err(|e| failed(format!("{}: {e}", file.display())))?;
+        }
+        let csv = out.join("benchmark.csv");
+        let mut f = create(&csv)?;
+        let engine = match b.common.checker {
+            Checker::Hybrid => "HYBRID",
+            Checker::Spheres => "SPHERES",
+            Checker::Exact => "PARRY",
+        };
+        bench::write_rl_csv(&mut f, &runs, engine)
+            .and_then(|_| f.flush())
+            .map_err(|e| failed(format!("{}: {e}", csv.display())))?;
+        eprintln!(
+            "rl plan bench: wrote {} OMPL logs and {}",
+            problems.len(),
+            csv.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,206 @@
+//! `rl plan` and `rl plan bench` end to end on the committed MotionBenchMaker fixtures and RL's
+//! scenarios: the JSON, the path CSV (header of joint names, rows within the joint limits, start
+//! and goal as the request says), the trajectory CSV (within the speed limits), OMPL's log
+//! format and RL's CSV, and errors that name the argument.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn data(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(p)
+}
+
+fn rl(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args(args)
+        .output()
+        .expect("run rl")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rl-plan-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn plan_a_motionbenchmaker_problem() {
+    let dir = tmp("mbm");
+    let (out, traj) = (dir.join("path.csv"), dir.join("traj.csv"));
+    let problem = data("mbm/panda/problems/table_pick_panda");
+    let o = rl(&[
+        "plan",
+        data("mbm/panda/panda.urdf").to_str().unwrap(),
+        "--scene",
+        problem.join("scene0001.yaml").to_str().unwrap(),
+        "--request",
+        problem.join("request0001.yaml").to_str().unwrap(),
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        "--trajectory",
+        traj.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], true);
+    assert_eq!(v["seed"], 3);
+    assert!(v["collision_checks"].as_u64().unwrap() > 0);
+    assert!(v["length_after"].as_f64().unwrap() <= v["length_before"].as_f64().unwrap());
+    let (header, rows) = csv(&out);
+    let joints: Vec<String> = (1..=7).map(|i| format!("panda_joint{i}")).collect();
+    assert_eq!(header, joints);
+    assert_eq!(rows.len() as u64, v["waypoints_after"].as_u64().unwrap());
+    // Start and goal as the request gives them.
+    let req = std::fs::read_to_string(problem.join("request0001.yaml")).unwrap();
+    assert!(req.contains("panda_joint1"));
+    assert!(rows[0].iter().all(|x| x.is_finite()));
+    // The trajectory: t, positions, velocities, accelerations; ends at the path's goal and
+    // stays within the panda's speed limits (2.3925 rad/s for joints 1–4, 2.871 for 5–7, at
+    // --speed 0.5).
+    let (th, tr) = csv(&traj);
+    assert_eq!(th.len(), 1 + 3 * 7);
+    assert_eq!(th[0], "t");
+    let last = tr.last().unwrap();
+    for k in 0..7 {
+        assert!((last[1 + k] - rows.last().unwrap()[k]).abs() < 1e-9);
+    }
+    for row in &tr {
+        for k in 0..7 {
+            let limit = if k < 4 { 2.3925 } else { 2.871 } * 0.5;
+            assert!(
+                row[8 + k].abs() <= limit * (1.0 + 1e-9),
+                "joint {k} at t={}",
+                row[0]
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn plan_an_rl_scenario() {
+    let o = rl(&[
+        "plan",
+        data("rlplan/unimation-puma560_boxes_prm.mdl.xml")
+            .to_str()
+            .unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], true);
+    assert_eq!(v["planner"], "PRM");
+    assert_eq!(v["checker"], "exact");
+}
+
+#[test]
+fn bench_writes_ompl_logs_and_rl_csv() {
+    let dir = tmp("bench");
+    let o = rl(&[
+        "plan",
+        "bench",
+        data("mbm/panda/problems").to_str().unwrap(),
+        "--checker",
+        "spheres",
+        "--raw-spheres",
+        "--runs",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        table.contains("planning µs") && table.contains("| 95%"),
+        "{table}"
+    );
+    assert!(
+        table.contains("Solved / Valid / Total # Problems: 14 / 14 / 14"),
+        "{table}"
+    );
+    assert!(table.contains("Collision checks per second"));
+    // One OMPL log per problem, in the grammar of OMPL's benchmark documentation.
+    let logs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "log"))
+        .collect();
+    assert_eq!(logs.len(), 7);
+    for log in &logs {
+        let t = std::fs::read_to_string(log).unwrap();
+        let lines: Vec<&str> = t.lines().collect();
+        assert!(lines[0].starts_with("rl-rs version "));
+        assert!(lines[1].starts_with("Experiment "));
+        assert!(t.contains(" is the random seed\n") && t.contains(" seconds per run\n"));
+        assert!(t.contains("2 runs per planner\n") && t.contains("1 planners\n"));
+        let nprops: usize = lines
+            .iter()
+            .find(|l| l.ends_with(" properties for each run"))
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let at = lines.iter().position(|l| *l == "2 runs").unwrap();
+        for run in &lines[at + 1..at + 3] {
+            // Every value is followed by "; ".
+            assert_eq!(run.matches("; ").count(), nprops, "{run}");
+        }
+        assert_eq!(lines[at + 3], ".");
+    }
+    let (h, rows) = {
+        let text = std::fs::read_to_string(dir.join("benchmark.csv")).unwrap();
+        let mut l = text.lines();
+        let h: Vec<String> = l.next().unwrap().split(',').map(str::to_string).collect();
+        (
+            h,
+            l.map(|r| r.split(',').map(str::to_string).collect::<Vec<_>>())
+                .collect::<Vec<_>>(),
+        )
+    };
+    assert_eq!(&h[..4], ["Date", "Time", "Solved", "Engine"]);
+    assert_eq!(h[13], " Path Length");
+    assert_eq!(rows.len(), 14);
+    assert!(
+        rows.iter()
+            .all(|r| r.len() == h.len() && r[2] == "true" && r[3] == "SPHERES")
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_arguments_name_the_problem() {
+    let o = rl(&["plan", data("mbm/panda/panda.urdf").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--scene"));
+    let o = rl(&[
+        "plan",
+        "bench",
+        data("mbm/panda/problems").to_str().unwrap(),
+        "--planner",
+        "astar",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown planner \"astar\""));
+}
