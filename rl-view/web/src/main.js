@@ -1,0 +1,133 @@
+// rl view's page: wires the connection to the view, the panel and the test hooks.
+//
+// Every `hello` replaces the scene (models, environment, panel, path, plot); every `state`
+// poses the bodies, colours collisions, draws the distance, updates panel, IK and plot.
+
+import { Connection, socketUrl } from './connection.js';
+import { View } from './scene.js';
+import { ModelView } from './models.js';
+import { EnvView } from './env.js';
+import { JointPanel } from './panel.js';
+import { IkTarget } from './ik.js';
+import { DistanceView } from './distance.js';
+import { PathPlayer } from './path.js';
+import { LivePlot } from './plot.js';
+import { StatusLine } from './status.js';
+import * as THREE from 'three';
+
+const $ = (id) => document.getElementById(id);
+
+const view = new View($('view'));
+const status = new StatusLine($('status'));
+let conn = null;
+const send = (msg) => {
+  const ok = conn.send(msg);
+  if (!ok) status.setServerError('not connected: the command was not sent');
+  return ok;
+};
+const sendQ = (model, q) => send({ type: 'set_q', model, q });
+const panel = new JointPanel($('models'), sendQ);
+const ik = new IkTarget(view, $('ik'), send);
+const distance = new DistanceView(view, $('labels'));
+const player = new PathPlayer($('path'), sendQ);
+const plot = new LivePlot($('plot'), $('plot-caption'));
+
+let scene = null;
+let state = null;
+let models = [];
+let env = null;
+let framed = false;
+
+function meshTotals() {
+  const t = { pending: 0, loaded: 0, failed: 0, errors: [] };
+  for (const m of [...models, env].filter(Boolean)) {
+    t.pending += m.meshes.pending;
+    t.loaded += m.meshes.loaded;
+    t.failed += m.meshes.failed;
+    t.errors.push(...m.meshes.errors);
+  }
+  return t;
+}
+
+function changed(what) {
+  status.setMeshes(meshTotals());
+  if (what.framed && !framed && models.every((m) => m.ready)) {
+    framed = true;
+    const box = new THREE.Box3();
+    for (const m of models) box.expandByObject(m.root);
+    view.frame(box);
+  }
+  if (state) ik.followTool();
+  view.requestRender();
+}
+
+function onHello(msg) {
+  for (const m of models) m.dispose();
+  if (env) env.dispose();
+  scene = msg.scene;
+  models = scene.models.map((d) => new ModelView(view, d, changed));
+  env = new EnvView(view, scene.env, changed);
+  panel.build(scene);
+  ik.build(scene, models);
+  player.build(scene);
+  plot.build(scene);
+  status.setServerError(null);
+  if (msg.state) onState(msg.state);
+  changed({});
+}
+
+function onState(msg) {
+  state = msg;
+  for (const sm of msg.models || []) {
+    const mv = models.find((m) => m.desc.index === sm.index);
+    if (mv && Array.isArray(sm.bodies)) mv.setPoses(sm.bodies);
+    if (mv) mv.setShapePoses(sm.shapes);
+  }
+  const hits = new Map(models.map((m) => [m.desc.index, []]));
+  for (const [mi, body] of msg.colliding || []) if (hits.has(mi)) hits.get(mi).push(body);
+  for (const m of models) m.setColliding(hits.get(m.desc.index));
+  distance.update(msg.distance);
+  panel.update(msg);
+  ik.update(msg);
+  plot.push(msg);
+  status.setState(msg);
+  view.requestRender();
+}
+
+conn = new Connection(socketUrl(), {
+  onStatus: (s) => {
+    status.setConnection(s);
+    plot.setLive(s.connected);
+  },
+  onMessage: (msg) => {
+    switch (msg.type) {
+      case 'hello': onHello(msg); break;
+      case 'state': onState(msg); break;
+      case 'error': status.setServerError(msg.message); break;
+      case 'pong': break;
+      default: console.warn('rl view: unknown message', msg.type);
+    }
+  },
+});
+
+// Test hooks (the browser test reads and drives the page through these).
+window.rlView = {
+  get connected() { return conn.connected; },
+  get scene() { return scene; },
+  get state() { return state; },
+  get frames() { return view.frames; },
+  /** [[model, body], ...] whose meshes currently carry the collision red. */
+  redBodies() {
+    return models.flatMap((m) => m.redBodies().map((b) => [m.desc.index, b]));
+  },
+  /** Moves a joint slider (value in rad or m) as a user would; returns the value sent. */
+  setSlider(model, joint, value) { return panel.setSlider(model, joint, value); },
+  /** Drags the IK target to [x,y,z,qx,qy,qz,qw]; resolves with the server's IK answer. */
+  dragTarget(model, pose) { return ik.drag(model, pose); },
+  /** Meshes drawn per model, and mesh file loading counts. */
+  meshCounts() { return models.map((m) => m.meshCount()); },
+  meshLoading() { return meshTotals(); },
+  /** The distance label as shown, or null when no distance is drawn. */
+  distanceLabel() { return distance.label.hidden ? null : distance.text; },
+  statusText() { return $('status').textContent; },
+};
