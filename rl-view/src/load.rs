@@ -1,0 +1,372 @@
+//! Loading what the viewer shows: the robots (rl-core's loaders, URDF or RL XML), their
+//! geometry as an rl-sg scene built from the same files, the obstacles (`--env`: a MoveIt
+//! planning scene, an RL scene, VRML or a URDF, through [`rl_sg::load::load_scene_file`]), the
+//! SRDF (`--srdf`, for the first model), and the fixed table of files the page may fetch.
+//!
+//! Scene model `i` of [`World::scene`] is robot `i` (the Coach model index, the order on the
+//! command line); the obstacles' models follow.
+//!
+//! URDF robots collide with their `<collision>` geometry; the page draws their `<visual>`
+//! geometry (or the collision geometry where visual meshes are missing). RL XML models carry no
+//! geometry: they get a skeleton (a sphere at every body origin, a capsule from it to each child
+//! joint) which is drawn, and checked against the obstacles but not against itself.
+
+use std::path::PathBuf;
+
+use glam::{DQuat, DVec3};
+use rl_core::loader::{self as core_loader, LoadedModel, UrdfOptions};
+use rl_core::model::ROOT;
+use rl_core::spatial::PlueckerTransform;
+use rl_sg::load::{self, GeometryKind, MeshCache, MeshMode, UrdfGeometryOptions};
+use rl_sg::{Geometry, KinematicLink, Model, Scene, Shape};
+
+use crate::error::ViewError;
+use crate::files::FileTable;
+use crate::path::PathData;
+
+/// Capacity of the viewer's kinematic models (bodies and degrees of freedom).
+pub const CAPACITY: usize = 64;
+
+/// Radius of the skeleton drawn for RL XML models, m.
+const SKELETON_RADIUS: f64 = 0.03;
+
+/// Where a robot comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ModelSource {
+    /// A URDF or RL XML (rlmdl) file.
+    File(PathBuf),
+    /// URDF or RL XML text (e.g. the embedded default robot), with a name for messages.
+    Text {
+        /// What to call it in messages (`"the embedded RV-6SL"`).
+        name: String,
+        /// The XML.
+        text: String,
+    },
+}
+
+impl ModelSource {
+    fn describe(&self) -> String {
+        match self {
+            ModelSource::File(p) => p.display().to_string(),
+            ModelSource::Text { name, .. } => name.clone(),
+        }
+    }
+}
+
+/// What to load.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// The robots, in Coach model order.
+    pub models: Vec<ModelSource>,
+    /// Obstacles (MoveIt planning-scene YAML, rlsg XML, VRML, URDF).
+    pub env: Option<PathBuf>,
+    /// Allowed collision pairs of the first model (SRDF).
+    pub srdf: Option<PathBuf>,
+    /// A path to play back (`rl plan --out` or `--trajectory` CSV), for model 0.
+    pub path: Option<PathBuf>,
+    /// Where `package://` URIs are looked up (besides `$ROS_PACKAGE_PATH` and the files'
+    /// ancestors).
+    pub package_dirs: Vec<PathBuf>,
+}
+
+/// One coordinate of a robot's `q`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointInfo {
+    /// Joint name (`name[k]` for joints with several coordinates).
+    pub name: String,
+    /// `revolute`, `continuous`, `prismatic` or `other`.
+    pub kind: &'static str,
+    /// Lower limit (rad or m; `-inf` when none).
+    pub min: f64,
+    /// Upper limit.
+    pub max: f64,
+    /// `rad`, `m` or `""`.
+    pub unit: &'static str,
+}
+
+/// A loaded robot.
+#[derive(Clone, Debug)]
+pub struct Robot {
+    /// Its name (the model's).
+    pub name: String,
+    /// The kinematic model.
+    pub kinematics: Box<LoadedModel<CAPACITY>>,
+    /// `/files/<i>/robot.urdf` for URDF robots.
+    pub urdf: Option<String>,
+    /// The geometry the page draws (same bodies, same order, as the collision model).
+    pub visual: Model,
+    /// The tool the IK target drags (index into the model's tools).
+    pub tool: usize,
+    /// The coordinates of `q`.
+    pub joints: Vec<JointInfo>,
+    /// The configuration it starts at (RL's home, or neutral).
+    pub initial_q: Vec<f64>,
+    /// Notes made while loading (missing meshes, ignored elements).
+    pub warnings: Vec<String>,
+}
+
+/// Everything the viewer shows.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// The robots, in Coach model order.
+    pub robots: Vec<Robot>,
+    /// Collision geometry: robot `i` is scene model `i`, the obstacles follow.
+    pub scene: Scene,
+    /// The files the page may fetch.
+    pub files: FileTable,
+    /// The path to play back.
+    pub path: Option<PathData>,
+}
+
+fn load_err(what: impl Into<String>, e: impl std::fmt::Display) -> ViewError {
+    ViewError::Load {
+        what: what.into(),
+        reason: e.to_string(),
+    }
+}
+
+fn geometry_options(kind: GeometryKind, package_dirs: &[PathBuf]) -> UrdfGeometryOptions {
+    UrdfGeometryOptions {
+        kind,
+        package_dirs: package_dirs.to_vec(),
+        mesh: MeshMode::Mesh,
+        strict_meshes: false,
+    }
+}
+
+/// The coordinates of `q` of a kinematic model.
+pub fn joint_infos(k: &LoadedModel<CAPACITY>) -> Vec<JointInfo> {
+    use rl_core::joint::JointKind;
+    let m = &k.model;
+    let mut out = Vec::with_capacity(m.nq());
+    for b in 0..m.body_count() {
+        let nq = m.joint_nq(b);
+        if nq == 0 {
+            continue;
+        }
+        let name = m.joint_name(b).to_string();
+        let kind = m.joint(b).kind();
+        if nq == 1 && matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
+            let lim = m.limits(m.v_index(b));
+            let prismatic = kind == JointKind::Prismatic;
+            out.push(JointInfo {
+                name,
+                kind: if prismatic {
+                    "prismatic"
+                } else if lim.wraparound || k.joint_source_type(b) == Some("continuous") {
+                    "continuous"
+                } else {
+                    "revolute"
+                },
+                min: if lim.wraparound {
+                    -std::f64::consts::PI
+                } else {
+                    lim.lower
+                },
+                max: if lim.wraparound {
+                    std::f64::consts::PI
+                } else {
+                    lim.upper
+                },
+                unit: if prismatic { "m" } else { "rad" },
+            });
+        } else {
+            for c in 0..nq {
+                out.push(JointInfo {
+                    name: format!("{name}[{c}]"),
+                    kind: "other",
+                    min: f64::NEG_INFINITY,
+                    max: f64::INFINITY,
+                    unit: "",
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The tool the IK target drags: `tool0` if the model has one, else its first tool.
+fn pick_tool(k: &LoadedModel<CAPACITY>) -> usize {
+    let tools = k.model.tools();
+    ["tool0", "tool", "ee_link"]
+        .iter()
+        .find_map(|n| tools.iter().position(|t| t.name.as_str() == *n))
+        .unwrap_or(0)
+}
+
+/// A pose placing a z-aligned shape of length `|d|` between `a` and `a + d`.
+fn segment_pose(a: DVec3, d: DVec3) -> PlueckerTransform {
+    let len = d.length();
+    let rot = if len > 0.0 {
+        DQuat::from_rotation_arc(DVec3::Z, d / len)
+    } else {
+        DQuat::IDENTITY
+    };
+    PlueckerTransform::from_quat_translation(rot, a + d * 0.5)
+}
+
+/// The skeleton of an RL XML model: one scene body per rl-core body (named after it), and a base
+/// body fixed to the world.
+pub fn skeleton(k: &LoadedModel<CAPACITY>) -> Result<Model, ViewError> {
+    let m = &k.model;
+    let err = |e: rl_sg::SgError| load_err(format!("skeleton of \"{}\"", m.name()), e);
+    let mut model = Model::new(m.name());
+    let mut frames = Vec::with_capacity(m.body_count() + 1);
+    let add = |model: &mut Model, name: &str, parent: usize| -> Result<(), ViewError> {
+        let body = model.add_body(name);
+        body.push_shape(
+            Shape::new(
+                format!("{name}/joint"),
+                Geometry::sphere(SKELETON_RADIUS * 1.4).map_err(err)?,
+                PlueckerTransform::IDENTITY,
+            )
+            .map_err(err)?,
+        );
+        for c in (0..m.body_count()).filter(|&c| m.parent(c) == parent) {
+            let d = m.placement(c).translation;
+            if d.length() > 1e-6 {
+                body.push_shape(
+                    Shape::new(
+                        format!("{name}/link/{c}"),
+                        Geometry::capsule(SKELETON_RADIUS, d.length()).map_err(err)?,
+                        segment_pose(DVec3::ZERO, d),
+                    )
+                    .map_err(err)?,
+                );
+            }
+        }
+        Ok(())
+    };
+    add(&mut model, "base", ROOT)?;
+    frames.push(Some((ROOT, PlueckerTransform::IDENTITY)));
+    for b in 0..m.body_count() {
+        let name = m.body_name(b).to_string();
+        add(&mut model, &name, b)?;
+        frames.push(Some((b, PlueckerTransform::IDENTITY)));
+    }
+    let link = KinematicLink::new(frames, m.body_count()).map_err(err)?;
+    model.set_kinematics(link);
+    model.set_self_collision(false);
+    Ok(model)
+}
+
+/// Loads robot `index` from `source`: its kinematics, collision model (returned) and drawn
+/// geometry; URDF files are added to `files`.
+fn load_robot(
+    index: usize,
+    source: &ModelSource,
+    package_dirs: &[PathBuf],
+    files: &mut FileTable,
+    cache: &mut MeshCache,
+) -> Result<(Robot, Model), ViewError> {
+    let what = source.describe();
+    let mut warnings = Vec::new();
+    let (kinematics, collision, visual, urdf) = match source {
+        ModelSource::File(path) if load::is_urdf(path) => {
+            let opts = geometry_options(GeometryKind::Collision, package_dirs);
+            let r = load::load_robot::<CAPACITY>(path, &opts, &UrdfOptions::default(), cache)
+                .map_err(|e| load_err(&what, e))?;
+            let served = files.add_urdf(index, path, package_dirs)?;
+            warnings.extend(served.warnings);
+            let vopts = geometry_options(GeometryKind::Visual, package_dirs);
+            let visual = match load::urdf::load_geometry(path, &vopts, cache) {
+                Ok(v) => v,
+                Err(e) => {
+                    warnings.push(format!(
+                        "visual geometry not loaded ({e}): the collision geometry is drawn"
+                    ));
+                    r.model.clone()
+                }
+            };
+            (r.kinematics, r.model, visual, Some(served.url))
+        }
+        ModelSource::File(path) => {
+            let k = core_loader::load_file::<CAPACITY>(path).map_err(|e| load_err(&what, e))?;
+            let sk = skeleton(&k)?;
+            (k, sk.clone(), sk, None)
+        }
+        ModelSource::Text { text, .. } => {
+            let k = core_loader::load_str::<CAPACITY>(text, &UrdfOptions::default())
+                .map_err(|e| load_err(&what, e))?;
+            let sk = skeleton(&k)?;
+            (k, sk.clone(), sk, None)
+        }
+    };
+    if kinematics.model.tools().is_empty() {
+        warnings.push("the model has no tool: inverse kinematics is off".into());
+    }
+    warnings.extend(collision.warnings().iter().cloned());
+    // Every mesh drawn must be in the file table (the collision stand-ins may not be yet).
+    for b in visual.bodies() {
+        for s in b.shapes() {
+            if let Some(p) = s.source() {
+                files.add_mesh_file(index, p);
+            }
+        }
+    }
+    let robot = Robot {
+        name: kinematics.model.name().to_string(),
+        tool: pick_tool(&kinematics),
+        joints: joint_infos(&kinematics),
+        initial_q: kinematics.home_or_neutral(),
+        kinematics: Box::new(kinematics),
+        urdf,
+        visual,
+        warnings,
+    };
+    Ok((robot, collision))
+}
+
+impl World {
+    /// Loads everything `options` names.
+    pub fn load(options: &LoadOptions) -> Result<World, ViewError> {
+        if options.models.is_empty() {
+            return Err(ViewError::Invalid("no model to show".into()));
+        }
+        let mut files = FileTable::new();
+        let mut cache = MeshCache::new();
+        let mut scene = Scene::new();
+        let mut robots = Vec::with_capacity(options.models.len());
+        for (i, src) in options.models.iter().enumerate() {
+            let (robot, mut collision) =
+                load_robot(i, src, &options.package_dirs, &mut files, &mut cache)?;
+            if i == 0 {
+                if let Some(srdf) = &options.srdf {
+                    load::srdf::apply_file(srdf, &mut collision)
+                        .map_err(|e| load_err(srdf.display().to_string(), e))?;
+                }
+            }
+            // Two robots of the same file: names must differ in the scene.
+            while scene.model_id(collision.name()).is_some() {
+                collision.set_name(format!("{}'", collision.name()));
+            }
+            scene
+                .add_model(collision)
+                .map_err(|e| load_err(src.describe(), e))?;
+            robots.push(robot);
+        }
+        if let Some(env) = &options.env {
+            let opts = geometry_options(GeometryKind::Collision, &options.package_dirs);
+            let s = load::load_scene_file(env, &opts, &mut cache)
+                .map_err(|e| load_err(env.display().to_string(), e))?;
+            for mut m in s.models().iter().cloned() {
+                while scene.model_id(m.name()).is_some() {
+                    m.set_name(format!("{}'", m.name()));
+                }
+                scene
+                    .add_model(m)
+                    .map_err(|e| load_err(env.display().to_string(), e))?;
+            }
+        }
+        let path = match &options.path {
+            Some(p) => Some(PathData::load(p, &robots[0].joints)?),
+            None => None,
+        };
+        Ok(World {
+            robots,
+            scene,
+            files,
+            path,
+        })
+    }
+}
