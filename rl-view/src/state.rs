@@ -408,6 +408,7 @@ impl Engine {
     /// Counts a malformed page message.
     pub fn page_error(&mut self) {
         self.page_errors += 1;
+        self.touch();
     }
 
     /// Malformed page messages so far.
