@@ -37,6 +37,7 @@ let state = null;
 let models = [];
 let env = null;
 let framed = false;
+let hellos = 0;
 
 function meshTotals() {
   const t = { pending: 0, loaded: 0, failed: 0, errors: [] };
@@ -65,6 +66,7 @@ function onHello(msg) {
   for (const m of models) m.dispose();
   if (env) env.dispose();
   scene = msg.scene;
+  hellos += 1;
   models = scene.models.map((d) => new ModelView(view, d, changed));
   env = new EnvView(view, scene.env, changed);
   panel.build(scene);
@@ -130,4 +132,33 @@ window.rlView = {
   /** The distance label as shown, or null when no distance is drawn. */
   distanceLabel() { return distance.label.hidden ? null : distance.text; },
   statusText() { return $('status').textContent; },
+  /** How many `hello`s replaced the scene (1 + reconnects). */
+  get hellos() { return hellos; },
+  /** World position of a body as drawn (its three.js group), or null. */
+  bodyPosition(model, name) {
+    const m = models.find((x) => x.desc.index === model);
+    const f = m && m.frameOf(name);
+    return f ? new THREE.Vector3().setFromMatrixPosition(f).toArray() : null;
+  },
+  envMeshCount() { return env ? env.root.children.reduce((n, g) => n + (g.children.length ? 1 : 0), 0) : 0; },
+  /** Screen rectangle (CSS px, page coordinates) of model `model` as drawn, or null. */
+  screenBox(model) {
+    const m = models.find((x) => x.desc.index === model);
+    if (!m) return null;
+    const box = new THREE.Box3().expandByObject(m.root);
+    if (box.isEmpty()) return null;
+    const r = $('view').getBoundingClientRect();
+    let x0 = Infinity; let y0 = Infinity; let x1 = -Infinity; let y1 = -Infinity;
+    for (let i = 0; i < 8; i++) {
+      const p = new THREE.Vector3(i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y, i & 4 ? box.max.z : box.min.z);
+      const s = view.toScreen(p);
+      if (!s) continue;
+      x0 = Math.min(x0, s.x); y0 = Math.min(y0, s.y); x1 = Math.max(x1, s.x); y1 = Math.max(y1, s.y);
+    }
+    if (!Number.isFinite(x0)) return null;
+    const cx = (v) => Math.min(r.width, Math.max(0, v));
+    const bottom = r.height - $('status').getBoundingClientRect().height; // not the status line
+    const cy = (v) => Math.min(bottom, Math.max(0, v));
+    return { x: r.left + cx(x0), y: r.top + cy(y0), width: cx(x1) - cx(x0), height: cy(y1) - cy(y0) };
+  },
 };

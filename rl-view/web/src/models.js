@@ -238,6 +238,18 @@ export class ModelView {
       }
     };
     visit(robot, null);
+    // Bodies the server draws but whose URDF link has no <visual> (it stands in the collision
+    // geometry where a link has no visual): drawn from the scene's shapes.
+    const material = new THREE.MeshStandardMaterial({ color: 0x9aa1aa, roughness: 0.6 });
+    this.desc.bodies.forEach((b, i) => {
+      if (this.shapes[i].length || !(b.shapes || []).length) return;
+      for (const shape of b.shapes) {
+        if (shape.kind === 'mesh') this.meshes.pending += 1;
+        const h = buildShape(shape, material, this.manager, (err) => this.#meshDone(shape.url, err));
+        this.shapes[i].push(h);
+        this.bodies[i].add(h);
+      }
+    });
     this.#update();
   }
 }

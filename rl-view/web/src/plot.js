@@ -106,10 +106,15 @@ export class LivePlot {
       g.strokeStyle = COLORS[j % COLORS.length];
       g.lineWidth = 1.5;
       g.beginPath();
+      // Sample and hold: a state's q holds until the next state (Coach lines are steps).
       s.forEach((x, i) => {
         const px = X(Math.max(t0, x.t));
         const py = Y(x.q[j]);
-        if (i === 0) g.moveTo(px, py); else g.lineTo(px, py);
+        if (i === 0) g.moveTo(px, py);
+        else {
+          g.lineTo(px, Y(s[i - 1].q[j]));
+          g.lineTo(px, py);
+        }
       });
       // Hold the last value up to now (states only come when something changed).
       g.lineTo(X(t1), Y(s.at(-1).q[j]));

@@ -1,0 +1,461 @@
+// The page of `rl view` in a real browser: playwright-core drives Debian's headless Chromium
+// (WebGL on SwiftShader) against the real `rl view` server, and a Coach client sends joint
+// commands over TCP as RL's controllers do. Run by tests/view_browser.rs:
+//
+//   node rl-view/web/test/browser.mjs --rl target/release/rl [--out DIR] [--chromium PATH]
+//
+// What it checks (each step prints what it measured):
+//   1. ur5 (URDF with STL meshes) loads: connected, frames drawn, every mesh loaded.
+//   2. Coach `2 0 q1..q6` moves the model: the page's state reports q (to 1e-4), the drawn
+//      bodies sit at the state's poses, and a screenshot of the robot region differs from the
+//      one before by more than a threshold measured from two screenshots with no change.
+//   3. A slider change moves the model (source "ui"), by the same screenshot measure.
+//   4. The IK target dragged to a reachable pose (the tool pose at a known q) gives IK ok and
+//      the tool there; a pose out of reach gives a failure with its reason in the panel.
+//   5. The server restarts on the same address: the page shows it is reconnecting, then
+//      reconnects by itself and shows the new server's current state.
+//   6. With an obstacle at the tool (a MoveIt scene written here), the colliding bodies are
+//      drawn red (read from the three.js materials) and restored when the arm moves away; the
+//      distance line's label shows the state's distance.
+//   7. An RL XML model (no meshes) is drawn from its bodies' shapes and follows Coach too.
+// Screenshots go to --out (default <repo>/target/view-screenshots). Exit 0 when all pass.
+
+import { chromium } from 'playwright-core';
+import { spawn } from 'node:child_process';
+import net from 'node:net';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const repo = path.resolve(here, '..', '..', '..');
+
+function arg(name, fallback) {
+  const i = process.argv.indexOf(name);
+  return i >= 0 && i + 1 < process.argv.length ? process.argv[i + 1] : fallback;
+}
+const rlBin = arg('--rl', null);
+const outDir = path.resolve(arg('--out', path.join(repo, 'target', 'view-screenshots')));
+const chromiumPath = arg('--chromium', '/usr/bin/chromium');
+if (!rlBin) {
+  console.error('usage: browser.mjs --rl PATH_TO_RL [--out DIR] [--chromium PATH]');
+  process.exit(2);
+}
+fs.mkdirSync(outDir, { recursive: true });
+const data = (p) => path.join(repo, 'tests', 'data', p);
+
+const WAIT_MS = 30000;
+const TOTAL_MS = 360000;
+const servers = new Set();
+let browser = null;
+let passed = 0;
+
+const watchdog = setTimeout(() => {
+  console.error(`browser test: still running after ${TOTAL_MS / 1000} s, giving up`);
+  cleanup().finally(() => process.exit(1));
+}, TOTAL_MS);
+
+async function cleanup() {
+  for (const s of servers) s.kill();
+  if (browser) await browser.close().catch(() => {});
+}
+
+function ok(what) {
+  passed += 1;
+  console.log(`ok ${passed} - ${what}`);
+}
+
+function check(cond, what) {
+  if (!cond) throw new Error(`check failed: ${what}`);
+}
+
+// ---- the server ------------------------------------------------------------------------
+
+/** `rl view ARGS...`; resolves when it has printed its page and Coach addresses. */
+function startServer(args) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(rlBin, ['view', ...args], { cwd: repo, stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    let done = false;
+    const server = {
+      child,
+      http: null,
+      coach: null,
+      output: () => out,
+      kill() {
+        servers.delete(server);
+        if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
+      },
+      exited: new Promise((r) => child.once('exit', r)),
+    };
+    servers.add(server);
+    const timer = setTimeout(() => {
+      if (!done) { done = true; server.kill(); reject(new Error(`rl view printed no addresses in ${WAIT_MS} ms:\n${out}`)); }
+    }, WAIT_MS);
+    const scan = (chunk) => {
+      out += chunk;
+      const http = /(http:\/\/[0-9.]+:\d+)/.exec(out);
+      const coach = /coach[^\n]*?([0-9]+\.[0-9]+\.[0-9]+\.[0-9]+):(\d+)/i.exec(out);
+      if (!done && http && coach) {
+        done = true;
+        clearTimeout(timer);
+        server.http = http[1];
+        server.coach = { host: coach[1], port: Number(coach[2]) };
+        resolve(server);
+      }
+    };
+    child.stdout.on('data', (d) => scan(d.toString()));
+    child.stderr.on('data', (d) => scan(d.toString()));
+    child.once('exit', (code, sig) => {
+      if (!done) { done = true; clearTimeout(timer); reject(new Error(`rl view exited (${code ?? sig}):\n${out}`)); }
+    });
+  });
+}
+
+/** A Coach client (RL's protocol: ASCII lines over TCP). */
+function coachClient(addr) {
+  return new Promise((resolve, reject) => {
+    const sock = net.connect(addr.port, addr.host);
+    sock.setNoDelay(true);
+    sock.once('error', reject);
+    sock.once('connect', () => resolve({
+      joints(model, q) { sock.write(`2 ${model} ${q.map((v) => v.toPrecision(9)).join(' ')}\n`); },
+      close() { sock.destroy(); },
+    }));
+  });
+}
+
+// ---- the page --------------------------------------------------------------------------
+
+async function openPage(url) {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  page.on('pageerror', (e) => console.log(`page error: ${e.message}`));
+  page.on('console', (m) => {
+    // Refused connections while the server restarts are expected; everything else is shown.
+    if (m.type() === 'error' && !/ERR_CONNECTION_REFUSED/.test(m.text())) console.log(`page console: ${m.text()}`);
+  });
+  await page.goto(url);
+  await page.waitForFunction(() => window.rlView && rlView.connected && rlView.scene && rlView.state
+    && rlView.frames > 0 && rlView.meshLoading().pending === 0, null, { timeout: WAIT_MS });
+  await settle(page);
+  return page;
+}
+
+/** Waits until the page has drawn at least two more frames (the last change is on screen). */
+async function settle(page) {
+  const f0 = await page.evaluate(() => rlView.frames);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  // Render-on-demand: nudge a render so a frame exists after every state applied so far.
+  await page.waitForFunction((f) => rlView.frames >= f, f0, { timeout: WAIT_MS });
+  await page.waitForTimeout(150);
+}
+
+/** Waits until state.models[model].q equals q to 1e-4; returns the state. */
+async function waitQ(page, model, q, source) {
+  await page.waitForFunction(([m, want, src]) => {
+    const s = rlView.state && rlView.state.models.find((x) => x.index === m);
+    return !!s && s.q.length === want.length && s.q.every((v, i) => Math.abs(v - want[i]) <= 1e-4)
+      && (!src || s.source === src);
+  }, [model, q, source], { timeout: WAIT_MS });
+  await settle(page);
+  return page.evaluate(() => rlView.state);
+}
+
+/** PNG screenshot of `rect` (page CSS px). */
+function shot(page, rect, file) {
+  return page.screenshot({ clip: rect, path: file ? path.join(outDir, file) : undefined });
+}
+
+/**
+ * Fraction of the pixels inside `rect` (page CSS px; whole images when null) whose colour
+ * differs by more than 24/255 in some channel between two full-page PNG screenshots.
+ */
+async function changedFraction(page, a, b, rect = null) {
+  return page.evaluate(async ([a64, b64, r]) => {
+    const load = async (b64x) => {
+      const blob = await (await fetch(`data:image/png;base64,${b64x}`)).blob();
+      const bmp = await createImageBitmap(blob);
+      const c = new OffscreenCanvas(bmp.width, bmp.height);
+      const g = c.getContext('2d');
+      g.drawImage(bmp, 0, 0);
+      return g.getImageData(0, 0, bmp.width, bmp.height);
+    };
+    const [x, y] = [await load(a64), await load(b64)];
+    if (x.width !== y.width || x.height !== y.height) return 1;
+    const k = x.width / window.innerWidth; // device pixels per CSS pixel
+    const x0 = r ? Math.floor(r.x * k) : 0;
+    const y0 = r ? Math.floor(r.y * k) : 0;
+    const x1 = r ? Math.min(x.width, Math.ceil((r.x + r.width) * k)) : x.width;
+    const y1 = r ? Math.min(x.height, Math.ceil((r.y + r.height) * k)) : x.height;
+    let n = 0;
+    for (let row = y0; row < y1; row++) {
+      for (let col = x0; col < x1; col++) {
+        const i = 4 * (row * x.width + col);
+        if (Math.abs(x.data[i] - y.data[i]) > 24 || Math.abs(x.data[i + 1] - y.data[i + 1]) > 24
+          || Math.abs(x.data[i + 2] - y.data[i + 2]) > 24) n += 1;
+      }
+    }
+    return n / Math.max(1, (x1 - x0) * (y1 - y0));
+  }, [a.toString('base64'), b.toString('base64'), rect]);
+}
+
+/** Union of two rectangles (either may be null), rounded out to whole pixels. */
+function union(r, s) {
+  const rs = [r, s].filter(Boolean);
+  const x0 = Math.floor(Math.min(...rs.map((t) => t.x)));
+  const y0 = Math.floor(Math.min(...rs.map((t) => t.y)));
+  const x1 = Math.ceil(Math.max(...rs.map((t) => t.x + t.width)));
+  const y1 = Math.ceil(Math.max(...rs.map((t) => t.y + t.height)));
+  return { x: x0, y: y0, width: Math.max(1, x1 - x0), height: Math.max(1, y1 - y0) };
+}
+
+/**
+ * Runs `act` (which changes what the page shows) and measures how much of the robot's screen
+ * region changed: the union of the robot's screen box before and after, compared between
+ * full-page screenshots before and after. The "after" crop is saved as `file`.
+ */
+async function measureChange(page, act, file) {
+  const before = await page.evaluate(() => rlView.screenBox(0));
+  const a = await page.screenshot();
+  await act();
+  const after = await page.evaluate(() => rlView.screenBox(0));
+  const rect = union(before, after);
+  const b = await page.screenshot();
+  await shot(page, rect, file);
+  return { rect, fraction: await changedFraction(page, a, b, rect) };
+}
+
+const threshold = { noise: null, value: null };
+
+function angleBetween(q1, q2) {
+  const d = Math.abs(q1[0] * q2[0] + q1[1] * q2[1] + q1[2] * q2[2] + q1[3] * q2[3]);
+  return 2 * Math.acos(Math.min(1, d));
+}
+
+function dist3(a, b) {
+  return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
+
+async function checkDrawnAtState(page, model, what) {
+  const r = await page.evaluate((m) => {
+    const s = rlView.state.models.find((x) => x.index === m);
+    const sc = rlView.scene.models.find((x) => x.index === m);
+    let worst = 0;
+    sc.bodies.forEach((b, i) => {
+      const p = rlView.bodyPosition(m, b.name);
+      const w = s.bodies[i];
+      worst = Math.max(worst, Math.hypot(p[0] - w[0], p[1] - w[1], p[2] - w[2]));
+    });
+    return { worst, n: sc.bodies.length };
+  }, model);
+  check(r.worst < 1e-6, `${what}: drawn bodies at the state's poses (worst ${r.worst} m)`);
+  return r;
+}
+
+// ---- the steps -------------------------------------------------------------------------
+
+const Q1 = [0.4, -1.2, 1.5, -0.9, -1.4, 0.3];
+const Q2 = [-0.3, -1.6, 1.2, -1.1, -1.6, 0.5];
+const Q3 = [1.0, -0.8, 0.9, -1.6, 0.7, -0.4];
+
+async function ur5Steps() {
+  const urdf = data('mbm/ur5/ur5.urdf');
+  let server = await startServer([urdf, '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  console.log(`# rl view ${path.relative(repo, urdf)}: page ${server.http}/, coach ${server.coach.host}:${server.coach.port}`);
+  const page = await openPage(`${server.http}/`);
+  const info = await page.evaluate(() => ({
+    joints: rlView.scene.models[0].joints.length, meshes: rlView.meshCounts(), loading: rlView.meshLoading(),
+    frames: rlView.frames, tool: rlView.scene.models[0].tool, toolBody: rlView.scene.models[0].tool_body,
+  }));
+  check(info.joints === 6, `ur5 has 6 joints (got ${info.joints})`);
+  check(info.meshes[0] > 0 && info.loading.failed === 0, `meshes drawn, none failed (${JSON.stringify(info.loading)})`);
+  await page.screenshot({ path: path.join(outDir, '01-ur5-loaded.png') });
+  ok(`ur5 page loads: ${info.meshes[0]} meshes drawn, ${info.loading.loaded} mesh files loaded, 0 failed, ${info.frames} frames`);
+
+  // The noise floor: two screenshots of the robot region with nothing changed in between.
+  const box0 = union(await page.evaluate(() => rlView.screenBox(0)), null);
+  const n1 = await page.screenshot();
+  await page.waitForTimeout(400);
+  await settle(page);
+  const n2 = await page.screenshot();
+  threshold.noise = await changedFraction(page, n1, n2, box0);
+  threshold.value = Math.max(0.02, 10 * threshold.noise);
+  ok(`noise floor: ${(100 * threshold.noise).toFixed(3)} % of ${box0.width}x${box0.height} px changed with no change; threshold ${(100 * threshold.value).toFixed(1)} %`);
+
+  // Coach joint commands move the model.
+  const coach = await coachClient(server.coach);
+  const m1 = await measureChange(page, async () => { coach.joints(0, Q1); await waitQ(page, 0, Q1, 'coach'); }, '02-coach-q1.png');
+  const f1 = m1.fraction;
+  await checkDrawnAtState(page, 0, 'after Coach');
+  check(f1 > threshold.value, `Coach move changed ${(100 * f1).toFixed(1)} % of the robot region (> ${(100 * threshold.value).toFixed(1)} %)`);
+  const coachStatus = await page.evaluate(() => rlView.statusText());
+  check(/coach: 1 client/.test(coachStatus), `status line shows the Coach client (${coachStatus})`);
+  ok(`Coach "2 0 ${Q1.join(' ')}": state q equal to 1e-4, bodies drawn at the state's poses, ${(100 * f1).toFixed(1)} % of the ${m1.rect.width}x${m1.rect.height} px robot region changed`);
+
+  // A slider moves the model.
+  let sent = null;
+  const m2 = await measureChange(page, async () => {
+    sent = await page.evaluate(() => rlView.setSlider(0, 0, -0.6));
+    const want = Q1.slice();
+    want[0] = sent;
+    await waitQ(page, 0, want, 'ui');
+  }, '03-slider.png');
+  const f2 = m2.fraction;
+  check(f2 > threshold.value, `slider move changed ${(100 * f2).toFixed(1)} % (> ${(100 * threshold.value).toFixed(1)} %)`);
+  await checkDrawnAtState(page, 0, 'after the slider');
+  ok(`slider joint 1 to ${sent.toFixed(4)} rad: state q follows (source ui), ${(100 * f2).toFixed(1)} % of the robot region changed`);
+
+  // IK: the tool pose at Q2 is reachable; drag the target there from Q1.
+  const toolName = info.tool;
+  const toolIndex = await page.evaluate((t) => {
+    const b = rlView.scene.models[0].bodies.findIndex((x) => x.name === t);
+    return b >= 0 ? b : rlView.scene.models[0].bodies.findIndex((x) => x.name === rlView.scene.models[0].tool_body);
+  }, toolName);
+  check(toolIndex >= 0, `the tool ${toolName} is a body of the scene`);
+  coach.joints(0, Q2);
+  const s2 = await waitQ(page, 0, Q2, 'coach');
+  const goal = s2.models[0].bodies[toolIndex];
+  coach.joints(0, Q1);
+  await waitQ(page, 0, Q1, 'coach');
+  const ikOk = await page.evaluate((g) => rlView.dragTarget(0, g), goal);
+  check(ikOk.ok === true, `IK to a reachable pose is ok (${JSON.stringify(ikOk)})`);
+  await page.waitForFunction(() => rlView.state.models[0].source === 'ik', null, { timeout: WAIT_MS });
+  await settle(page);
+  const reached = await page.evaluate((i) => rlView.state.models[0].bodies[i], toolIndex);
+  const posErr = dist3(reached, goal);
+  const angErr = angleBetween(reached.slice(3), goal.slice(3));
+  check(posErr < 1e-3 && angErr < 1e-2, `the tool reached the target (${posErr} m, ${angErr} rad)`);
+  const ikText = await page.evaluate(() => document.querySelector('.ik-status').textContent);
+  check(/IK ok/.test(ikText), `the panel says IK ok (${ikText})`);
+  await page.screenshot({ path: path.join(outDir, '04-ik-reached.png') });
+  ok(`IK target dragged to the tool pose at q=[${Q2.join(', ')}]: ok, tool ${posErr.toExponential(1)} m and ${angErr.toExponential(1)} rad from it; panel "${ikText}"`);
+  const far = [3.0, 0.0, 0.5, 0, 0, 0, 1];
+  const ikFail = await page.evaluate((g) => rlView.dragTarget(0, g), far);
+  check(ikFail.ok === false && ikFail.reason, `IK to a pose 3 m away fails with a reason (${JSON.stringify(ikFail)})`);
+  const failText = await page.evaluate(() => document.querySelector('.ik-status').textContent);
+  check(/IK failed: ./.test(failText), `the panel shows the failure (${failText})`);
+  ok(`IK target 3 m away: not ok, the panel shows "${failText}"`);
+
+  // Restart the server on the same address: the page reconnects and shows the current state.
+  const httpAddr = server.http.replace('http://', '');
+  // Where the wrist is at Q1: the obstacle of the collision steps goes there.
+  coach.joints(0, Q1);
+  const sq1 = await waitQ(page, 0, Q1, 'coach');
+  const wrist = await page.evaluate(() => rlView.scene.models[0].bodies.findIndex((b) => b.name === 'wrist_3_link'));
+  check(wrist >= 0, 'ur5 has a body wrist_3_link');
+  const wristAtQ1 = sq1.models[0].bodies[wrist];
+  coach.close();
+  server.kill();
+  await server.exited;
+  await page.waitForFunction(() => !rlView.connected && /reconnecting/.test(rlView.statusText()), null, { timeout: WAIT_MS });
+  const downText = await page.evaluate(() => rlView.statusText());
+  server = await startServer([urdf, '--http', httpAddr, '--coach', '127.0.0.1:0']);
+  const coach2 = await coachClient(server.coach);
+  coach2.joints(0, Q3);
+  await page.waitForFunction(() => rlView.connected && rlView.hellos >= 2, null, { timeout: WAIT_MS });
+  const st = await waitQ(page, 0, Q3, 'coach');
+  await checkDrawnAtState(page, 0, 'after the reconnect');
+  await page.screenshot({ path: path.join(outDir, '05-reconnected.png') });
+  ok(`server restarted on ${httpAddr}: page showed "${downText.slice(0, 60)}…", reconnected by itself (hello #${await page.evaluate(() => rlView.hellos)}), shows the new server's q (state #${st.seq})`);
+  coach2.close();
+  await page.close();
+  server.kill();
+  return wristAtQ1;
+}
+
+async function collisionSteps(obstacleAt) {
+  // A MoveIt planning scene with one box around the wrist's position at Q1.
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'rl-view-browser-'));
+  const scene = path.join(dir, 'box.yaml');
+  fs.writeFileSync(scene, [
+    'name: box at the wrist',
+    'world:',
+    '  collision_objects:',
+    '    - id: box1',
+    '      header:',
+    '        frame_id: world',
+    '      pose:',
+    `        position: [${obstacleAt.slice(0, 3).join(', ')}]`,
+    '        orientation: [0, 0, 0, 1]',
+    '      primitives:',
+    '        - type: box',
+    '          dimensions: [0.16, 0.16, 0.16]',
+    '      primitive_poses:',
+    '        - position: [0, 0, 0]',
+    '          orientation: [0, 0, 0, 1]',
+    '',
+  ].join('\n'));
+  const server = await startServer([data('mbm/ur5/ur5.urdf'), '--env', scene, '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  const page = await openPage(`${server.http}/`);
+  const envShapes = await page.evaluate(() => rlView.envMeshCount());
+  check(envShapes === 1, `the obstacle is drawn (${envShapes} env bodies)`);
+  const coach = await coachClient(server.coach);
+  coach.joints(0, Q1);
+  await waitQ(page, 0, Q1, 'coach');
+  const hit = await page.evaluate(() => ({ colliding: rlView.state.colliding, red: rlView.redBodies() }));
+  const key = (l) => l.map(([m, b]) => `${m}/${b}`).sort();
+  check(hit.colliding.length > 0, `the wrist in the box collides (${JSON.stringify(hit.colliding)})`);
+  check(JSON.stringify(key(hit.red)) === JSON.stringify(key(hit.colliding)), `red bodies ${JSON.stringify(hit.red)} = colliding ${JSON.stringify(hit.colliding)}`);
+  await page.screenshot({ path: path.join(outDir, '06-collision-red.png') });
+  ok(`obstacle at the wrist: ${hit.colliding.length} colliding bodies (${key(hit.colliding).join(', ')}) drawn red`);
+  const away = Q1.slice();
+  away[0] += Math.PI;
+  coach.joints(0, away);
+  await waitQ(page, 0, away, 'coach');
+  const clear = await page.evaluate(() => ({ colliding: rlView.state.colliding, red: rlView.redBodies(), d: rlView.state.distance, label: rlView.distanceLabel() }));
+  check(clear.colliding.length === 0 && clear.red.length === 0, `arm turned away: nothing red (${JSON.stringify(clear)})`);
+  check(clear.d && clear.d.value > 0, `a distance to the obstacle is reported (${JSON.stringify(clear.d)})`);
+  check(clear.label && clear.label.startsWith(`${(clear.d.value * 1000).toFixed(1)} mm`), `the distance label shows it (${clear.label})`);
+  await page.screenshot({ path: path.join(outDir, '07-distance.png') });
+  ok(`arm turned away: materials restored, distance line labelled "${clear.label}"`);
+  coach.close();
+  await page.close();
+  server.kill();
+  fs.rmSync(dir, { recursive: true, force: true });
+}
+
+async function rlModelSteps() {
+  const xml = data('rlmdl/unimation-puma560.xml');
+  const server = await startServer([xml, '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  const page = await openPage(`${server.http}/`);
+  const info = await page.evaluate(() => ({
+    urdf: rlView.scene.models[0].urdf, joints: rlView.scene.models[0].joints.length,
+    shapes: rlView.scene.models[0].bodies.reduce((n, b) => n + b.shapes.length, 0), meshes: rlView.meshCounts(),
+  }));
+  check(info.urdf === null, 'an RL model has no URDF');
+  check(info.shapes > 0 && info.meshes[0] >= info.shapes, `drawn from its ${info.shapes} shapes (${info.meshes[0]} meshes)`);
+  await page.screenshot({ path: path.join(outDir, '08-rlmdl-loaded.png') });
+  const q = Array.from({ length: info.joints }, (_, i) => [0.5, -0.7, 0.9, 0.4, -0.6, 0.8][i % 6]);
+  const coach = await coachClient(server.coach);
+  const m = await measureChange(page, async () => { coach.joints(0, q); await waitQ(page, 0, q, 'coach'); }, '09-rlmdl-coach.png');
+  const f = m.fraction;
+  check(f > threshold.value, `RL model moved: ${(100 * f).toFixed(1)} % changed (> ${(100 * threshold.value).toFixed(1)} %)`);
+  await checkDrawnAtState(page, 0, 'RL model after Coach');
+  ok(`RL model ${path.basename(xml)}: ${info.shapes} shapes drawn, Coach q moves it, ${(100 * f).toFixed(1)} % of the robot region changed`);
+  coach.close();
+  await page.close();
+  server.kill();
+}
+
+try {
+  browser = await chromium.launch({
+    executablePath: chromiumPath,
+    headless: true,
+    args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-sandbox'],
+  });
+  const obstacle = await ur5Steps();
+  await collisionSteps(obstacle);
+  await rlModelSteps();
+  console.log(`screenshots: ${outDir}`);
+  console.log(`${passed} passed, 0 failed`);
+  await cleanup();
+  clearTimeout(watchdog);
+  process.exit(0);
+} catch (e) {
+  console.error(`not ok ${passed + 1} - ${e.message}`);
+  for (const s of servers) console.error(`--- rl view output:\n${s.output()}`);
+  await cleanup();
+  clearTimeout(watchdog);
+  process.exit(1);
+}
