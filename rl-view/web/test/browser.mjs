@@ -83,9 +83,13 @@ function startServer(args) {
       http: null,
       coach: null,
       output: () => out,
+      /** SIGTERM (rl view shuts down), SIGKILL if it is still there after 5 s. */
       kill() {
         servers.delete(server);
-        if (child.exitCode === null && child.signalCode === null) child.kill('SIGKILL');
+        if (child.exitCode !== null || child.signalCode !== null) return;
+        child.kill('SIGTERM');
+        const t = setTimeout(() => child.kill('SIGKILL'), 5000);
+        child.once('exit', () => clearTimeout(t));
       },
       exited: new Promise((r) => child.once('exit', r)),
     };
@@ -96,7 +100,8 @@ function startServer(args) {
     const scan = (chunk) => {
       out += chunk;
       const http = /(http:\/\/[0-9.]+:\d+)/.exec(out);
-      const coach = /coach[^\n]*?([0-9]+\.[0-9]+\.[0-9]+\.[0-9]+):(\d+)/i.exec(out);
+      // `rl view: open http://HOST:PORT/` and `rl view: Coach listening on HOST:PORT`.
+      const coach = /coach(?: listening on|:)\s*([0-9]+\.[0-9]+\.[0-9]+\.[0-9]+):(\d+)/i.exec(out);
       if (!done && http && coach) {
         done = true;
         clearTimeout(timer);
