@@ -37,6 +37,8 @@ enum Command {
     Plan(Box<cli::plan::PlanArgs>),
     /// Run a complete controller against a robot (the default: a fake robot on loopback).
     Run(cli::run::RunArgs),
+    /// Show robots in a web browser, live over RL's Coach protocol (rlCoachMdl).
+    View(cli::view::ViewArgs),
 }
 
 /// `command` and all its subcommands, recursively, with negative numbers accepted as values
@@ -68,6 +70,7 @@ fn main() -> ExitCode {
         Some(Command::FakeRobot(cmd)) => cli::fake_robot::run(cmd),
         Some(Command::Plan(args)) => cli::plan::run(*args),
         Some(Command::Run(args)) => cli::run::run(args),
+        Some(Command::View(args)) => cli::view::run(args),
         None => cli::run::run(cli::run::RunArgs::default()),
     };
     match result {

@@ -46,6 +46,10 @@ pub enum ViewError {
 impl fmt::Display for ViewError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            // Loaders often name the file already.
+            ViewError::Load { what, reason } if reason.contains(what.as_str()) => {
+                f.write_str(reason)
+            }
             ViewError::Load { what, reason } => write!(f, "{what}: {reason}"),
             ViewError::Io { path, reason } => write!(f, "{}: {reason}", path.display()),
             ViewError::Path { path, line, reason } if *line > 0 => {

@@ -272,9 +272,12 @@ fn load_robot(
             let visual = match load::urdf::load_geometry(path, &vopts, cache) {
                 Ok(v) => v,
                 Err(e) => {
-                    warnings.push(format!(
-                        "visual geometry not loaded ({e}): the collision geometry is drawn"
-                    ));
+                    // Missing visual meshes are noted one by one already.
+                    if !warnings.iter().any(|w| w.contains("visual mesh")) {
+                        warnings.push(format!(
+                            "visual geometry not loaded ({e}): the collision geometry is drawn"
+                        ));
+                    }
                     r.model.clone()
                 }
             };

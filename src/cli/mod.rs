@@ -9,6 +9,7 @@ pub mod plan;
 pub mod run;
 pub mod scene;
 pub mod traj;
+pub mod view;
 
 use std::fmt;
 use std::time::Duration;

@@ -1,0 +1,106 @@
+//! `rl view` end to end: with no model it serves the embedded RV-6SL that `rl run` drives and
+//! prints the address it listens on (port 0 picks a free one); a non-loopback address is
+//! warned about; a model that does not load exits with 2 and names the file.
+
+mod cli;
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use cli::rl;
+use serde_json::Value;
+
+fn get(addr: &str, path: &str) -> (String, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).expect("connect to rl view");
+    s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut out = Vec::new();
+    s.read_to_end(&mut out).unwrap();
+    let end = out.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    (
+        String::from_utf8_lossy(&out[..end]).into_owned(),
+        out[end + 4..].to_vec(),
+    )
+}
+
+#[test]
+fn view_serves_the_default_robot_and_prints_its_address() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "view",
+            "--http",
+            "127.0.0.1:0",
+            "--coach",
+            "127.0.0.1:0",
+            "--seconds",
+            "120",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rl view");
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let first = lines.next().expect("a line").expect("text");
+    let url = first
+        .strip_prefix("rl view: open http://")
+        .and_then(|u| u.strip_suffix('/'))
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+    assert!(
+        url.starts_with("127.0.0.1:") && !url.ends_with(":0"),
+        "{url}"
+    );
+    let coach = lines.next().expect("a line").expect("text");
+    assert!(
+        coach.starts_with("rl view: Coach listening on 127.0.0.1:"),
+        "{coach}"
+    );
+
+    let (head, body) = get(&url, "/");
+    assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+    assert!(String::from_utf8_lossy(&body).contains("<html"));
+    let (head, body) = get(&url, "/api/scene");
+    assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+    let scene: Value = serde_json::from_slice(&body).unwrap();
+    let m = &scene["models"][0];
+    assert!(m["name"].as_str().unwrap().contains("RV"), "{}", m["name"]);
+    assert_eq!(m["joints"].as_array().unwrap().len(), 6);
+    assert!(m["urdf"].is_null());
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
+#[test]
+fn view_warns_about_a_page_beyond_loopback() {
+    let out = rl(&[
+        "view",
+        "--http",
+        "0.0.0.0:0",
+        "--no-coach",
+        "--seconds",
+        "0",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no authentication"), "{err}");
+}
+
+#[test]
+fn view_refuses_a_model_that_does_not_load() {
+    let out = rl(&[
+        "view",
+        "no-such-robot.urdf",
+        "--http",
+        "127.0.0.1:0",
+        "--no-coach",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no-such-robot.urdf"), "{err}");
+}
