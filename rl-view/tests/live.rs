@@ -200,3 +200,32 @@ fn a_page_reconnecting_after_a_restart_gets_the_current_state() {
     assert!(close(&q_of(&hello["state"], 0), &[0.3; 6], 1e-12));
     assert_eq!(hello["state"]["models"][0]["source"], "coach");
 }
+
+/// rl-drivers' Coach device (what `rl run --device coach://…` uses) against the viewer: every
+/// step's reply is the configuration it sent, and the page follows.
+#[test]
+fn the_coach_device_of_rl_drivers_drives_the_viewer() {
+    use rl_drivers::coach::{Coach as CoachDevice, CoachConfig};
+    use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor};
+
+    let v = start(vec![ur5()]);
+    let (mut page, _) = Page::connect(v.http_addr());
+    let mut config = CoachConfig::new(6);
+    config.server = v.coach_addr().unwrap();
+    config.reply_timeout = std::time::Duration::from_secs(2);
+    let mut coach = CoachDevice::new(config).unwrap();
+    coach.open().unwrap();
+    coach.start().unwrap();
+    let mut got = [0.0; 6];
+    let mut q = [0.0; 6];
+    for k in 0..50 {
+        q = core::array::from_fn(|i| 0.01 * k as f64 * (i as f64 - 2.5));
+        coach.set_joint_position(&q).unwrap();
+        coach.step().unwrap_or_else(|e| panic!("cycle {k}: {e}"));
+        coach.joint_position(&mut got).unwrap();
+        assert!(close(&got, &q, 1e-5), "cycle {k}: {got:?} vs {q:?}");
+    }
+    let s = page.wait_state(|s| close(&q_of(s, 0), &q, 1e-5));
+    assert_eq!(s["models"][0]["source"], "coach");
+    assert_eq!(s["coach"]["rejected"], 0);
+}
