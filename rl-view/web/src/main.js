@@ -56,6 +56,7 @@ function changed(what) {
     framed = true;
     const box = new THREE.Box3();
     for (const m of models) box.expandByObject(m.root);
+    if (env) box.expandByObject(env.root);
     view.frame(box);
   }
   if (state) ik.followTool();

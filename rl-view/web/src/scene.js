@@ -87,7 +87,7 @@ export class View {
     if (this.userMovedCamera || box.isEmpty()) return;
     const center = box.getCenter(new THREE.Vector3());
     const size = box.getSize(new THREE.Vector3()).length();
-    const dist = Math.max(0.8, size * 1.8);
+    const dist = Math.max(0.8, size * 1.35);
     const dir = new THREE.Vector3(1.0, -1.15, 0.75).normalize();
     this.controls.target.copy(center);
     this.camera.position.copy(center).addScaledVector(dir, dist);
