@@ -546,3 +546,29 @@ impl Engine {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coach_poses_are_rz_ry_rx() {
+        let h = std::f64::consts::FRAC_PI_2;
+        // c = 90°: a turn about z.
+        let x = coach_pose(&[1.0, 2.0, 3.0, 0.0, 0.0, h]).unwrap();
+        let q = x.quaternion();
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(
+            (q.z.abs() - s).abs() < 1e-12 && (q.w.abs() - s).abs() < 1e-12,
+            "{q:?}"
+        );
+        assert_eq!(x.translation, DVec3::new(1.0, 2.0, 3.0));
+        // a = 90° and c = 90°: R = Rz·Rx takes y to z (Rx turns it there, Rz keeps it).
+        let x = coach_pose(&[0.0, 0.0, 0.0, h, 0.0, h]).unwrap();
+        let y = x.rotation * DVec3::Y;
+        assert!((y - DVec3::Z).length() < 1e-12, "{y:?}");
+        assert!(coach_pose(&[f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]).is_none());
+        assert!(pose_from7(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]).is_none());
+        assert!(pose_from7(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0]).is_some());
+    }
+}

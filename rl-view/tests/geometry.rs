@@ -213,3 +213,41 @@ fn a_planned_path_is_in_the_scene() {
         "{e}"
     );
 }
+
+#[test]
+fn ur5_folded_into_itself_reports_its_colliding_links() {
+    let mut o = options(vec![ur5()]);
+    o.load.srdf = Some(repo().join("tests/data/mbm/ur5/ur5.srdf"));
+    let v = Viewer::start(&o).unwrap();
+    let (mut page, hello) = Page::connect(v.http_addr());
+    assert_eq!(
+        hello["state"]["colliding"],
+        json!([]),
+        "stretched out: nothing"
+    );
+    assert!(
+        hello["state"]["distance"].is_null(),
+        "no obstacles, no distance"
+    );
+    // The elbow folded back: the forearm and wrist reach the shoulder (as `rl scene check`).
+    page.send(json!({"type": "set_q", "model": 0, "q": [0.0, -1.57, 3.0, 0.0, 0.0, 0.0]}));
+    let s = page.wait_state(|s| s["models"][0]["q"][2] == 3.0);
+    let colliding = s["colliding"].as_array().unwrap();
+    for link in [
+        "shoulder_link",
+        "forearm_link",
+        "wrist_1_link",
+        "upper_arm_link",
+    ] {
+        assert!(
+            colliding.contains(&json!([0, link])),
+            "{link}: {colliding:?}"
+        );
+    }
+    assert!(
+        !colliding.contains(&json!([0, "base_link"])),
+        "{colliding:?}"
+    );
+    page.send(json!({"type": "set_q", "model": 0, "q": vec![0.0; 6]}));
+    page.wait_state(|s| s["models"][0]["q"][2] == 0.0 && s["colliding"] == json!([]));
+}
