@@ -54,6 +54,7 @@ pub(crate) fn accept_loop(listener: TcpListener, shared: Arc<Shared>) {
                 threads.retain(|t| !t.is_finished());
                 if active.load(Ordering::Relaxed) >= MAX_CONNECTIONS {
                     let _ = stream.set_nonblocking(false);
+                    let _ = stream.set_write_timeout(Some(ACCEPT_POLL));
                     let _ = respond(&mut stream, 503, "text/plain", b"too many connections\n");
                     continue;
                 }

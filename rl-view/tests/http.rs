@@ -179,3 +179,25 @@ fn obstacles_from_a_moveit_scene() {
     assert_eq!(d["model"], 0);
     assert!(d["obstacle"].is_string());
 }
+
+#[test]
+fn obstacles_from_an_rl_scene_around_an_rl_model() {
+    let mut o = options(vec![puma()]);
+    o.load.env = Some(repo().join("tests/data/rlsg/scene.xml"));
+    let v = rl_view::Viewer::start(&o).unwrap();
+    let scene = get_json(v.http_addr(), "/api/scene");
+    let env = scene["env"]["bodies"].as_array().unwrap();
+    assert_eq!(env.len(), 2);
+    assert_eq!(env[0]["name"], "body1");
+    assert_eq!(env[0]["shapes"][0]["kind"], "box");
+    assert_eq!(
+        env[0]["shapes"][0]["size"],
+        serde_json::json!([1.5, 1.5, 1.5])
+    );
+    let p = floats(&env[0]["pose"]);
+    assert!((p[0] + 1.0).abs() < 1e-12 && p[1].abs() < 1e-12, "{p:?}");
+    let state = get_json(v.http_addr(), "/api/state");
+    let d = &state["distance"];
+    assert!(d["obstacle"] == "body1" || d["obstacle"] == "body2", "{d}");
+    assert!(d["value"].is_f64());
+}
