@@ -29,7 +29,7 @@ const sendQ = (model, q) => send({ type: 'set_q', model, q });
 const panel = new JointPanel($('models'), sendQ);
 const ik = new IkTarget(view, $('ik'), send);
 const distance = new DistanceView(view, $('labels'));
-const player = new PathPlayer($('path'), sendQ);
+const player = new PathPlayer($('path'), (model, q) => send({ type: 'set_q', model, q, source: 'path' }));
 const plot = new LivePlot($('plot'), $('plot-caption'));
 
 let scene = null;

@@ -1,6 +1,6 @@
 // Playback of a planned path (scene.path from `rl view --path`): a time slider and a play
 // button. The page interpolates q linearly between the path's samples and sends it as
-// `set_q`; the server's state moves the model like any other joint command.
+// `set_q` with source "path"; the server's state moves the model like any other command.
 
 /** q at time t on path {t: [...], q: [[...]]}, linear between samples, clamped at the ends. */
 export function sample(path, t) {

@@ -35,7 +35,13 @@ export function loadMesh(url, format, manager, material, done) {
       }, undefined, fail);
       break;
     case 'dae':
-      new ColladaLoader(manager).load(url, (dae) => done(dae.scene), undefined, fail);
+      // Like urdf-loader: keep the file's unit scale, drop the loader's up-axis rotation (the
+      // vertices are in the link frame whatever the file's <up_axis>).
+      new ColladaLoader(manager).load(url, (dae) => {
+        dae.scene.position.set(0, 0, 0);
+        dae.scene.quaternion.identity();
+        done(dae.scene);
+      }, undefined, fail);
       break;
     default:
       fail(new Error(`no loader for mesh ${url} (format ${format})`));
@@ -88,7 +94,7 @@ export function buildShape(shape, material, manager, onMesh) {
       const format = shape.format || meshFormat(shape.url);
       loadMesh(shape.url, format, manager, material, (obj, err) => {
         if (obj) {
-          if (Array.isArray(shape.scale)) obj.scale.set(shape.scale[0], shape.scale[1], shape.scale[2]);
+          if (Array.isArray(shape.scale)) obj.scale.multiply(new THREE.Vector3().fromArray(shape.scale));
           holder.add(obj);
         }
         onMesh(err || null);

@@ -126,6 +126,7 @@ function coachClient(addr) {
     sock.once('error', reject);
     sock.once('connect', () => resolve({
       joints(model, q) { sock.write(`2 ${model} ${q.map((v) => v.toPrecision(9)).join(' ')}\n`); },
+      raw(line) { sock.write(line); },
       close() { sock.destroy(); },
     }));
   });
@@ -298,6 +299,12 @@ async function ur5Steps() {
   check(/coach: 1 client/.test(coachStatus), `status line shows the Coach client (${coachStatus})`);
   ok(`Coach "2 0 ${Q1.join(' ')}": state q equal to 1e-4, bodies drawn at the state's poses, ${(100 * f1).toFixed(1)} % of the ${m1.rect.width}x${m1.rect.height} px robot region changed`);
 
+  // A second tab shows the same state and follows the first tab's slider below.
+  const page2 = await openPage(`${server.http}/`);
+  const q2 = await page2.evaluate(() => rlView.state.models[0].q);
+  check(q2.every((v, i) => Math.abs(v - Q1[i]) <= 1e-4), `a second tab opens at the current q (${q2})`);
+  ok('a second tab opens showing the current state');
+
   // A slider moves the model.
   let sent = null;
   const m2 = await measureChange(page, async () => {
@@ -310,6 +317,12 @@ async function ur5Steps() {
   check(f2 > threshold.value, `slider move changed ${(100 * f2).toFixed(1)} % (> ${(100 * threshold.value).toFixed(1)} %)`);
   await checkDrawnAtState(page, 0, 'after the slider');
   ok(`slider joint 1 to ${sent.toFixed(4)} rad: state q follows (source ui), ${(100 * f2).toFixed(1)} % of the robot region changed`);
+  const want2 = Q1.slice();
+  want2[0] = sent;
+  await waitQ(page2, 0, want2, 'ui');
+  await checkDrawnAtState(page2, 0, 'second tab');
+  await page2.close();
+  ok('the second tab follows the first tab\'s slider');
 
   // IK: the tool pose at Q2 is reachable; drag the target there from Q1.
   const toolName = info.tool;
@@ -443,6 +456,112 @@ async function rlModelSteps() {
   server.kill();
 }
 
+// A unit cube as OBJ and as COLLADA text, and a two-joint URDF that draws one of each.
+const CUBE_V = [[-0.5, -0.5, -0.5], [0.5, -0.5, -0.5], [0.5, 0.5, -0.5], [-0.5, 0.5, -0.5],
+  [-0.5, -0.5, 0.5], [0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [-0.5, 0.5, 0.5]];
+const CUBE_T = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+  [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]];
+const cubeObj = () => [...CUBE_V.map((v) => `v ${v.join(' ')}`), ...CUBE_T.map((t) => `f ${t.map((i) => i + 1).join(' ')}`), ''].join('\n');
+const cubeDae = () => `<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>
+    <geometry id="cube" name="cube"><mesh>
+      <source id="cube-pos">
+        <float_array id="cube-pos-array" count="24">${CUBE_V.flat().join(' ')}</float_array>
+        <technique_common><accessor source="#cube-pos-array" count="8" stride="3">
+          <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+        </accessor></technique_common>
+      </source>
+      <vertices id="cube-vtx"><input semantic="POSITION" source="#cube-pos"/></vertices>
+      <triangles count="12"><input semantic="VERTEX" source="#cube-vtx" offset="0"/><p>${CUBE_T.flat().join(' ')}</p></triangles>
+    </mesh></geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="scene"><node id="cube-node" name="cube"><instance_geometry url="#cube"/></node></visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+`;
+const formatsUrdf = () => `<?xml version="1.0"?>
+<robot name="formats">
+  <link name="base">
+    <visual><origin xyz="0 0 0.05"/><geometry><cylinder radius="0.08" length="0.1"/></geometry></visual>
+    <collision><origin xyz="0 0 0.05"/><geometry><cylinder radius="0.08" length="0.1"/></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute">
+    <parent link="base"/><child link="arm"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
+  </joint>
+  <link name="arm">
+    <visual><origin xyz="0.15 0 0.03"/><geometry><mesh filename="meshes/cube.obj" scale="0.3 0.06 0.06"/></geometry></visual>
+    <collision><origin xyz="0.15 0 0.03"/><geometry><box size="0.3 0.06 0.06"/></geometry></collision>
+  </link>
+  <joint name="j2" type="prismatic">
+    <parent link="arm"/><child link="hand"/><origin xyz="0.3 0 0.03"/><axis xyz="0 0 1"/>
+    <limit lower="-0.1" upper="0.2" effort="1" velocity="1"/>
+  </joint>
+  <link name="hand">
+    <visual><origin xyz="0.05 0 0"/><geometry><mesh filename="meshes/cube.dae" scale="0.1 0.08 0.08"/></geometry></visual>
+    <collision><origin xyz="0.05 0 0"/><geometry><box size="0.1 0.08 0.08"/></geometry></collision>
+  </link>
+</robot>
+`;
+
+async function formatsAndPathSteps() {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'rl-view-formats-'));
+  fs.mkdirSync(path.join(dir, 'meshes'));
+  fs.writeFileSync(path.join(dir, 'meshes', 'cube.obj'), cubeObj());
+  fs.writeFileSync(path.join(dir, 'meshes', 'cube.dae'), cubeDae());
+  fs.writeFileSync(path.join(dir, 'formats.urdf'), formatsUrdf());
+  // A path as `rl plan --out` writes it: joint names, one waypoint per row (1 s apart).
+  const rows = [[0, 0], [1.2, 0.15], [-0.8, 0.05]];
+  fs.writeFileSync(path.join(dir, 'path.csv'), ['j1,j2', ...rows.map((r) => r.join(',')), ''].join('\n'));
+  const server = await startServer([path.join(dir, 'formats.urdf'), '--path', path.join(dir, 'path.csv'),
+    '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  const page = await openPage(`${server.http}/`);
+  const info = await page.evaluate(() => ({
+    loading: rlView.meshLoading(), meshes: rlView.meshCounts(),
+    formats: rlView.scene.models[0].bodies.flatMap((b) => b.shapes.map((x) => x.format || x.kind)),
+    units: [...document.querySelectorAll('.joint .unit')].map((e) => e.textContent),
+    path: rlView.scene.path,
+  }));
+  check(info.loading.failed === 0 && info.loading.loaded === 2, `OBJ and COLLADA meshes loaded (${JSON.stringify(info.loading)})`);
+  check(info.meshes[0] >= 3, `cylinder, OBJ and COLLADA drawn (${info.meshes[0]} meshes)`);
+  check(JSON.stringify(info.units) === JSON.stringify(['°', 'mm']), `revolute in degrees, prismatic in mm (${info.units})`);
+  await page.screenshot({ path: path.join(outDir, '10-obj-dae-loaded.png') });
+  ok(`URDF with ${info.formats.join(', ')} visuals: ${info.loading.loaded} mesh files loaded, 0 failed, ${info.meshes[0]} meshes drawn; panel units ${info.units.join(' and ')}`);
+
+  // Coach `0`: a body pose set over Coach overrides the kinematics until the next joint update.
+  const coach = await coachClient(server.coach);
+  coach.joints(0, [0.3, 0.1]);
+  await waitQ(page, 0, [0.3, 0.1], 'coach');
+  const handIndex = await page.evaluate(() => rlView.scene.models[0].bodies.findIndex((b) => b.name === 'hand'));
+  coach.raw(`0 0 ${handIndex} 0.1 0.4 0.5 0 0 0\n`);
+  await page.waitForFunction((i) => {
+    const p = rlView.bodyPosition(0, 'hand');
+    const w = rlView.state.models[0].bodies[i];
+    return Math.hypot(w[0] - 0.1, w[1] - 0.4, w[2] - 0.5) < 1e-6 && Math.hypot(p[0] - 0.1, p[1] - 0.4, p[2] - 0.5) < 1e-6;
+  }, handIndex, { timeout: WAIT_MS });
+  ok('Coach "0 0 <hand> 0.1 0.4 0.5 0 0 0": the hand is drawn at (0.1, 0.4, 0.5)');
+
+  // Path playback: the play button runs to the end; the time slider gives the interpolated q.
+  check(info.path && info.path.t.length === rows.length, `the page has the path (${JSON.stringify(info.path)})`);
+  await page.click('#path button');
+  const end = await waitQ(page, 0, rows.at(-1), 'path');
+  await page.screenshot({ path: path.join(outDir, '11-path-end.png') });
+  const t = (info.path.t[0] + info.path.t[1]) / 2 + 0.25 * (info.path.t[1] - info.path.t[0]);
+  await page.$eval('#path input[type=range]', (el, v) => { el.value = String(v); el.dispatchEvent(new Event('input')); }, t);
+  const s = (t - info.path.t[0]) / (info.path.t[1] - info.path.t[0]);
+  const want = rows[0].map((a, i) => a + s * (rows[1][i] - a));
+  await waitQ(page, 0, want, 'path');
+  ok(`path of ${rows.length} waypoints: play ran to the last one (state #${end.seq}, source path); the time slider at ${t.toFixed(2)} s gives q = [${want.map((v) => v.toFixed(4)).join(', ')}]`);
+  coach.close();
+  await page.close();
+  server.kill();
+  fs.rmSync(dir, { recursive: true, force: true });
+}
+
 try {
   browser = await chromium.launch({
     executablePath: chromiumPath,
@@ -452,6 +571,7 @@ try {
   const obstacle = await ur5Steps();
   await collisionSteps(obstacle);
   await rlModelSteps();
+  await formatsAndPathSteps();
   console.log(`screenshots: ${outDir}`);
   console.log(`${passed} passed, 0 failed`);
   await cleanup();
