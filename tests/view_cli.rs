@@ -104,3 +104,33 @@ fn view_refuses_a_model_that_does_not_load() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("no-such-robot.urdf"), "{err}");
 }
+
+#[test]
+fn view_takes_an_rl_scene_with_its_kinematics_as_rl_coach_mdl_does() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let scene = format!("{root}/tests/data/rlsg/unimation-puma560_boxes.convex.xml");
+    let kin = format!("{root}/tests/data/rlmdl/unimation-puma560.xml");
+    let args = ["--http", "127.0.0.1:0", "--no-coach", "--seconds", "0"];
+    let out = rl(&[
+        &["view", scene.as_str(), "--kinematics", kin.as_str()][..],
+        &args[..],
+    ]
+    .concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("rl view: open http://127.0.0.1:"));
+    // --kinematics without a scene, a scene without --kinematics: refused.
+    let out = rl(&[
+        &["view", kin.as_str(), "--kinematics", kin.as_str()][..],
+        &args[..],
+    ]
+    .concat());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--kinematics goes with"));
+    let out = rl(&[&["view", scene.as_str()][..], &args[..]].concat());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--kinematics"));
+}

@@ -6,6 +6,10 @@
 //! Scene model `i` of [`World::scene`] is robot `i` (the Coach model index, the order on the
 //! command line); the obstacles' models follow.
 //!
+//! An RL scene (rlsg XML) with the rlmdl files of its first models (RL's `rlCoachMdl scene.xml
+//! model.xml …`) gives robots drawn and checked with the scene's own geometry; its other models
+//! are obstacles.
+//!
 //! URDF robots collide with their `<collision>` geometry; the page draws their `<visual>`
 //! geometry (or the collision geometry where visual meshes are missing). RL XML models carry no
 //! geometry: they get a skeleton (a sphere at every body origin, a capsule from it to each child
@@ -35,6 +39,15 @@ const SKELETON_RADIUS: f64 = 0.03;
 pub enum ModelSource {
     /// A URDF or RL XML (rlmdl) file.
     File(PathBuf),
+    /// An RL scene (rlsg XML with its VRML) whose first models are the robots of RL kinematic
+    /// models (rlmdl), in order, as RL's `rlCoachMdl scene.xml model1.xml …` takes them; the
+    /// scene's other models are obstacles.
+    RlScene {
+        /// The rlsg file.
+        scene: PathBuf,
+        /// One rlmdl file per robot, paired with the scene's models in order.
+        kinematics: Vec<PathBuf>,
+    },
     /// URDF or RL XML text (e.g. the embedded default robot), with a name for messages.
     Text {
         /// What to call it in messages (`"the embedded RV-6SL"`).
@@ -47,7 +60,7 @@ pub enum ModelSource {
 impl ModelSource {
     fn describe(&self) -> String {
         match self {
-            ModelSource::File(p) => p.display().to_string(),
+            ModelSource::File(p) | ModelSource::RlScene { scene: p, .. } => p.display().to_string(),
             ModelSource::Text { name, .. } => name.clone(),
         }
     }
@@ -132,6 +145,13 @@ fn geometry_options(kind: GeometryKind, package_dirs: &[PathBuf]) -> UrdfGeometr
         mesh: MeshMode::Mesh,
         strict_meshes: false,
     }
+}
+
+/// Whether `path` is an RL scene (an XML file whose root element is `<rlsg>`).
+pub fn is_rl_scene(path: &std::path::Path) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|t| {
+        roxmltree::Document::parse(&t).is_ok_and(|d| d.root_element().has_tag_name("rlsg"))
+    })
 }
 
 /// The coordinates of `q` of a kinematic model.
@@ -283,6 +303,16 @@ fn load_robot(
             };
             (r.kinematics, r.model, visual, Some(served.url))
         }
+        ModelSource::File(path) if is_rl_scene(path) => {
+            return Err(load_err(
+                &what,
+                "an RL scene: give the kinematic models of its robots (rl view SCENE \
+                 --kinematics MODEL.xml …)",
+            ));
+        }
+        ModelSource::RlScene { .. } => {
+            return Err(load_err(&what, "an RL scene is loaded by rl_scene_robots"));
+        }
         ModelSource::File(path) => {
             let k = core_loader::load_file::<CAPACITY>(path).map_err(|e| load_err(&what, e))?;
             let sk = skeleton(&k)?;
@@ -295,6 +325,21 @@ fn load_robot(
             (k, sk.clone(), sk, None)
         }
     };
+    Ok(finish_robot(
+        index, kinematics, urdf, visual, collision, warnings, files,
+    ))
+}
+
+/// A robot from its parts; its drawn meshes are added to `files`.
+fn finish_robot(
+    index: usize,
+    kinematics: LoadedModel<CAPACITY>,
+    urdf: Option<String>,
+    visual: Model,
+    collision: Model,
+    mut warnings: Vec<String>,
+    files: &mut FileTable,
+) -> (Robot, Model) {
     if kinematics.model.tools().is_empty() {
         warnings.push("the model has no tool: inverse kinematics is off".into());
     }
@@ -317,7 +362,58 @@ fn load_robot(
         visual,
         warnings,
     };
-    Ok((robot, collision))
+    (robot, collision)
+}
+
+/// A robot and its collision model.
+type RobotAndGeometry = (Robot, Model);
+
+/// The robots of an RL scene (its first `kinematics.len()` models, linked to their rlmdl files
+/// as rl-sg's [`load::rlsg::link_rlmdl`] does) and the scene's other models (obstacles).
+fn rl_scene_robots(
+    first_index: usize,
+    scene: &std::path::Path,
+    kinematics: &[PathBuf],
+    files: &mut FileTable,
+) -> Result<(Vec<RobotAndGeometry>, Vec<Model>), ViewError> {
+    let what = scene.display().to_string();
+    let s = load::rlsg::load_scene(scene).map_err(|e| load_err(&what, e))?;
+    if kinematics.is_empty() {
+        return Err(load_err(
+            &what,
+            "an RL scene: give the kinematic models of its robots, in the scene's order \
+             (--kinematics MODEL.xml …)",
+        ));
+    }
+    if kinematics.len() > s.models().len() {
+        return Err(load_err(
+            &what,
+            format!(
+                "{} kinematic models given for a scene of {} models",
+                kinematics.len(),
+                s.models().len()
+            ),
+        ));
+    }
+    let mut robots = Vec::with_capacity(kinematics.len());
+    for (j, kpath) in kinematics.iter().enumerate() {
+        let kwhat = kpath.display().to_string();
+        let k = core_loader::load_file::<CAPACITY>(kpath).map_err(|e| load_err(&kwhat, e))?;
+        let mut model = s.models()[j].clone();
+        load::rlsg::link_rlmdl(&mut model, kpath, &k).map_err(|e| load_err(&kwhat, e))?;
+        let warnings = Vec::new();
+        robots.push(finish_robot(
+            first_index + j,
+            k,
+            None,
+            model.clone(),
+            model,
+            warnings,
+            files,
+        ));
+    }
+    let rest = s.models()[kinematics.len()..].to_vec();
+    Ok((robots, rest))
 }
 
 impl World {
@@ -330,9 +426,23 @@ impl World {
         let mut cache = MeshCache::new();
         let mut scene = Scene::new();
         let mut robots = Vec::with_capacity(options.models.len());
-        for (i, src) in options.models.iter().enumerate() {
-            let (robot, mut collision) =
-                load_robot(i, src, &options.package_dirs, &mut files, &mut cache)?;
+        let mut obstacles = Vec::new();
+        let mut loaded = Vec::new();
+        for src in &options.models {
+            let i = loaded.len();
+            match src {
+                ModelSource::RlScene { scene, kinematics } => {
+                    let (r, rest) = rl_scene_robots(i, scene, kinematics, &mut files)?;
+                    loaded.extend(r.into_iter().map(|r| (r, src)));
+                    obstacles.extend(rest);
+                }
+                _ => loaded.push((
+                    load_robot(i, src, &options.package_dirs, &mut files, &mut cache)?,
+                    src,
+                )),
+            }
+        }
+        for (i, ((robot, mut collision), src)) in loaded.into_iter().enumerate() {
             if i == 0 {
                 if let Some(srdf) = &options.srdf {
                     load::srdf::apply_file(srdf, &mut collision)
@@ -347,6 +457,14 @@ impl World {
                 .add_model(collision)
                 .map_err(|e| load_err(src.describe(), e))?;
             robots.push(robot);
+        }
+        for mut m in obstacles {
+            while scene.model_id(m.name()).is_some() {
+                m.set_name(format!("{}'", m.name()));
+            }
+            scene
+                .add_model(m)
+                .map_err(|e| load_err("the RL scene's obstacles", e))?;
         }
         if let Some(env) = &options.env {
             let opts = geometry_options(GeometryKind::Collision, &options.package_dirs);

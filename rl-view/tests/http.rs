@@ -201,3 +201,42 @@ fn obstacles_from_an_rl_scene_around_an_rl_model() {
     assert!(d["obstacle"] == "body1" || d["obstacle"] == "body2", "{d}");
     assert!(d["value"].is_f64());
 }
+
+/// RL's `rlCoachMdl scene.xml model.xml`: the robot drawn with the scene's own geometry (VRML
+/// faces, inline), the scene's other models as obstacles, Coach lines moving it.
+#[test]
+fn an_rl_scene_with_the_kinematics_of_its_robot() {
+    let mut o = options(vec![]);
+    o.load.models = vec![rl_view::ModelSource::RlScene {
+        scene: repo().join("tests/data/rlsg/unimation-puma560_boxes.convex.xml"),
+        kinematics: vec![puma()],
+    }];
+    let v = rl_view::Viewer::start(&o).unwrap();
+    let (mut page, hello) = Page::connect(v.http_addr());
+    let m = &hello["scene"]["models"][0];
+    assert_eq!(m["bodies"].as_array().unwrap().len(), 7);
+    assert_eq!(m["joints"].as_array().unwrap().len(), 6);
+    let link1 = &m["bodies"][1]["shapes"][0];
+    assert_eq!(link1["kind"], "mesh");
+    assert!(!link1["vertices"].as_array().unwrap().is_empty(), "{link1}");
+    assert!(
+        !hello["scene"]["env"]["bodies"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    assert!(hello["state"]["distance"]["value"].is_f64());
+    let before = bodies(&hello["state"], 0);
+    let mut coach = Coach::connect(v.coach_addr().unwrap());
+    coach.send("2 0 0.5 0.5 0.5 0.5 0.5 0.5\n");
+    let s = page.wait_state(|s| s["models"][0]["source"] == "coach");
+    assert!(max_diff(&before, &bodies(&s, 0)) > 0.05);
+
+    // A scene without its kinematics is refused with a hint.
+    let mut o = options(vec![
+        repo().join("tests/data/rlsg/unimation-puma560_boxes.convex.xml"),
+    ]);
+    o.coach = None;
+    let e = rl_view::Viewer::start(&o).unwrap_err().to_string();
+    assert!(e.contains("--kinematics"), "{e}");
+}

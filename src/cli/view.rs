@@ -32,6 +32,11 @@ pub struct ViewArgs {
     /// `--trajectory`.
     #[arg(long, value_name = "FILE")]
     pub path: Option<PathBuf>,
+    /// An RL scene (rlsg XML) among the models: the rlmdl files of its first models, in order
+    /// (repeatable), as RL's `rlCoachMdl scene.xml model.xml …`; its other models are
+    /// obstacles.
+    #[arg(long, value_name = "FILE")]
+    pub kinematics: Vec<PathBuf>,
     /// Where `package://` URIs are looked up (repeatable).
     #[arg(long = "package-dir", value_name = "DIR")]
     pub package_dirs: Vec<PathBuf>,
@@ -58,8 +63,36 @@ pub fn run(args: ViewArgs) -> CliResult {
             text: rl::controller::RV6SL_XML.to_string(),
         }]
     } else {
-        args.models.iter().cloned().map(ModelSource::File).collect()
+        let mut scenes = 0;
+        let models: Vec<ModelSource> = args
+            .models
+            .iter()
+            .map(|m| {
+                if rl_view::load::is_rl_scene(m) {
+                    scenes += 1;
+                    ModelSource::RlScene {
+                        scene: m.clone(),
+                        kinematics: args.kinematics.clone(),
+                    }
+                } else {
+                    ModelSource::File(m.clone())
+                }
+            })
+            .collect();
+        if scenes > 1 {
+            return Err(CliError::usage("give at most one RL scene (rlsg XML)"));
+        }
+        models
     };
+    if !args.kinematics.is_empty()
+        && !models
+            .iter()
+            .any(|m| matches!(m, ModelSource::RlScene { .. }))
+    {
+        return Err(CliError::usage(
+            "--kinematics goes with an RL scene (rlsg XML) among the models",
+        ));
+    }
     let options = ViewerOptions {
         load: LoadOptions {
             models,
