@@ -52,9 +52,11 @@ function meshTotals() {
 
 function changed(what) {
   status.setMeshes(meshTotals());
-  if (what.framed && !framed && models.every((m) => m.ready)) {
+  // Point the camera once per page load, when every model is drawn at the state's poses.
+  if (what.framed && !framed && state && models.length && models.every((m) => m.ready)) {
     framed = true;
     const box = new THREE.Box3();
+    view.scene.updateMatrixWorld(true); // Box3 reads world matrices; poses changed since the last render
     for (const m of models) box.expandByObject(m.root);
     if (env) box.expandByObject(env.root);
     view.frame(box);
@@ -146,6 +148,7 @@ window.rlView = {
   screenBox(model) {
     const m = models.find((x) => x.desc.index === model);
     if (!m) return null;
+    view.scene.updateMatrixWorld(true);
     const box = new THREE.Box3().expandByObject(m.root);
     if (box.isEmpty()) return null;
     const r = $('view').getBoundingClientRect();

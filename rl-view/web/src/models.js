@@ -13,12 +13,15 @@ import { buildShape, loadMesh, meshFormat, meshesOf } from './shapes.js';
 import { setPose } from './scene.js';
 
 const RED = new THREE.MeshStandardMaterial({ color: 0xe0302a, emissive: 0x3a0000, roughness: 0.6 });
-const BODY_COLORS = [0xe08a2e, 0xa7adb5];
+// Body colours far from the collision red, so red means colliding and nothing else.
+const BODY_COLORS = [0x4f86c6, 0xb4bbc4];
 
-/** True if the material is the collision red (what redBodies() reads back). */
+/** True if the material is drawn in the collision red (what redBodies() reads back). */
 export function isRed(material) {
   const c = material && material.color;
-  return !!c && c.r > 0.6 && c.g < 0.3 && c.b < 0.3;
+  if (!c) return false;
+  const srgb = c.clone().convertLinearToSRGB();
+  return srgb.r > 0.7 && srgb.g < 0.35 && srgb.b < 0.35;
 }
 
 export class ModelView {
@@ -47,11 +50,13 @@ export class ModelView {
     this.meshes = { pending: 0, loaded: 0, failed: 0, errors: [] };
     this.colliding = new Set();
     this.ready = false;
-    this.manager = new THREE.LoadingManager(() => {
+    // Everything loaded: reported from a task of its own, so never before the constructor
+    // has returned (shape models finish synchronously).
+    this.manager = new THREE.LoadingManager(() => setTimeout(() => {
       this.ready = true;
       this.#update();
       this.changed({ framed: true });
-    });
+    }, 0));
     if (desc.urdf) {
       this.#loadUrdf();
     } else {

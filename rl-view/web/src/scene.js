@@ -86,8 +86,11 @@ export class View {
   frame(box) {
     if (this.userMovedCamera || box.isEmpty()) return;
     const center = box.getCenter(new THREE.Vector3());
-    const size = box.getSize(new THREE.Vector3()).length();
-    const dist = Math.max(0.8, size * 1.35);
+    // Far enough that the box's bounding sphere fits the narrower field of view.
+    const radius = box.getSize(new THREE.Vector3()).length() / 2;
+    const vfov = THREE.MathUtils.degToRad(this.camera.fov);
+    const hfov = 2 * Math.atan(Math.tan(vfov / 2) * this.camera.aspect);
+    const dist = Math.max(0.8, 1.25 * radius / Math.sin(Math.min(vfov, hfov) / 2));
     const dir = new THREE.Vector3(1.0, -1.15, 0.75).normalize();
     this.controls.target.copy(center);
     this.camera.position.copy(center).addScaledVector(dir, dist);

@@ -433,6 +433,18 @@ async function collisionSteps(obstacleAt) {
   fs.rmSync(dir, { recursive: true, force: true });
 }
 
+async function defaultRobotSteps() {
+  // `rl view` with no model: the embedded default robot.
+  const server = await startServer(['--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  const page = await openPage(`${server.http}/`);
+  const info = await page.evaluate(() => ({ name: rlView.scene.models[0].name, joints: rlView.scene.models[0].joints.length, meshes: rlView.meshCounts() }));
+  check(info.joints > 0 && info.meshes[0] > 0, `the default robot is drawn (${JSON.stringify(info)})`);
+  await page.screenshot({ path: path.join(outDir, '12-default-robot.png') });
+  ok(`rl view with no model: ${info.name}, ${info.joints} joints, ${info.meshes[0]} meshes drawn`);
+  await page.close();
+  server.kill();
+}
+
 async function rlModelSteps() {
   const xml = data('rlmdl/unimation-puma560.xml');
   const server = await startServer([xml, '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
@@ -450,7 +462,9 @@ async function rlModelSteps() {
   const f = m.fraction;
   check(f > threshold.value, `RL model moved: ${(100 * f).toFixed(1)} % changed (> ${(100 * threshold.value).toFixed(1)} %)`);
   await checkDrawnAtState(page, 0, 'RL model after Coach');
-  ok(`RL model ${path.basename(xml)}: ${info.shapes} shapes drawn, Coach q moves it, ${(100 * f).toFixed(1)} % of the robot region changed`);
+  const red = await page.evaluate(() => ({ red: rlView.redBodies().length, colliding: rlView.state.colliding.length }));
+  check(red.red === red.colliding, `red bodies = colliding bodies (${JSON.stringify(red)})`);
+  ok(`RL model ${path.basename(xml)}: ${info.shapes} shapes drawn, Coach q moves it, ${(100 * f).toFixed(1)} % of the robot region changed (the server reports ${red.colliding} colliding bodies there, ${red.red} drawn red)`);
   coach.close();
   await page.close();
   server.kill();
@@ -572,6 +586,7 @@ try {
   await collisionSteps(obstacle);
   await rlModelSteps();
   await formatsAndPathSteps();
+  await defaultRobotSteps();
   console.log(`screenshots: ${outDir}`);
   console.log(`${passed} passed, 0 failed`);
   await cleanup();
