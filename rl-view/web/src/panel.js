@@ -108,6 +108,7 @@ export class JointPanel {
     };
     range.addEventListener('pointerdown', () => { r.active = true; });
     range.addEventListener('pointerup', () => { r.active = false; });
+    range.addEventListener('change', () => { r.active = false; }); // released outside the slider
     range.addEventListener('input', () => {
       num.value = Number(range.value).toFixed(1);
       send(range.value);
