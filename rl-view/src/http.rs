@@ -10,7 +10,7 @@
 use std::io::{self, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use crate::Shared;
@@ -26,6 +26,7 @@ const MAX_HEAD: usize = 16 * 1024;
 /// Most connections served at once (pages, their files, WebSockets); more get 503.
 pub const MAX_CONNECTIONS: usize = 64;
 const HEAD_TIMEOUT: Duration = Duration::from_secs(5);
+const HEAD_POLL: Duration = Duration::from_millis(50);
 const ACCEPT_POLL: Duration = Duration::from_millis(2);
 
 /// The embedded file `name` (relative to `web/dist/`).
@@ -87,6 +88,7 @@ fn reason(code: u16) -> &'static str {
         400 => "Bad Request",
         404 => "Not Found",
         405 => "Method Not Allowed",
+        408 => "Request Timeout",
         431 => "Request Header Fields Too Large",
         503 => "Service Unavailable",
         _ => "Error",
@@ -105,10 +107,12 @@ fn respond(stream: &mut TcpStream, code: u16, ctype: &str, body: &[u8]) -> io::R
     stream.flush()
 }
 
-/// Reads a request head (up to the blank line), bounded in size and time.
-fn read_head(stream: &mut TcpStream) -> Result<Vec<u8>, u16> {
+/// Reads a request head (up to the blank line), bounded in size and time; gives up early when
+/// the server stops (browsers keep idle connections open).
+fn read_head(stream: &mut TcpStream, stop: &AtomicBool) -> Result<Vec<u8>, u16> {
     let mut buf = Vec::with_capacity(1024);
     let mut chunk = [0u8; 1024];
+    let start = std::time::Instant::now();
     loop {
         if buf.windows(4).any(|w| w == b"\r\n\r\n") {
             return Ok(buf);
@@ -116,21 +120,30 @@ fn read_head(stream: &mut TcpStream) -> Result<Vec<u8>, u16> {
         if buf.len() > MAX_HEAD {
             return Err(431);
         }
+        if stop.load(Ordering::Relaxed) || start.elapsed() > HEAD_TIMEOUT {
+            return Err(408);
+        }
         match stream.read(&mut chunk) {
-            Ok(0) | Err(_) => return Err(400),
+            Ok(0) => return Err(400),
             Ok(n) => buf.extend_from_slice(&chunk[..n]),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                ) => {}
+            Err(_) => return Err(400),
         }
     }
 }
 
 fn serve(mut stream: TcpStream, shared: &Shared) {
     if stream.set_nonblocking(false).is_err()
-        || stream.set_read_timeout(Some(HEAD_TIMEOUT)).is_err()
+        || stream.set_read_timeout(Some(HEAD_POLL)).is_err()
         || stream.set_write_timeout(Some(HEAD_TIMEOUT)).is_err()
     {
         return;
     }
-    let head = match read_head(&mut stream) {
+    let head = match read_head(&mut stream, &shared.stop) {
         Ok(h) => h,
         Err(code) => {
             let _ = respond(&mut stream, code, "text/plain", b"bad request\n");
