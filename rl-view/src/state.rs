@@ -445,10 +445,14 @@ impl Engine {
             }
         };
         for i in 0..robots {
-            for f in [
-                CollisionFilter::SelfCollision(ModelId(i)),
-                CollisionFilter::Against(ModelId(i)),
-            ] {
+            // Models without self-collision (RL skeletons) are only checked against others.
+            let own = scene.models()[i]
+                .self_collision()
+                .then_some(CollisionFilter::SelfCollision(ModelId(i)));
+            for f in own
+                .into_iter()
+                .chain([CollisionFilter::Against(ModelId(i))])
+            {
                 for (a, b) in scene.colliding_bodies(&f) {
                     push(a);
                     push(b);

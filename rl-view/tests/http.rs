@@ -157,6 +157,15 @@ fn scene_of_an_rl_xml_model() {
         state["models"][0]["bodies"].as_array().unwrap().len()
     );
     assert_eq!(state["models"][0]["source"], "init");
+    // The skeleton's spheres and capsules touch at every joint: it is not checked against
+    // itself, so alone it never collides.
+    assert_eq!(state["colliding"], serde_json::json!([]));
+    let mut coach = Coach::connect(v.coach_addr().unwrap());
+    coach.send("2 0 0.5 -0.7 0.9 0.4 -0.6 0.8\n6 0\n");
+    assert_eq!(coach.read_line(), "6 0 0.5 -0.7 0.9 0.4 -0.6 0.8");
+    let state = get_json(v.http_addr(), "/api/state");
+    assert_eq!(state["models"][0]["source"], "coach");
+    assert_eq!(state["colliding"], serde_json::json!([]));
 }
 
 #[test]
