@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
-use rl_drivers::proto::coach::{LineBuffer, Message};
+use rl_drivers::proto::coach::{LineBuffer, Message, write_g6};
 
 use crate::Shared;
 use crate::state::{Engine, Source};
@@ -65,15 +65,15 @@ pub fn apply_line(engine: &mut Engine, line: &[u8], reply: &mut Vec<u8>) -> Resu
             pose,
         } => engine.set_shape_pose(model as usize, body as usize, shape as usize, &pose),
         Message::Request { model } => {
-            let values = engine
-                .q(model as usize)
-                .map(|q| q.iter().copied().collect())
-                .unwrap_or_default();
-            let mut buf = [0u8; 8192];
-            let n = Message::Reply { model, values }
-                .encode(&mut buf)
-                .map_err(|e| e.to_string())?;
-            reply.extend_from_slice(&buf[..n]);
+            // `6 <i> q…` as rl-drivers' codec writes numbers (%g, 6 significant digits), with
+            // no bound on the number of values.
+            let mut line = format!("6 {model}");
+            for &v in engine.q(model as usize).unwrap_or(&[]) {
+                line.push(' ');
+                write_g6(&mut line, v).map_err(|e| e.to_string())?;
+            }
+            line.push('\n');
+            reply.extend_from_slice(line.as_bytes());
             Ok(())
         }
         // A reply sent to us, or an empty line (rlSimulator's acknowledgement): nothing to do.
