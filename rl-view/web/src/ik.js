@@ -24,6 +24,7 @@ export class IkTarget {
     this.held = false; // the target stays where it was dragged until the robot moves otherwise
     this.lastSent = 0;
     this.waiters = [];
+    this.lastIk = null; // JSON of the last IK answer seen, to tell a new answer from it
 
     this.target = new THREE.Group();
     this.target.name = 'ik target';
@@ -147,9 +148,15 @@ export class IkTarget {
         this.status.textContent = `IK failed: ${ik.reason || 'no reason given'}`;
         this.status.className = 'ik-status fail';
       }
-      const waiters = this.waiters;
-      this.waiters = [];
-      for (const w of waiters) w.resolve(ik);
+      // The state keeps the last IK answer: a state sent before the server saw the request
+      // still carries the previous one. A different answer is the reply; the same answer is
+      // taken only if nothing different follows within 1.5 s (the same request twice).
+      const text = JSON.stringify(ik);
+      this.lastIk = text;
+      for (const w of this.waiters) {
+        if (text !== w.before) w.done(ik);
+        else w.same = ik;
+      }
     }
   }
 
@@ -172,12 +179,16 @@ export class IkTarget {
     this.target.quaternion.set(pose[3], pose[4], pose[5], pose[6]).normalize();
     this.view.requestRender();
     return new Promise((resolve, reject) => {
-      const w = { resolve };
-      this.waiters.push(w);
-      setTimeout(() => {
+      const timers = [];
+      const w = { before: this.lastIk, same: null };
+      const finish = () => {
         this.waiters = this.waiters.filter((x) => x !== w);
-        reject(new Error('no IK answer within the timeout'));
-      }, timeoutMs);
+        timers.forEach(clearTimeout);
+      };
+      w.done = (ik) => { finish(); resolve(ik); };
+      this.waiters.push(w);
+      timers.push(setTimeout(() => { if (w.same) w.done(w.same); }, 1500));
+      timers.push(setTimeout(() => { finish(); reject(new Error('no IK answer within the timeout')); }, timeoutMs));
       this.#sendTarget(true);
     });
   }
