@@ -89,8 +89,9 @@ fn three_second_run_reports_full_cycles_no_loss_and_bounded_tracking() {
     let out = run_bounded(cmd, Duration::from_secs(60));
     assert!(
         out.status.success(),
-        "exit {:?}; stderr:\n{}",
+        "exit {:?}; stdout:\n{}\nstderr:\n{}",
         out.status,
+        String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
     let v = json(&out);
