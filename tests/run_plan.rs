@@ -309,6 +309,11 @@ fn a_start_in_collision_fails_before_anything_starts() {
         stderr.contains("the start configuration is invalid: in collision"),
         "{stderr}"
     );
+    // What touches, by name (the exact meshes' verdict).
+    assert!(
+        stderr.contains("touching: ") && stderr.contains("panda_link0") && stderr.contains("block"),
+        "{stderr}"
+    );
     assert!(stderr.contains("nothing was started"), "{stderr}");
     // No report: no device was opened, let alone switched on.
     assert!(out.stdout.is_empty(), "{}", text(&out.stdout));

@@ -388,9 +388,39 @@ fn plan_for_run<const B: usize, const J: usize>(
             goal,
         })),
         Err(PlannedMotionError::Cancelled) => Ok(None),
-        Err(e) => Err(CliError::failed(format!(
-            "refusing to move: {e} (nothing was started)"
-        ))),
+        Err(e) => {
+            // For a start or goal in collision, name what touches (exact meshes).
+            let touching = match &e {
+                PlannedMotionError::Planner(rl_plan::PlanError::InvalidEndpoint {
+                    which, ..
+                }) => {
+                    let q = if *which == "start" { &start } else { &goal };
+                    drop(checker);
+                    robot
+                        .exact_checker(scene)
+                        .map(|mut exact| exact.collisions(q))
+                        .unwrap_or_default()
+                }
+                _ => Vec::new(),
+            };
+            let touching = if touching.is_empty() {
+                String::new()
+            } else {
+                let pairs: Vec<String> = touching
+                    .iter()
+                    .take(6)
+                    .map(|(a, b)| format!("{a} ↔ {b}"))
+                    .collect();
+                format!(
+                    "; touching: {}{}",
+                    pairs.join(", "),
+                    if touching.len() > 6 { ", …" } else { "" }
+                )
+            };
+            Err(CliError::failed(format!(
+                "refusing to move: {e}{touching} (nothing was started)"
+            )))
+        }
     }
 }
 
