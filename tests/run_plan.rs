@@ -320,6 +320,143 @@ fn a_start_in_collision_fails_before_anything_starts() {
     std::fs::remove_file(&scene).ok();
 }
 
+/// A request with no solution: every joint but the first pinned by `--limits` (the space is
+/// one-dimensional), and a post in the way of the arm as joint 1 turns from 0 to 1.5 rad
+/// (start and goal are free: the post stands between them).
+fn unsolvable() -> (PathBuf, PathBuf, &'static str) {
+    let scene = temp("post.yaml");
+    std::fs::write(
+        &scene,
+        "world:\n  collision_objects:\n    - id: post\n      primitive_poses:\n        \
+         - position: [0.22, 0.20, 0.45]\n          orientation: [0, 0, 0, 1]\n      primitives:\n        \
+         - type: box\n          dimensions: [0.08, 0.08, 0.5]\n",
+    )
+    .unwrap();
+    let request = temp("turn.yaml");
+    let mut text = String::from(
+        "group_name: panda_arm\nstart_state:\n  joint_state:\n    name: [panda_joint1, \
+         panda_joint2, panda_joint3, panda_joint4, panda_joint5, panda_joint6, panda_joint7]\n    \
+         position: [0, -0.785, 0, -2.356, 0, 1.571, 0.785]\ngoal_constraints:\n  - joint_constraints:\n",
+    );
+    for (k, q) in [1.5, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+        .iter()
+        .enumerate()
+    {
+        text += &format!(
+            "      - joint_name: panda_joint{}\n        position: {q}\n",
+            k + 1
+        );
+    }
+    std::fs::write(&request, text).unwrap();
+    let pinned = "panda_joint2=-0.785:-0.785,panda_joint3=0:0,panda_joint4=-2.356:-2.356,\
+                  panda_joint5=0:0,panda_joint6=1.571:1.571,panda_joint7=0.785:0.785";
+    (scene, request, pinned)
+}
+
+#[test]
+fn an_unsolvable_request_fails_before_anything_starts() {
+    let _run = one_run_at_a_time();
+    let (scene, request, pinned) = unsolvable();
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--limits",
+            pinned,
+            "--plan-time",
+            "300ms",
+        ],
+        Duration::from_secs(60),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    std::fs::remove_file(&scene).ok();
+    std::fs::remove_file(&request).ok();
+}
+
+/// Ctrl-C while `rl run --plan` plans (a search that cannot succeed, with a two-minute budget)
+/// ends the planning at once: exit code 130, nothing started, no report.
+#[test]
+fn ctrl_c_while_planning_stops_before_anything_starts() {
+    use std::io::{BufRead, BufReader};
+    let _run = one_run_at_a_time();
+    let (scene, request, pinned) = unsolvable();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--limits",
+            pinned,
+            "--plan-time",
+            "120s",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    let stderr = child.stderr.take().expect("stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains("planning a collision-free path") {
+                let _ = tx.send(());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("the planning line within 60 s");
+    std::thread::sleep(Duration::from_millis(300));
+    let interrupted = Instant::now();
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .expect("SIGINT");
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if interrupted.elapsed() > Duration::from_secs(20) {
+            let _ = child.kill();
+            panic!("rl went on planning for 20 s after SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let stderr = reader.join().expect("stderr");
+    let mut stdout = String::new();
+    std::io::Read::read_to_string(&mut child.stdout.take().expect("stdout"), &mut stdout)
+        .expect("stdout");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("stopped on request before the motion started"),
+        "{stderr}"
+    );
+    assert!(stdout.is_empty(), "no run, no report: {stdout}");
+    std::fs::remove_file(&scene).ok();
+    std::fs::remove_file(&request).ok();
+}
+
 #[test]
 fn no_path_within_the_budget_fails_before_anything_starts() {
     let _run = one_run_at_a_time();
