@@ -7,6 +7,7 @@ mod support;
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
+use rl_core::spatial::PlueckerTransform;
 use rl_sg::load::rlsg;
 use rl_sg::load::vrml::VrmlScene;
 use rl_sg::{CollisionFilter, Geometry, ModelId, Scene};
@@ -23,7 +24,7 @@ fn shapes(s: &Scene) -> usize {
 #[test]
 fn every_shipped_wrl_loads() {
     let all = files(".wrl");
-    assert!(all.len() >= 17, "{}", all.len());
+    assert!(all.len() >= 18, "{}", all.len());
     for f in &all {
         let s = rlsg::load_vrml(f).unwrap_or_else(|e| panic!("{e}"));
         println!(
@@ -102,6 +103,70 @@ fn every_shipped_rlsg_file_loads_as_rl_reads_it() {
     let m = load("box-6d-300505_maze.xml");
     assert_eq!(m.models()[1].bodies()[0].shapes().len(), 25);
     assert_eq!(m.models()[0].bodies()[6].shapes().len(), 1);
+}
+
+/// A ball of `radius` at `at` beside the scene of `wall.wrl`: its signed distance to the wall
+/// model and whether the scene collides.
+fn ball_by_the_wall(radius: f64, at: DVec3) -> (f64, bool) {
+    let mut s = rlsg::load_vrml(&rlsg_data().join("wall.wrl")).unwrap();
+    let mut m = rl_sg::Model::new("ball");
+    m.add_body("ball")
+        .add_shape(
+            "ball",
+            Geometry::Sphere { radius },
+            PlueckerTransform::IDENTITY,
+        )
+        .unwrap();
+    let id = s.add_model(m).unwrap();
+    s.set_body_pose(
+        rl_sg::BodyId {
+            model: id.0,
+            body: 0,
+        },
+        &PlueckerTransform::from_translation(at),
+    )
+    .unwrap();
+    let d = s.model_distance(ModelId(0), id).unwrap();
+    (d.distance, s.is_colliding(&CollisionFilter::All))
+}
+
+#[test]
+fn rls_wall_has_its_bricks_and_its_four_holes() {
+    // RL's wall.wrl (the Stäubli TX60L's scene): floor, ceiling and four outer walls, and a
+    // wall of 0.05 × 0.25 × 0.25 m bricks in the plane x = 0, seven columns (y = −0.75 … 0.75)
+    // of six rows (z = 0.125 … 1.375), four of them commented out: holes at y = ±0.25,
+    // z = 0.375 and 0.875.
+    let s = rlsg::load_vrml(&rlsg_data().join("wall.wrl")).unwrap();
+    assert_eq!(s.models().len(), 1);
+    assert_eq!(shapes(&s), 6 + 7 * 6 - 4);
+    let bricks = s.models()[0].bodies()[0]
+        .shapes()
+        .iter()
+        .filter(|sh| {
+            sh.geometry()
+                == &Geometry::Box {
+                    size: DVec3::new(0.05, 0.25, 0.25),
+                }
+        })
+        .count();
+    assert_eq!(bricks, 38);
+    // A ball of radius 0.05 in the middle of a hole is 0.125 − 0.05 from the bricks around it.
+    for (y, z) in [(0.25, 0.375), (0.25, 0.875), (-0.25, 0.375), (-0.25, 0.875)] {
+        let (d, hit) = ball_by_the_wall(0.05, DVec3::new(0.0, y, z));
+        assert!((d - 0.075).abs() < 1e-9, "hole ({y}, {z}): {d}");
+        assert!(!hit);
+    }
+    // The same ball in a brick's middle penetrates it by 0.025 + 0.05 (the brick's half
+    // thickness plus the radius).
+    for (y, z) in [(0.0, 0.375), (0.25, 0.625), (-0.75, 1.375)] {
+        let (d, hit) = ball_by_the_wall(0.05, DVec3::new(0.0, y, z));
+        assert!((d + 0.075).abs() < 1e-9, "brick ({y}, {z}): {d}");
+        assert!(hit);
+    }
+    // In front of the wall: 0.5 − 0.025 − 0.05 from the brick faces.
+    let (d, hit) = ball_by_the_wall(0.05, DVec3::new(0.5, 0.0, 1.0));
+    assert!((d - 0.425).abs() < 1e-9, "{d}");
+    assert!(!hit);
 }
 
 #[test]
@@ -423,4 +488,179 @@ fn arbitrary_bytes_never_panic_the_vrml_reader() {
         "Transform { children [ ".repeat(100_000)
     );
     no_panic(deep.as_bytes());
+}
+
+/// A scene of RL's whose first model is a robot, linked to its RL kinematic model.
+fn linked(scene: &str, rlmdl: &str) -> (Scene, rl_core::loader::LoadedModel<8>) {
+    let rlmdl = repo().join("tests/data/rlmdl").join(rlmdl);
+    let loaded = rl_core::loader::load_file::<8>(&rlmdl).unwrap();
+    let mut s = rlsg::load_scene(&rlsg_data().join(scene)).unwrap();
+    rlsg::link_rlmdl(s.model_mut(ModelId(0)).unwrap(), &rlmdl, &loaded).unwrap();
+    (s, loaded)
+}
+
+#[test]
+fn the_rv6sl_among_boxes_is_clear_at_home_and_hits_a_box_it_is_laid_into() {
+    // RL's mitsubishi-rv6sl_boxes.convex.xml (the scene of its RV-6SL planning examples)
+    // linked to RL's RV-6SL model.
+    let (mut s, loaded) = linked("mitsubishi-rv6sl_boxes.convex.xml", "mitsubishi-rv6sl.xml");
+    let m = &s.models()[0];
+    assert_eq!(m.name(), "mitsubishi-rv6sl");
+    let names: Vec<_> = m.bodies().iter().map(|b| b.name().to_string()).collect();
+    assert_eq!(
+        names,
+        (0..7).map(|i| format!("link{i}")).collect::<Vec<_>>()
+    );
+    assert!(m.bodies().iter().all(|b| b.shapes().len() == 1));
+    assert_eq!(s.models()[1].name(), "boxes");
+    assert_eq!(s.models()[1].bodies()[0].shapes().len(), 8);
+    // `<ignore/>` on body0: the base stands on the floor box unchecked.
+    assert!(!m.bodies()[0].collision_enabled());
+    let before: Vec<_> = m.bodies().iter().map(|b| *b.pose()).collect();
+    let mut data = Box::new(rl_core::Data::<8>::new());
+    let mut at = |s: &mut Scene, deg: [f64; 6]| {
+        let q: Vec<f64> = deg.iter().map(|v| v.to_radians()).collect();
+        s.set_configuration(ModelId(0), &loaded.model, &mut data, &q)
+            .unwrap();
+        let d = s.model_distance(ModelId(0), ModelId(1)).unwrap();
+        let hits: Vec<_> = s
+            .colliding_bodies(&CollisionFilter::Against(ModelId(0)))
+            .iter()
+            .map(|(a, b)| (s.body_name(*a), s.body_name(*b)))
+            .collect();
+        (d, hits)
+    };
+    // Home (the model has no <home>: q = 0, the arm straight up) is RL's VRML pose and clear
+    // of every box: the closest is 0.1475 m from link2.
+    let home = loaded.home_or_neutral();
+    assert!(home.iter().all(|q| *q == 0.0), "{home:?}");
+    let (d, hits) = at(&mut s, [0.0; 6]);
+    for (b, x) in s.models()[0].bodies().iter().zip(&before) {
+        assert!(
+            (b.pose().translation - x.translation).length() < 1e-4,
+            "{}: {:?} vs {:?}",
+            b.name(),
+            b.pose(),
+            x
+        );
+    }
+    assert!(hits.is_empty(), "{hits:?}");
+    assert!(d.distance > 0.1, "{d:?}");
+    assert!(!s.is_colliding(&CollisionFilter::All));
+    // Turned to −y and laid forward (q2 = 90°) at shoulder height, the arm runs into the box
+    // at (0, −1, 0.5) (1 m cube): links 2 to 6 penetrate it, the hand deepest.
+    let (d, hits) = at(&mut s, [-90.0, 90.0, 0.0, 0.0, 0.0, 0.0]);
+    assert!(d.distance < -0.1, "{d:?}");
+    assert!(
+        hits.contains(&("mitsubishi-rv6sl/link6".to_string(), "boxes/".to_string())),
+        "{hits:?}"
+    );
+    assert!(s.is_colliding(&CollisionFilter::All));
+    // Laid backwards instead (q2 = −90°) it is over free floor: clear again.
+    let (d, hits) = at(&mut s, [-90.0, -90.0, 0.0, 0.0, 0.0, 0.0]);
+    assert!(hits.is_empty() && d.distance > 0.0, "{d:?} {hits:?}");
+}
+
+/// RL's Stäubli TX60L kinematics from its `examples/rlkin/staeubli-tx60l.xml` (RL ships this
+/// robot in the DH format rlkin only, which rl-core does not load): (d, θ, a, α) per joint, m
+/// and degrees, standard DH `Rz(θ + q) Tz(d) Tx(a) Rx(α)`.
+const TX60L_DH: [(f64, f64, f64, f64); 6] = [
+    (0.375, 0.0, 0.0, -90.0),
+    (0.0, -90.0, 0.4, 0.0),
+    (0.02, -90.0, 0.0, -90.0),
+    (0.45, 0.0, 0.0, 90.0),
+    (0.0, 180.0, 0.0, 90.0),
+    (0.07, 0.0, 0.0, 0.0),
+];
+
+/// The frames of the TX60L's link0 … link6 in the world, its base at `base`, for `q` in degrees.
+fn tx60l_frames(base: PlueckerTransform, q: [f64; 6]) -> Vec<PlueckerTransform> {
+    use glam::DMat3;
+    let mut x = base;
+    let mut out = vec![x];
+    for ((d, theta, a, alpha), qi) in TX60L_DH.iter().zip(q) {
+        let dh =
+            PlueckerTransform::from_rotation(DMat3::from_rotation_z((theta + qi).to_radians()))
+                * PlueckerTransform::from_translation(DVec3::new(*a, 0.0, *d))
+                * PlueckerTransform::from_rotation(DMat3::from_rotation_x(alpha.to_radians()));
+        x = x * dh;
+        out.push(x);
+    }
+    out
+}
+
+#[test]
+fn the_tx60l_reaches_through_rls_wall_where_it_has_holes_and_hits_it_where_not() {
+    // RL's staeubli-tx60l_wall.convex.xml (the scene of its TX60L planning examples): the robot
+    // at x = −0.625 in front of the wall of bricks in the plane x = 0.
+    let mut s = rlsg::load_scene(&rlsg_data().join("staeubli-tx60l_wall.convex.xml")).unwrap();
+    let names: Vec<_> = s.models()[0]
+        .bodies()
+        .iter()
+        .map(|b| b.name().to_string())
+        .collect();
+    assert_eq!(s.models()[0].name(), "staeubli-tx60l");
+    assert_eq!(
+        names,
+        (0..7).map(|i| format!("link{i}")).collect::<Vec<_>>()
+    );
+    assert_eq!(s.models()[1].name(), "wall");
+    assert_eq!(shapes(&s), 7 + 44);
+    let base = PlueckerTransform::from_translation(DVec3::new(-0.625, 0.0, 0.0));
+    // At q = 0 (RL's contract) the DH frames are the VRML body frames.
+    for (b, x) in s.models()[0]
+        .bodies()
+        .iter()
+        .zip(tx60l_frames(base, [0.0; 6]))
+    {
+        assert!(
+            (b.pose().translation - x.translation).length() < 1e-6,
+            "{}: {:?} vs {:?}",
+            b.name(),
+            b.pose(),
+            x
+        );
+        let e = (b.pose().rotation - x.rotation).abs().to_cols_array();
+        assert!(e.iter().all(|v| *v < 1e-5), "{}: {e:?}", b.name());
+    }
+    // RL's ignore list on link0 (`<ignore/>`): the base stands on the floor.
+    s.model_mut(ModelId(0))
+        .unwrap()
+        .body_mut(0)
+        .unwrap()
+        .set_collision_enabled(false);
+    let at = |s: &mut Scene, q: [f64; 6]| {
+        for (i, x) in tx60l_frames(base, q).iter().enumerate() {
+            s.set_body_pose(rl_sg::BodyId { model: 0, body: i }, x)
+                .unwrap();
+        }
+        let d = s.model_distance(ModelId(0), ModelId(1)).unwrap();
+        let hits: Vec<_> = s
+            .colliding_bodies(&CollisionFilter::Against(ModelId(0)))
+            .iter()
+            .map(|(a, b)| (s.body_name(*a), s.body_name(*b)))
+            .collect();
+        (d, hits)
+    };
+    // Home (q = 0, upright) is clear of the wall.
+    let (d, hits) = at(&mut s, [0.0; 6]);
+    assert!(hits.is_empty() && d.distance > 0.1, "{d:?} {hits:?}");
+    // The start and goal of RL's staeubli-tx60l_wall scenarios (q1 = 20° and −25°, q2 = 90°):
+    // the arm laid forward through the holes at y = ±0.25, z = 0.375: collision-free.
+    for q0 in [20.0, -25.0] {
+        let (d, hits) = at(&mut s, [q0, 90.0, 0.0, 0.0, 0.0, 0.0]);
+        assert!(
+            hits.is_empty() && d.distance > 0.0,
+            "q1 = {q0}: {d:?} {hits:?}"
+        );
+    }
+    // Laid forward straight (q1 = 0) it runs into the brick between the holes.
+    let (d, hits) = at(&mut s, [0.0, 90.0, 0.0, 0.0, 0.0, 0.0]);
+    assert!(d.distance < -0.01, "{d:?}");
+    assert!(
+        hits.iter()
+            .any(|(a, b)| a.starts_with("staeubli-tx60l/link") && b == "wall/"),
+        "{hits:?}"
+    );
+    assert!(s.is_colliding(&CollisionFilter::All));
 }
