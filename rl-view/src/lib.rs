@@ -97,7 +97,8 @@ impl Shared {
                 if r.has_update() {
                     let f = r.read();
                     // Lengths are checked by `publish`; a non-finite value is refused here.
-                    let _ = e.set_q(model, &f.q[..f.len], Source::Live);
+                    let q_cmd = f.commanded.then(|| &f.q_cmd[..f.len]);
+                    let _ = e.set_q_commanded(model, &f.q[..f.len], q_cmd, Source::Live);
                 }
             }
         }
