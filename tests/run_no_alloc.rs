@@ -7,7 +7,7 @@
 
 mod common;
 
-use rl::controller::{Controller, CycleRecord, RV6SL_XML, ViewHook, rv6sl};
+use rl::controller::{Controller, CycleRecord, rv6sl};
 use rl::drivers::Device;
 use rl::drivers::mitsubishi_h7::MitsubishiH7;
 use rl::rt::exchange::{mailbox, queue};
@@ -59,8 +59,11 @@ fn steady_state_control_cycle_allocates_nothing() {
     robot.close().expect("close");
 }
 
+#[cfg(feature = "view")]
 #[test]
 fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
+    use rl::controller::{RV6SL_XML, ViewHook};
+
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
     let dof = rv6sl().expect("embedded model").model.dof();
