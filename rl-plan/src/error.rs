@@ -75,6 +75,8 @@ pub enum PlanError {
     },
     /// Writing output failed.
     Io(String),
+    /// Planning was cancelled (a [`crate::budget::Cancel`] was requested).
+    Cancelled,
 }
 
 impl PlanError {
@@ -155,6 +157,7 @@ impl fmt::Display for PlanError {
             Self::Unsupported(m) => write!(f, "not supported: {m}"),
             Self::Setting { what, message } => write!(f, "{what}: {message}"),
             Self::Io(m) => f.write_str(m),
+            Self::Cancelled => f.write_str("planning was cancelled"),
         }
     }
 }

@@ -25,7 +25,7 @@
 //! # Problems and execution
 //!
 //! [`problem`]: MoveIt planning scenes and motion plan requests (MotionBenchMaker), RL's
-//! rlplan XML scenarios. [`bench`]: OMPL's benchmark log and summary statistics.
+//! rlplan XML scenarios. [`bench`](mod@bench): OMPL's benchmark log and summary statistics.
 //! [`execute`]: a path becomes a jerk-limited trajectory through its waypoints that a
 //! controller can follow.
 #![deny(missing_docs)]

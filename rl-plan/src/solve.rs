@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::budget::Budget;
+use crate::budget::{Budget, Cancel};
 use crate::error::PlanError;
 use crate::optimizer::OptimizerKind;
 use crate::path::Path;
@@ -158,6 +158,23 @@ pub fn plan(
     goal: &[f64],
     options: &PlanOptions,
 ) -> Result<PlanResult, PlanError> {
+    plan_cancellable(space, validity, start, goal, options, None)
+}
+
+/// [`plan`], ended early with [`PlanError::Cancelled`] when `cancel` is requested (checked as
+/// often as the time budget, so within one planner or optimiser iteration).
+pub fn plan_cancellable(
+    space: &JointSpace,
+    validity: &mut dyn Validity,
+    start: &[f64],
+    goal: &[f64],
+    options: &PlanOptions,
+    cancel: Option<&Cancel>,
+) -> Result<PlanResult, PlanError> {
+    let cancelled = || cancel.is_some_and(Cancel::is_requested);
+    if cancelled() {
+        return Err(PlanError::Cancelled);
+    }
     check_endpoint(space, validity, "start", start)?;
     check_endpoint(space, validity, "goal", goal)?;
     let mut planner = options.planner.build(space)?;
@@ -170,7 +187,7 @@ pub fn plan(
         options.verifier,
         sampler,
         options.seed,
-        Budget::new(options.time),
+        Budget::new(options.time).with_cancel(cancel.cloned()),
     );
     let direct = options.try_direct && ctx.motion_valid(start, goal, false);
     let (path, stats) = if direct {
@@ -205,7 +222,7 @@ pub fn plan(
         if let Some(mut opt) = options.optimizer.build() {
             let c1 = ctx.validity.checks();
             let t1 = Instant::now();
-            ctx.budget = Budget::new(options.optimize_time);
+            ctx.budget = Budget::new(options.optimize_time).with_cancel(cancel.cloned());
             if let Some(v) = options.optimizer_verifier {
                 ctx.verifier = v;
             }
@@ -216,6 +233,9 @@ pub fn plan(
         result.length_after = optimized.length(space);
         result.path = Some(p);
         result.optimized = Some(optimized);
+    }
+    if cancelled() {
+        return Err(PlanError::Cancelled);
     }
     Ok(result)
 }

@@ -78,6 +78,48 @@ pub struct Coordinate {
     pub offset: usize,
 }
 
+/// Reads joint-limit overrides `NAME=MIN:MAX[,NAME=MIN:MAX…]` (rad or m; a negative bound is
+/// written as is, `j1=-1.5:1.5`). Every entry must name a joint once and give a finite interval
+/// with `MIN ≤ MAX`; the names are checked against a space by [`JointSpace::override_bounds`].
+pub fn parse_bounds(text: &str) -> Result<Vec<(String, f64, f64)>, PlanError> {
+    let bad = |entry: &str, why: &str| {
+        PlanError::setting(
+            "joint limits",
+            format!("`{entry}`: {why} (expected NAME=MIN:MAX, e.g. joint1=-1.5:1.5)"),
+        )
+    };
+    let mut out: Vec<(String, f64, f64)> = Vec::new();
+    for entry in text.split(',').map(str::trim).filter(|e| !e.is_empty()) {
+        let (name, range) = entry.split_once('=').ok_or_else(|| bad(entry, "no `=`"))?;
+        let name = name.trim();
+        if name.is_empty() {
+            return Err(bad(entry, "no joint name"));
+        }
+        let (lo, hi) = range
+            .split_once(':')
+            .ok_or_else(|| bad(entry, "no `:` between MIN and MAX"))?;
+        let number = |x: &str| {
+            x.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(entry, &format!("`{}` is not a finite number", x.trim())))
+        };
+        let (lower, upper) = (number(lo)?, number(hi)?);
+        if lower > upper {
+            return Err(bad(entry, "MIN is above MAX"));
+        }
+        if out.iter().any(|(n, _, _)| n == name) {
+            return Err(bad(entry, "the joint is given twice"));
+        }
+        out.push((name.to_owned(), lower, upper));
+    }
+    if out.is_empty() {
+        return Err(bad(text, "no limits given"));
+    }
+    Ok(out)
+}
+
 /// The configuration space of a model: see the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointSpace {
@@ -258,6 +300,22 @@ impl JointSpace {
         }
         c.topology = Topology::Interval { lower, upper };
         self.update_plain();
+        Ok(())
+    }
+
+    /// Replaces the bounds of the coordinates named in `bounds` (`(name, lower, upper)`, as
+    /// [`parse_bounds`] reads them): the joint-limit override. All or nothing: an unknown name
+    /// ([`PlanError::UnknownName`], naming it) or a bad interval leaves the space as it was.
+    pub fn override_bounds(&mut self, bounds: &[(String, f64, f64)]) -> Result<(), PlanError> {
+        let mut out = self.clone();
+        for (name, lower, upper) in bounds {
+            let index = out.index_of(name).ok_or_else(|| PlanError::UnknownName {
+                what: "joint",
+                name: name.clone(),
+            })?;
+            out.set_bounds(index, *lower, *upper)?;
+        }
+        *self = out;
         Ok(())
     }
 
@@ -579,6 +637,60 @@ mod tests {
             ("c".into(), Topology::Rotation),
         ])
         .unwrap()
+    }
+
+    #[test]
+    fn limit_overrides_parse_and_apply_all_or_nothing() {
+        let b = parse_bounds("a=-0.5:1.5, b = -1:1").unwrap();
+        assert_eq!(
+            b,
+            vec![("a".to_string(), -0.5, 1.5), ("b".to_string(), -1.0, 1.0)]
+        );
+        let mut s = mixed();
+        s.override_bounds(&b).unwrap();
+        assert_eq!(
+            s.coordinates()[0].topology,
+            Topology::Interval {
+                lower: -0.5,
+                upper: 1.5
+            }
+        );
+        // The circle became an interval.
+        assert_eq!(
+            s.coordinates()[1].topology,
+            Topology::Interval {
+                lower: -1.0,
+                upper: 1.0
+            }
+        );
+        // An unknown joint is named, and nothing changes.
+        let before = mixed();
+        let mut s = before.clone();
+        let e = s
+            .override_bounds(&parse_bounds("a=0:1,elbow=0:1").unwrap())
+            .unwrap_err();
+        assert_eq!(
+            e,
+            PlanError::UnknownName {
+                what: "joint",
+                name: "elbow".into()
+            }
+        );
+        assert_eq!(s, before);
+        assert!(s.override_bounds(&[("c".into(), 0.0, 1.0)]).is_err());
+        for bad in [
+            "",
+            "a",
+            "a=1",
+            "a=x:1",
+            "a=2:1",
+            "=0:1",
+            "a=0:1,a=0:2",
+            "a=0:inf",
+        ] {
+            let e = parse_bounds(bad).unwrap_err();
+            assert!(e.to_string().contains("NAME=MIN:MAX"), "{bad}: {e}");
+        }
     }
 
     #[test]

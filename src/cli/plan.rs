@@ -25,6 +25,7 @@ use rl_plan::problem::moveit::MotionRequest;
 use rl_plan::problem::rlplan::Scenario;
 use rl_plan::problem::{COVER_SPACING, Robot, mbm};
 use rl_plan::sampler::SamplerKind;
+use rl_plan::space::parse_bounds;
 use rl_plan::verifier::Verifier;
 use rl_plan::{JointSpace, Path as PlanPath, PlanOptions, PlanResult, plan};
 use serde_json::json;
@@ -107,6 +108,32 @@ pub struct CommonArgs {
     /// Plain RRT extensions instead of dynamic-domain ones (VAMP's default, on here too).
     #[arg(long)]
     pub no_dynamic_domain: bool,
+    /// Joint limits to plan within, replacing the model's for the joints named:
+    /// JOINT=MIN:MAX[,JOINT=MIN:MAX…] in rad (m for prismatic joints), e.g.
+    /// panda_joint1=-1:1. Start and goal must lie within them.
+    #[arg(long, value_name = "JOINT=MIN:MAX[,…]")]
+    pub limits: Option<String>,
+}
+
+impl Default for CommonArgs {
+    /// The same defaults as the flags (for `rl run --plan`, which takes a few of them).
+    fn default() -> Self {
+        Self {
+            srdf: None,
+            planner: "rrt-connect".into(),
+            seed: 0,
+            time: Duration::from_secs(1),
+            checker: Checker::Hybrid,
+            spheres: None,
+            raw_spheres: false,
+            sampler: "halton".into(),
+            optimizer: "simple".into(),
+            resolution: 1.0 / 32.0,
+            range: None,
+            no_dynamic_domain: false,
+            limits: None,
+        }
+    }
 }
 
 /// The collision checker.
@@ -163,7 +190,7 @@ fn usage(e: impl std::fmt::Display) -> CliError {
 }
 
 /// The planning options of the common arguments.
-fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
+pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     let mut planner =
         PlannerKind::parse(&c.planner).map_err(|e| usage(format!("--planner: {e}")))?;
     if let Some(s) = planner.rrt_settings_mut() {
@@ -207,9 +234,28 @@ fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     })
 }
 
-fn load_robot(urdf: &Path, c: &CommonArgs) -> Result<Robot, CliError> {
+/// Loads the robot with the common arguments' SRDF and spheres, and their `--limits`.
+pub(crate) fn load_robot(urdf: &Path, c: &CommonArgs) -> Result<Robot, CliError> {
     let cover = (!c.raw_spheres).then_some(COVER_SPACING);
-    Robot::load_urdf_with(urdf, c.srdf.as_deref(), c.spheres.as_deref(), cover).map_err(failed)
+    let mut robot = Robot::load_urdf_with(urdf, c.srdf.as_deref(), c.spheres.as_deref(), cover)
+        .map_err(failed)?;
+    override_limits(&mut robot.space, c)?;
+    Ok(robot)
+}
+
+/// Applies `--limits` to `space`; a bad entry or an unknown joint is a usage error naming it.
+pub(crate) fn override_limits(space: &mut JointSpace, c: &CommonArgs) -> Result<(), CliError> {
+    let Some(text) = &c.limits else {
+        return Ok(());
+    };
+    let bounds = parse_bounds(text).map_err(|e| usage(format!("--limits: {e}")))?;
+    space.override_bounds(&bounds).map_err(|e| match e {
+        rl_plan::PlanError::UnknownName { name, .. } => usage(format!(
+            "--limits: unknown joint \"{name}\" (the model's joints: {})",
+            names_of(space).join(", ")
+        )),
+        e => usage(format!("--limits: {e}")),
+    })
 }
 
 /// Runs `rl plan`.
@@ -225,7 +271,8 @@ pub fn run(args: PlanArgs) -> CliResult {
         .map_err(|e| usage(format!("{}: {e}", model.display())))?;
     let (space, result, names, checker_name) = if is_scenario {
         let sc = Scenario::load(model).map_err(failed)?;
-        let (space, mut checker) = sc.build().map_err(failed)?;
+        let (mut space, mut checker) = sc.build().map_err(failed)?;
+        override_limits(&mut space, &args.common)?;
         let mut opts = sc.options(args.common.seed);
         if args.common.time != Duration::from_secs(1) {
             opts.time = args.common.time;

@@ -9,8 +9,15 @@
 //! otherwise); the report goes to standard output (`--json` for a script). Ctrl-C brings the
 //! arm to rest along its path and stops the device cleanly; a second Ctrl-C stops at once.
 //!
-//! Exit codes: 0 done, 1 failed (device fault, limits crossed, stop failed), 2 bad flags or
-//! files, 130 stopped by Ctrl-C before the end.
+//! With `--plan --scene SCENE.yaml --request REQUEST.yaml` (a MoveIt planning scene and motion
+//! plan request, as `rl plan` takes them) the run follows a collision-free path instead of the
+//! tour: rl-plan plans it before anything is opened (bounded by `--plan-time`, Ctrl-C cancels),
+//! [`rl::controller::planned`] makes it a jerk-limited trajectory within the model's limits, the
+//! in-process fake stands at the request's start state (a real robot must stand there, or the
+//! run refuses to start), and the report says the trajectory came from the plan.
+//!
+//! Exit codes: 0 done, 1 failed (device fault, limits crossed, stop failed, no path found), 2
+//! bad flags or files, 130 stopped by Ctrl-C before the end.
 
 mod device;
 mod plot;
@@ -23,18 +30,23 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use rl::controller::plan::joint_name;
+use rl::controller::planned::{PlannedMotion, PlannedMotionError, plan_motion};
+use rl::controller::runtime::DEFAULT_SPEED;
 use rl::controller::{
-    ControlRun, CycleRecord, JointRobot, RV6SL_XML, RunError, RunOptions, Supervision,
+    ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions, Supervision,
     TelemetryFile,
 };
 use rl_core::Model;
 use rl_core::loader::{LoadOptions, LoadedModel};
+use rl_plan::PlanOptions;
+use rl_plan::problem::moveit::MotionRequest;
 use rl_rt::{StopFlag, StopLevel};
 
 use self::device::DeviceSpec;
 use self::progress::ProgressDisplay;
 use super::capacity::{self, WithModel};
 use super::output::{out, outln};
+use super::plan::{CommonArgs, load_robot, options as plan_options};
 use super::{CliError, CliResult};
 
 /// A positive duration: the shared [`super::parse_duration`] units, zero refused.
@@ -105,6 +117,39 @@ pub struct RunArgs {
     /// Longest trajectory to accept: e.g. 10m, 1h [default: 1h].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub max_plan_duration: Option<Duration>,
+    /// Follow a collision-free path planned for --scene and --request (as `rl plan` takes
+    /// them) instead of the tour. Planned before anything starts; the fake robot stands at the
+    /// request's start state, a real one must stand there. Needs --model URDF.
+    #[arg(long, help_heading = "Planned motion")]
+    pub plan: bool,
+    /// MoveIt planning scene (YAML) with the obstacles.
+    #[arg(long, value_name = "SCENE.yaml", help_heading = "Planned motion")]
+    pub scene: Option<PathBuf>,
+    /// MoveIt motion plan request (YAML) with the start state and the joint goal.
+    #[arg(long, value_name = "REQUEST.yaml", help_heading = "Planned motion")]
+    pub request: Option<PathBuf>,
+    /// SRDF with the allowed collision pairs [default: the .srdf beside the URDF].
+    #[arg(long, value_name = "FILE", help_heading = "Planned motion")]
+    pub srdf: Option<PathBuf>,
+    /// Planner: rrt-connect, rrt-con-con, rrt-ext-ext, rrt-dual, rrt-goal-bias, rrt, prm
+    /// [default: rrt-connect].
+    #[arg(long, value_name = "NAME", help_heading = "Planned motion")]
+    pub planner: Option<String>,
+    /// Random seed of the planner (the same seed gives the same path) [default: 0].
+    #[arg(long, value_name = "N", help_heading = "Planned motion")]
+    pub seed: Option<u64>,
+    /// Joint limits to plan within, replacing the model's for the joints named:
+    /// JOINT=MIN:MAX[,JOINT=MIN:MAX…] in rad (m), e.g. panda_joint1=-1:1 (as `rl plan --limits`;
+    /// the controller still checks the model's own limits).
+    #[arg(
+        long,
+        value_name = "JOINT=MIN:MAX[,…]",
+        help_heading = "Planned motion"
+    )]
+    pub limits: Option<String>,
+    /// Time budget for planning, and as much again for shortening the path [default: 1s].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION", help_heading = "Planned motion")]
+    pub plan_time: Option<Duration>,
     /// Show the run live in the robot viewer's page (as `rl view`), served by this process on
     /// ADDR while the run goes; the address is printed before the run starts. Port 0 picks a
     /// free port [default ADDR: 127.0.0.1:8080].
@@ -115,11 +160,21 @@ pub struct RunArgs {
     pub view_hold: bool,
 }
 
+/// The planning problem of `--plan`, checked before anything starts.
+struct PlanSetup {
+    urdf: PathBuf,
+    scene: PathBuf,
+    request: PathBuf,
+    common: CommonArgs,
+    options: PlanOptions,
+}
+
 /// Flags and files checked before anything starts.
 struct Setup {
     device: DeviceSpec,
     period: Option<Duration>,
     telemetry: Option<TelemetryFile>,
+    plan: Option<PlanSetup>,
 }
 
 /// Runs `rl run`.
@@ -229,7 +284,153 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
         device,
         period,
         telemetry: None,
+        plan: check_plan(args)?,
     })
+}
+
+/// The `--plan` flags: all or none, and not with `--waypoints`.
+fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
+    let given: Vec<&str> = [
+        ("--scene", args.scene.is_some()),
+        ("--request", args.request.is_some()),
+        ("--srdf", args.srdf.is_some()),
+        ("--planner", args.planner.is_some()),
+        ("--seed", args.seed.is_some()),
+        ("--plan-time", args.plan_time.is_some()),
+        ("--limits", args.limits.is_some()),
+    ]
+    .iter()
+    .filter(|(_, on)| *on)
+    .map(|(flag, _)| *flag)
+    .collect();
+    if !args.plan {
+        return match given.first() {
+            Some(flag) => Err(CliError::usage(format!(
+                "{flag} describes a planned motion: add --plan"
+            ))),
+            None => Ok(None),
+        };
+    }
+    let (Some(scene), Some(request)) = (&args.scene, &args.request) else {
+        return Err(CliError::usage(
+            "--plan needs --scene SCENE.yaml and --request REQUEST.yaml (a MoveIt planning \
+             scene and motion plan request)",
+        ));
+    };
+    let Some(urdf) = &args.model else {
+        return Err(CliError::usage(
+            "--plan needs --model ROBOT.urdf: the embedded RV-6SL has no collision geometry",
+        ));
+    };
+    if args.waypoints.is_some() {
+        return Err(CliError::usage(
+            "--plan and --waypoints: the run follows either the planned path or a tour",
+        ));
+    }
+    let mut common = CommonArgs {
+        srdf: args.srdf.clone(),
+        limits: args.limits.clone(),
+        ..CommonArgs::default()
+    };
+    if let Some(p) = &args.planner {
+        common.planner = p.clone();
+    }
+    if let Some(seed) = args.seed {
+        common.seed = seed;
+    }
+    if let Some(t) = args.plan_time {
+        common.time = t;
+    }
+    let options = plan_options(&common)?;
+    Ok(Some(PlanSetup {
+        urdf: urdf.clone(),
+        scene: scene.clone(),
+        request: request.clone(),
+        common,
+        options,
+    }))
+}
+
+/// A motion planned for `--plan`, with the request's start and goal.
+struct RunPlan<const J: usize> {
+    planned: PlannedMotion<J>,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+}
+
+/// Plans the motion of `--plan` for `model` (the run's model, loaded from the same URDF), before
+/// anything is opened. `Ok(None)`: cancelled by a stop request.
+fn plan_for_run<const B: usize, const J: usize>(
+    setup: &PlanSetup,
+    model: &Model<B>,
+    speed: f64,
+    stop: &StopFlag,
+) -> Result<Option<RunPlan<J>>, CliError> {
+    let robot = load_robot(&setup.urdf, &setup.common)?;
+    let scene = rl_sg::load::moveit::load_environment(&setup.scene)
+        .map_err(|e| CliError::usage(format!("--scene: {e}")))?;
+    let request = MotionRequest::load(&setup.request)
+        .map_err(|e| CliError::usage(format!("--request: {e}")))?;
+    let (start, goal) = request
+        .configurations(&robot.space)
+        .map_err(|e| CliError::usage(format!("--request {}: {e}", setup.request.display())))?;
+    let mut checker = robot
+        .hybrid_checker(&scene)
+        .map_err(|e| CliError::failed(format!("--plan: collision checker: {e}")))?;
+    eprintln!(
+        "rl run: planning a collision-free path with {} (seed {}, {:?} budget) before starting",
+        setup.common.planner, setup.common.seed, setup.common.time
+    );
+    match plan_motion::<B, J>(
+        model,
+        &robot.space,
+        &mut checker,
+        &start,
+        &goal,
+        &setup.options,
+        speed,
+        Some(stop),
+    ) {
+        Ok(planned) => Ok(Some(RunPlan {
+            planned,
+            start,
+            goal,
+        })),
+        Err(PlannedMotionError::Cancelled) => Ok(None),
+        Err(e) => {
+            // For a start or goal in collision, name what touches (exact meshes).
+            let touching = match &e {
+                PlannedMotionError::Planner(rl_plan::PlanError::InvalidEndpoint {
+                    which, ..
+                }) => {
+                    let q = if *which == "start" { &start } else { &goal };
+                    drop(checker);
+                    robot
+                        .exact_checker(scene)
+                        .map(|mut exact| exact.collisions(q))
+                        .unwrap_or_default()
+                }
+                _ => Vec::new(),
+            };
+            let touching = if touching.is_empty() {
+                String::new()
+            } else {
+                let pairs: Vec<String> = touching
+                    .iter()
+                    .take(6)
+                    .map(|(a, b)| format!("{a} ↔ {b}"))
+                    .collect();
+                format!(
+                    "; touching: {}{}",
+                    pairs.join(", "),
+                    if touching.len() > 6 { ", …" } else { "" }
+                )
+            };
+            Err(CliError::failed(format!(
+                "refusing to move: {e}{touching} (nothing was started)"
+            )))
+        }
+    }
 }
 
 /// Checks that `path` can be written without touching it: its directory exists and accepts a
@@ -266,7 +467,57 @@ fn drive<const B: usize, const J: usize>(
             ))
         })?);
     }
-    let opened = setup.device.build(&loaded, setup.period)?;
+    let speed = args.speed.unwrap_or(DEFAULT_SPEED);
+    let mut plan_json = None;
+    let mut plan_note = None;
+    let (motion, home) = match &setup.plan {
+        None => (Motion::Tour, None),
+        Some(p) => {
+            let Some(RunPlan {
+                planned,
+                start,
+                goal,
+            }) = plan_for_run::<B, J>(p, model, speed, &stop)?
+            else {
+                eprintln!("rl run: {}", RunError::Cancelled);
+                return Ok(ExitCode::from(130));
+            };
+            let r = &planned.result;
+            plan_note = Some(format!(
+                "plan: solved by {} in {:.1} µs ({} iterations, {} collision checks), path {:.3} \
+                 rad shortened to {:.3} rad in {:.1} µs, {} waypoints, trajectory {:.2} s",
+                r.planner,
+                r.planning_time.as_secs_f64() * 1e6,
+                r.iterations,
+                r.planning_checks,
+                r.length_before,
+                r.length_after,
+                r.optimization_time.as_secs_f64() * 1e6,
+                planned.waypoints.len(),
+                planned.duration_s
+            ));
+            plan_json = Some(serde_json::json!({
+                "solved": r.solved,
+                "planner": r.planner,
+                "seed": p.common.seed,
+                "scene": p.scene.display().to_string(),
+                "request": p.request.display().to_string(),
+                "planning_time_us": r.planning_time.as_secs_f64() * 1e6,
+                "optimization_time_us": r.optimization_time.as_secs_f64() * 1e6,
+                "iterations": r.iterations,
+                "collision_checks": r.planning_checks,
+                "optimization_collision_checks": r.optimization_checks,
+                "length_before": r.length_before,
+                "length_after": r.length_after,
+                "start": start,
+                "goal": goal,
+                "waypoints": planned.waypoints,
+                "trajectory_duration_s": planned.duration_s,
+            }));
+            (planned.motion, Some(start))
+        }
+    };
+    let opened = setup.device.build(&loaded, setup.period, home.as_deref())?;
     let fake = opened.fake;
     let mut supervision = Supervision::default();
     if args.no_supervision {
@@ -310,7 +561,7 @@ fn drive<const B: usize, const J: usize>(
     let view = view::start(args)?;
     options.view = view.clone();
     let robot: Box<dyn JointRobot + Send> = opened.robot;
-    let mut run = match ControlRun::<_, B, J>::start(robot, loaded, options) {
+    let mut run = match ControlRun::<_, B, J>::start_with(robot, loaded, options, motion) {
         Ok(run) => run,
         Err(e) => {
             return Err(match e {
@@ -372,6 +623,9 @@ fn drive<const B: usize, const J: usize>(
             Err(e) => report.fail(format!("telemetry: {e}")),
         }
     }
+    if let Some(note) = plan_note {
+        report.notes.insert(0, note);
+    }
     let fake_json = fake.as_ref().map(|fake| {
         let seen = fake.after_run(report.shutdown.stopped);
         report.notes.push(seen.note);
@@ -392,6 +646,9 @@ fn drive<const B: usize, const J: usize>(
             (json.as_object_mut(), fake_json)
         {
             obj.extend(seen);
+        }
+        if let (Some(obj), Some(plan)) = (json.as_object_mut(), plan_json) {
+            obj.insert("plan".into(), plan);
         }
         outln!("{json}")
     } else {

@@ -517,7 +517,7 @@ impl<R: JointRobot, const B: usize, const J: usize> Controller<R, B, J> {
 
 /// The supervisor's bounds for `model` and `plan`: the plan's speed limits (the model's, or the
 /// assumed speed), the model's position limits, the control period and the device cycle.
-fn supervision_bounds<const B: usize, const J: usize>(
+pub(super) fn supervision_bounds<const B: usize, const J: usize>(
     model: &Model<B>,
     plan: &Plan<J>,
     supervision: &Supervision,

@@ -12,6 +12,8 @@
 //!
 //! - [`plan`]: limits derived from the model, default waypoints, and a [`Plan`] that is checked
 //!   against the model's position, speed and effort limits before anything moves;
+//! - [`planned`] (feature `plan`): a collision-free path from rl-plan, made a trajectory the
+//!   run follows ([`Motion::Trajectory`], [`ControlRun::start_with`]);
 //! - [`supervise`]: the per-cycle checks and the [`Fault`]s that end a run;
 //! - [`clock`]: trajectory time, slowed to rest along the path when a stop is asked for;
 //! - [`tracking`]: tracking error, feed-forward peaks and limit checks of the measured motion;
@@ -49,6 +51,8 @@
 pub mod clock;
 mod control;
 pub mod plan;
+#[cfg(feature = "plan")]
+pub mod planned;
 pub mod report;
 mod robot;
 pub mod runtime;
@@ -60,7 +64,10 @@ pub mod view;
 
 pub use clock::TrajectoryClock;
 pub use control::{Controller, CycleResult, CycleTiming, RunEnd};
-pub use plan::{MotionLimits, Plan, PlanBudget, PlanError, default_waypoints};
+pub use plan::{
+    FollowTrajectory, Motion, MotionLimits, Plan, PlanBudget, PlanError, PlanTrajectory,
+    default_waypoints,
+};
 pub use report::RunReport;
 pub use robot::JointRobot;
 pub use runtime::{ControlRun, Progress, RunError, RunOptions};

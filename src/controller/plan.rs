@@ -2,7 +2,8 @@
 //!
 //! A [`Plan`] goes from the measured start through the waypoints and back to the start, as
 //! jerk-limited rest-to-rest moves synchronised over the joints (Biagiotti & Melchiorri's
-//! 7-segment profile). Each move is monotonic per joint, so the path stays between its two
+//! 7-segment profile), or follows a trajectory made elsewhere ([`Plan::from_trajectory`],
+//! [`Motion::Trajectory`]: e.g. a planned collision-free path). Each move is monotonic per joint, so the path stays between its two
 //! waypoints: waypoints inside the position limits keep the whole path inside. The plan is
 //! also sampled (every millisecond, or more coarsely for very long plans so the check stays
 //! bounded) and checked against position, speed and (where the model has them) effort limits
@@ -373,6 +374,43 @@ pub fn default_waypoints<const N: usize>(model: &Model<N>, start: &[f64]) -> Vec
     ]
 }
 
+/// What a run moves along.
+#[derive(Clone, Debug, Default)]
+pub enum Motion<const J: usize = DEFAULT_JOINTS> {
+    /// A tour from where the arm stands through the run's waypoints (or
+    /// [`default_waypoints`]) and back.
+    #[default]
+    Tour,
+    /// A given trajectory, followed from its start (where the arm must stand) to its end.
+    Trajectory(FollowTrajectory<J>),
+}
+
+/// A trajectory for a run to follow, and where it came from (for the report).
+#[derive(Clone, Debug)]
+pub struct FollowTrajectory<const J: usize = DEFAULT_JOINTS> {
+    /// The trajectory (rl-core's jerk-limited segments; axes beyond the model's joints unused).
+    pub trajectory: Box<PlanTrajectory<J>>,
+    /// A short tag for scripts, e.g. `"plan"` (the report's `trajectory_source`).
+    pub source: String,
+    /// One line for people, e.g. which planner found the path.
+    pub description: String,
+}
+
+impl<const J: usize> Motion<J> {
+    /// Follow `trajectory`; `source` and `description` go into the report.
+    pub fn trajectory(
+        trajectory: Box<PlanTrajectory<J>>,
+        source: impl Into<String>,
+        description: impl Into<String>,
+    ) -> Self {
+        Self::Trajectory(FollowTrajectory {
+            trajectory,
+            source: source.into(),
+            description: description.into(),
+        })
+    }
+}
+
 /// A checked jerk-limited trajectory from `start` through waypoints and back to `start`.
 #[derive(Clone, Debug)]
 pub struct Plan<const J: usize = DEFAULT_JOINTS> {
@@ -439,6 +477,65 @@ impl<const J: usize> Plan<J> {
             }
             trajectory.push(segment)?;
         }
+        let mut plan = Self {
+            dof,
+            trajectory,
+            points,
+            limits: *limits,
+            peak_velocity: [0.0; J],
+            peak_effort: [0.0; J],
+        };
+        plan.check(model, budget)?;
+        Ok(plan)
+    }
+
+    /// A checked plan that follows `trajectory` from its start to its end (no return): a
+    /// trajectory from elsewhere, e.g. rl-plan's time-parameterised collision-free path
+    /// (`rl_plan::execute`), built within `limits`. Its segments' end points must lie within
+    /// the model's position limits, and it is sampled and checked against position, speed and
+    /// effort limits exactly as a tour is, within `budget`. The robot must stand at its start
+    /// ([`Plan::start`]) when the device starts.
+    pub fn from_trajectory<const N: usize>(
+        model: &Model<N>,
+        trajectory: Box<PlanTrajectory<J>>,
+        limits: &MotionLimits<J>,
+        budget: &PlanBudget,
+    ) -> Result<Self, PlanError> {
+        check_model::<N, J>(model)?;
+        let dof = model.dof();
+        if trajectory.is_empty() {
+            return Err(PlanError::Trajectory(TrajectoryError::TooFewWaypoints {
+                required: 2,
+                given: 1,
+            }));
+        }
+        let duration = trajectory.duration();
+        let max_s = budget.max_duration.as_secs_f64();
+        if !duration.is_finite() || duration > max_s {
+            let k = (0..dof)
+                .min_by(|&a, &b| limits.velocity[a].total_cmp(&limits.velocity[b]))
+                .unwrap_or(0);
+            return Err(PlanError::TooLong {
+                duration_s: duration,
+                max_s,
+                joint: joint_name(model, k),
+                speed: limits.velocity[k],
+            });
+        }
+        let mut points = Vec::with_capacity(trajectory.len() + 1);
+        for (i, segment) in trajectory.segments().iter().enumerate() {
+            let what = if i == 0 {
+                "trajectory start".to_owned()
+            } else {
+                format!("trajectory waypoint {i}")
+            };
+            points.push(to_point(model, what, &segment.position(0.0)[..dof])?);
+        }
+        points.push(to_point(
+            model,
+            "trajectory end".into(),
+            &trajectory.position(duration)[..dof],
+        )?);
         let mut plan = Self {
             dof,
             trajectory,
@@ -561,9 +658,15 @@ impl<const J: usize> Plan<J> {
         self.trajectory.duration()
     }
 
-    /// The start, the waypoints and the start again.
+    /// The start, the waypoints and the start again (for a tour), or the start and the end
+    /// of every segment (for a trajectory given to [`Plan::from_trajectory`]).
     pub fn points(&self) -> &[[f64; J]] {
         &self.points
+    }
+
+    /// Where the plan starts (the robot must stand there).
+    pub fn start(&self) -> &[f64] {
+        &self.points[0][..self.dof]
     }
 
     /// The limits it was planned with.

@@ -47,6 +47,11 @@ pub struct RunReport {
     pub memory_locked: bool,
     /// Planned trajectory duration, s.
     pub plan_duration_s: f64,
+    /// Where the trajectory came from: `"tour"`, or the tag of a followed trajectory (e.g.
+    /// `"plan"`).
+    pub trajectory_source: String,
+    /// The trajectory in one line.
+    pub trajectory_description: String,
     /// Trajectory time reached, s.
     pub trajectory_time_s: f64,
     /// Wall time of the loop, s.
@@ -112,6 +117,8 @@ impl RunReport {
             warnings: Vec::new(),
             memory_locked: false,
             plan_duration_s: 0.0,
+            trajectory_source: String::new(),
+            trajectory_description: String::new(),
             trajectory_time_s: 0.0,
             wall_time_s: 0.0,
             end: None,
@@ -218,6 +225,8 @@ impl RunReport {
             "warnings": self.warnings,
             "memory_locked": self.memory_locked,
             "plan_duration_s": self.plan_duration_s,
+            "trajectory_source": self.trajectory_source,
+            "trajectory": self.trajectory_description,
             "trajectory_time_s": self.trajectory_time_s,
             "wall_time_s": self.wall_time_s,
             "end": self.end.map(|e| e.to_string()),
@@ -266,6 +275,13 @@ impl fmt::Display for RunReport {
                 out,
                 "note: the model gives no speed limit for {}; assumed {v} rad/s (or m/s)",
                 joints.join(", ")
+            );
+        }
+        if !self.trajectory_description.is_empty() {
+            let _ = writeln!(
+                out,
+                "trajectory ({}): {}",
+                self.trajectory_source, self.trajectory_description
             );
         }
         let _ = writeln!(

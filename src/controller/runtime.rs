@@ -43,9 +43,9 @@ use rl_rt::{
 };
 use rl_rt::{StopFlag, StopLevel, ThreadError};
 
-use super::control::{Controller, CycleTiming, RunEnd};
+use super::control::{Controller, CycleTiming, RunEnd, supervision_bounds};
 use super::plan::{
-    DEFAULT_MAX_PLAN_DURATION, MotionLimits, Plan, PlanBudget, PlanError, UNKNOWN_SPEED,
+    DEFAULT_MAX_PLAN_DURATION, Motion, MotionLimits, Plan, PlanBudget, PlanError, UNKNOWN_SPEED,
     default_waypoints, joint_name,
 };
 use super::report::{RunReport, Shutdown};
@@ -175,6 +175,17 @@ pub enum RunError {
         /// The tolerance.
         tolerance: f64,
     },
+    /// Before starting, the arm does not stand where the trajectory to follow starts.
+    NotAtStart {
+        /// The joint's name.
+        joint: String,
+        /// Where the trajectory starts.
+        start: f64,
+        /// Where the device reports the joint.
+        measured: f64,
+        /// The tolerance (the tracking bound and the device's resolution).
+        tolerance: f64,
+    },
     /// A stop was requested before the loop started.
     Cancelled,
     /// The real-time thread could not be started.
@@ -211,6 +222,17 @@ impl fmt::Display for RunError {
                 f,
                 "refusing to move: after starting, joint {joint} is at {measured}, not at \
                  {planned} where the plan starts (tolerance {tolerance:.2e})"
+            ),
+            RunError::NotAtStart {
+                joint,
+                start,
+                measured,
+                tolerance,
+            } => write!(
+                f,
+                "refusing to move: joint {joint} is at {measured}, not at {start} where the \
+                 trajectory starts (tolerance {tolerance:.2e}); bring the robot to the start \
+                 first"
             ),
             RunError::Cancelled => f.write_str("stopped on request before the motion started"),
             RunError::Thread(e) => write!(f, "cannot start the control thread: {e}"),
@@ -270,6 +292,8 @@ struct RunInfo {
     warnings: Vec<String>,
     memory_locked: bool,
     plan_duration_s: f64,
+    trajectory_source: String,
+    trajectory_description: String,
     assumed_speed: Vec<String>,
     started: Instant,
 }
@@ -285,13 +309,24 @@ pub struct ControlRun<R, const B: usize, const J: usize> {
 }
 
 impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<R, B, J> {
-    /// Opens `robot`, checks `model` against it, reads the start, plans and checks the motion,
-    /// starts the device, checks its first reply and starts the real-time loop. On an error
-    /// nothing has moved and the device is stopped and closed.
-    pub fn start(
+    /// Opens `robot`, checks `model` against it, reads the start, plans and checks the motion
+    /// (a tour through [`RunOptions::waypoints`] and back), starts the device, checks its first
+    /// reply and starts the real-time loop. On an error nothing has moved and the device is
+    /// stopped and closed.
+    pub fn start(robot: R, loaded: LoadedModel<B>, options: RunOptions) -> Result<Self, RunError> {
+        Self::start_with(robot, loaded, options, Motion::Tour)
+    }
+
+    /// [`start`](Self::start) with the motion to make: [`Motion::Tour`], or
+    /// [`Motion::Trajectory`] to follow a given trajectory (e.g. a planned collision-free path,
+    /// see [`super::planned`]). A trajectory is checked against the model's limits like a tour,
+    /// and the arm must stand at its start before the device starts: otherwise
+    /// [`RunError::NotAtStart`], and nothing moves.
+    pub fn start_with(
         mut robot: R,
         loaded: LoadedModel<B>,
         options: RunOptions,
+        motion: Motion<J>,
     ) -> Result<Self, RunError> {
         let model = loaded.model;
         if !(options.speed > 0.0 && options.speed <= 1.0) {
@@ -355,15 +390,6 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
                     }
                 }
             }
-            let waypoints = options
-                .waypoints
-                .clone()
-                .unwrap_or_else(|| default_waypoints(&model, &start));
-            let budget = PlanBudget {
-                max_duration: options.max_plan_duration,
-                stop: Some(stop.clone()),
-            };
-            let plan = Plan::<J>::with_budget(&model, &start, &waypoints, &limits, &budget)?;
             let device_period = robot.update_period();
             let period = options.period.unwrap_or(device_period);
             if period.is_zero() {
@@ -379,16 +405,65 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
                     device_period.as_secs_f64() * 1e3
                 )));
             }
+            let budget = PlanBudget {
+                max_duration: options.max_plan_duration,
+                stop: Some(stop.clone()),
+            };
+            let (plan, source, description) = match motion {
+                Motion::Tour => {
+                    let waypoints = options
+                        .waypoints
+                        .clone()
+                        .unwrap_or_else(|| default_waypoints(&model, &start));
+                    let n = waypoints.len();
+                    let plan =
+                        Plan::<J>::with_budget(&model, &start, &waypoints, &limits, &budget)?;
+                    let description = format!(
+                        "tour through {n} waypoint{} and back to the start",
+                        if n == 1 { "" } else { "s" }
+                    );
+                    (plan, "tour".to_owned(), description)
+                }
+                Motion::Trajectory(follow) => {
+                    let plan =
+                        Plan::<J>::from_trajectory(&model, follow.trajectory, &limits, &budget)?;
+                    // The arm must stand where the trajectory starts, within the tracking
+                    // bound the run supervises.
+                    let bounds = supervision_bounds(
+                        &model,
+                        &plan,
+                        &options.supervision,
+                        period.as_secs_f64(),
+                        device_period,
+                    );
+                    for (k, (&measured, &planned)) in start.iter().zip(plan.start()).enumerate() {
+                        let tolerance =
+                            bounds.tracking[k] + robot.joint_position_resolution(planned);
+                        let off = (measured - planned).abs();
+                        if off.is_nan() || off > tolerance {
+                            return Err(RunError::NotAtStart {
+                                joint: joints[k].clone(),
+                                start: planned,
+                                measured,
+                                tolerance,
+                            });
+                        }
+                    }
+                    start.copy_from_slice(plan.start());
+                    (plan, follow.source, follow.description)
+                }
+            };
             plan.check_step(&model, period, device_period)?;
-            Ok((start, plan, period, device_period))
+            Ok((start, plan, period, device_period, source, description))
         })();
-        let (start, plan, period, device_period) = match planned {
-            Ok(p) => p,
-            Err(e) => {
-                let _ = robot.close();
-                return Err(e);
-            }
-        };
+        let (start, plan, period, device_period, trajectory_source, trajectory_description) =
+            match planned {
+                Ok(p) => p,
+                Err(e) => {
+                    let _ = robot.close();
+                    return Err(e);
+                }
+            };
         let plan_duration_s = plan.duration_s();
         let assumed_speed: Vec<String> = (0..dof)
             .filter(|&k| limits.assumed_speed[k])
@@ -586,6 +661,8 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
                 warnings,
                 memory_locked,
                 plan_duration_s,
+                trajectory_source,
+                trajectory_description,
                 assumed_speed,
                 started: Instant::now(),
             },
@@ -668,12 +745,15 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
         let outcome = match self.thread.join() {
             Ok(Some(o)) => o,
             Ok(None) | Err(_) => {
-                return RunReport::failed_early(
+                let mut report = RunReport::failed_early(
                     info.model,
                     info.device,
                     info.joints,
                     "the control thread panicked; the device was not stopped by the run",
                 );
+                report.trajectory_source = info.trajectory_source;
+                report.trajectory_description = info.trajectory_description;
+                return report;
             }
         };
         let LoopOutcome {
@@ -721,6 +801,8 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
             warnings: info.warnings,
             memory_locked: info.memory_locked,
             plan_duration_s: info.plan_duration_s,
+            trajectory_source: info.trajectory_source,
+            trajectory_description: info.trajectory_description,
             trajectory_time_s: controller.clock().time_s(),
             wall_time_s: info.started.elapsed().as_secs_f64(),
             end,

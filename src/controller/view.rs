@@ -54,11 +54,18 @@ impl ViewHook {
     /// Starts a viewer for one robot on `http` (port 0: any free port), without a Coach
     /// listener, on ordinary threads, and shows runs in it.
     pub fn start(robot: ModelSource, http: SocketAddr) -> Result<Self, ViewError> {
+        let load = LoadOptions {
+            models: vec![robot],
+            ..LoadOptions::default()
+        };
+        Self::start_with(load, http)
+    }
+
+    /// [`ViewHook::start`] for what `load` names (the robot is its first model; obstacles,
+    /// SRDF and path as `rl view` takes them).
+    pub fn start_with(load: LoadOptions, http: SocketAddr) -> Result<Self, ViewError> {
         let options = ViewerOptions {
-            load: LoadOptions {
-                models: vec![robot],
-                ..LoadOptions::default()
-            },
+            load,
             http,
             coach: None,
         };

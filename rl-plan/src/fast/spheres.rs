@@ -263,9 +263,9 @@ impl SphereSet {
     /// convex hulls and boxes subdivided; round primitives as balls along their axis), so every
     /// surface point is within `spacing` of a sample, and every sample must lie inside some
     /// sphere with that margin. While one does not, the sample farthest outside gets a new
-    /// sphere: its centre [`COVER_DEPTH`] from the sample towards the nearest original centre
+    /// sphere: its centre `COVER_DEPTH` from the sample towards the nearest original centre
     /// (inwards; no farther than that centre), its radius that distance plus the margin plus
-    /// [`COVER_EXCESS`], so it sticks out of a flat surface by at most margin + excess around
+    /// `COVER_EXCESS`, so it sticks out of a flat surface by at most margin + excess around
     /// that sample. Samples are taken worst first, and one covered by a sphere added before is
     /// skipped. Existing spheres are kept as they are; a link without spheres gets its first
     /// from the same rule (towards the link's sample centroid). Afterwards the spheres contain

@@ -1,5 +1,6 @@
 //! Planners (RL's `Planner` family), one file each: [`Prm`], [`Rrt`], [`RrtGoalBias`],
-//! [`RrtDual`], [`RrtConCon`], [`RrtExtCon`], [`RrtExtExt`].
+//! [`RrtDual`], [`RrtConCon`], [`RrtExtCon`], [`RrtExtExt`]; the roadmap query
+//! ([`graph::shortest_path`], A*).
 //!
 //! A planner works in a [`Context`]: the space, the validity check, the edge verifier, the
 //! sampler, a seeded random generator and a time [`Budget`]. The same seed, problem and checker
@@ -10,6 +11,7 @@
 //! resolution (VAMP's setting: steps of 1 rad checked every 1/32 rad) is safe too. With `delta`
 //! at or below the resolution the verifier checks exactly the new vertex, as RL does.
 
+pub mod graph;
 mod prm;
 mod rrt;
 mod rrt_con_con;

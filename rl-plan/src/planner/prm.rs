@@ -2,14 +2,15 @@
 //!
 //! The start and the goal are inserted first; then valid samples are added until both lie in
 //! one connected component or the budget runs out. A new vertex is joined to its `k` nearest
-//! neighbours within `radius` (each vertex at most `degree` edges) when they lie in another
-//! component and the edge is valid — so, as in RL, the roadmap stays a forest and components
-//! are tracked with a union–find. The path is then found by A* (the metric to the goal is the
+//! neighbours, or with a finite `radius` to its neighbours within it (the nearest `k` of them:
+//! set `k` to `usize::MAX` for the whole neighbourhood; each vertex at most `degree` edges),
+//! when they lie in another component and the edge is valid — so, as in RL, the roadmap stays
+//! a forest and components are tracked with a union–find. The path is then found by A* (the metric to the goal is the
 //! heuristic; RL's default) or Dijkstra.
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
+use super::graph::shortest_path;
 use super::{Context, Planner, Stats};
 use crate::error::PlanError;
 use crate::nn::{NearestNeighbors, Nn, NnKind};
@@ -108,14 +109,22 @@ impl Prm {
         self.edges.push(Vec::new());
         self.parent.push(v);
         self.rank.push(0);
-        let neighbors = self.nn.nearest(ctx.space, q, self.settings.k);
+        // The k nearest, or with a finite radius the (at most k) nearest within it.
+        let neighbors = if self.settings.radius.is_finite() {
+            let mut within = self.nn.within(ctx.space, q, self.settings.radius);
+            within.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+            within.truncate(self.settings.k);
+            within
+        } else {
+            self.nn.nearest(ctx.space, q, self.settings.k)
+        };
         for n in neighbors {
             if self.edges[v as usize].len() >= self.settings.degree {
                 break;
             }
             let u = n.id as u32;
             if self.edges[u as usize].len() >= self.settings.degree
-                || n.distance >= self.settings.radius
+                || n.distance > self.settings.radius
                 || self.find(u) == self.find(v)
             {
                 continue;
@@ -131,56 +140,18 @@ impl Prm {
         v
     }
 
-    /// A* (or Dijkstra) from vertex 0 to vertex 1.
+    /// A* (or Dijkstra) from vertex 0 to vertex 1 ([`shortest_path`]).
     fn search(&self, space: &JointSpace) -> Option<Vec<u32>> {
-        #[derive(PartialEq)]
-        struct Item(f64, u32);
-        impl Eq for Item {}
-        impl PartialOrd for Item {
-            fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-                Some(self.cmp(o))
-            }
-        }
-        impl Ord for Item {
-            fn cmp(&self, o: &Self) -> Ordering {
-                o.0.total_cmp(&self.0).then(o.1.cmp(&self.1))
-            }
-        }
-        let n = self.edges.len();
         let goal = 1u32;
+        let astar = self.settings.astar;
         let h = |v: u32| {
-            if self.settings.astar {
+            if astar {
                 space.distance(self.q(v), self.q(goal))
             } else {
                 0.0
             }
         };
-        let mut g = vec![f64::INFINITY; n];
-        let mut pred = vec![u32::MAX; n];
-        let mut open = BinaryHeap::new();
-        g[0] = 0.0;
-        open.push(Item(h(0), 0));
-        while let Some(Item(_, u)) = open.pop() {
-            if u == goal {
-                let mut chain = vec![goal];
-                let mut v = goal;
-                while v != 0 {
-                    v = pred[v as usize];
-                    chain.push(v);
-                }
-                chain.reverse();
-                return Some(chain);
-            }
-            for &(v, w) in &self.edges[u as usize] {
-                let c = g[u as usize] + w;
-                if c < g[v as usize] {
-                    g[v as usize] = c;
-                    pred[v as usize] = u;
-                    open.push(Item(c + h(v), v));
-                }
-            }
-        }
-        None
+        shortest_path(&self.edges, 0, goal, h).map(|(chain, _)| chain)
     }
 }
 

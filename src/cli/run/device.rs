@@ -221,16 +221,20 @@ impl DeviceSpec {
         matches!(self, Self::H7 { .. } | Self::FakeH7)
     }
 
-    /// Builds the device for `loaded`; `period` is the control period asked for, if any.
+    /// Builds the device for `loaded`; `period` is the control period asked for, if any. An
+    /// in-process fake stands at `home` (the start of a planned motion), else at the model's
+    /// home position.
     pub fn build<const B: usize>(
         &self,
         loaded: &LoadedModel<B>,
         period: Option<Duration>,
+        home: Option<&[f64]>,
     ) -> Result<Opened, CliError> {
         let model = &loaded.model;
+        let home = home.map_or_else(|| loaded.home_or_neutral(), <[f64]>::to_vec);
         match self {
             Self::FakeH7 => {
-                let config = fake_h7_config(loaded)?;
+                let config = fake_h7_config(loaded, &home)?;
                 let fake = spawn_fake("fake-h7-0", move || FakeH7::spawn(config))
                     .map_err(|e| CliError::failed(format!("cannot start the fake H7: {e}")))?;
                 let robot =
@@ -259,7 +263,7 @@ impl DeviceSpec {
             }
             Self::FakeCia402 => {
                 let units = AxisUnits::GEARED_100;
-                let config = FakeCia402Config::for_model(model, &loaded.home_or_neutral(), units)
+                let config = FakeCia402Config::for_model(model, &home, units)
                     .map_err(|e| CliError::usage(format!("fake CiA 402 drives: {e}")))?;
                 let loopback = CanAddress::parse("cannelloni+udp://127.0.0.1:0")
                     .map_err(|e| CliError::failed(e.to_string()))?;
@@ -370,10 +374,12 @@ fn spawn_fake<T: Send + 'static, E: std::fmt::Display>(
     }
 }
 
-/// The in-process fake H7 for a model: its limits and speed limits, standing at the model's
-/// home position.
-fn fake_h7_config<const B: usize>(loaded: &LoadedModel<B>) -> Result<FakeH7Config, CliError> {
-    FakeH7Config::for_model(&loaded.model, &loaded.home_or_neutral())
+/// The in-process fake H7 for a model: its limits and speed limits, standing at `home`.
+fn fake_h7_config<const B: usize>(
+    loaded: &LoadedModel<B>,
+    home: &[f64],
+) -> Result<FakeH7Config, CliError> {
+    FakeH7Config::for_model(&loaded.model, home)
         .map_err(|e| CliError::usage(format!("--model: the fake H7 cannot simulate it: {e}")))
 }
 

@@ -25,7 +25,15 @@ pub(super) fn start(args: &RunArgs) -> Result<Option<ViewHook>, CliError> {
             text: RV6SL_XML.into(),
         },
     };
-    let hook = ViewHook::start(robot, http).map_err(|e| CliError::usage(format!("--view: {e}")))?;
+    // A planned run shows its obstacles (and the SRDF's allowed pairs) too.
+    let load = rl_view::LoadOptions {
+        models: vec![robot],
+        env: args.scene.clone().filter(|_| args.plan),
+        srdf: args.srdf.clone().filter(|_| args.plan),
+        ..rl_view::LoadOptions::default()
+    };
+    let hook =
+        ViewHook::start_with(load, http).map_err(|e| CliError::usage(format!("--view: {e}")))?;
     let viewer = hook.viewer();
     for w in viewer.warnings() {
         eprintln!("rl run: view: note: {w}");

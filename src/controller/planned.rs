@@ -1,0 +1,197 @@
+//! A planned motion for a run (feature `plan`): a collision-free path from rl-plan, made a
+//! time-parameterised trajectory through its waypoints within the model's speed, acceleration
+//! and jerk limits (rl-core's jerk-limited profile, rl-plan's [`Execution`]), as the
+//! [`Motion`] a [`ControlRun`](super::ControlRun) follows.
+//!
+//! Planning runs before anything is opened or started, bounded by the planner's time budget
+//! (planning, then as much again for optimising) and cancelled within one planner iteration
+//! when the run's [`StopFlag`] is raised (Ctrl-C). A start or goal in collision, or no path
+//! within the budget, is an error and nothing moves.
+//!
+//! The trajectory stops at every waypoint of the optimised path and follows the straight
+//! segments between them exactly (every joint on the same normalised profile), so the arm
+//! passes only through configurations the planner checked.
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use rl::controller::{ControlRun, RunOptions, planned};
+//! use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+//! use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+//! use rl_plan::problem::{Robot, moveit::MotionRequest};
+//!
+//! let urdf = Path::new("tests/data/mbm/panda/panda.urdf");
+//! let problem = Path::new("tests/data/mbm/panda/problems/table_pick_panda");
+//! let robot = Robot::load_urdf(urdf, None, None)?; // the SRDF and spheres beside the URDF
+//! let scene = rl::sg::load::moveit::load_environment(&problem.join("scene0001.yaml"))?;
+//! let request = MotionRequest::load(&problem.join("request0001.yaml"))?;
+//! let (start, goal) = request.configurations(&robot.space)?;
+//!
+//! let loaded = rl::core::loader::load_file::<16>(urdf)?;
+//! let options = RunOptions::default().speed(0.5);
+//! let mut checker = robot.hybrid_checker(&scene)?;
+//! let planned = planned::plan_motion::<16, 16>(
+//!     &loaded.model, &robot.space, &mut checker, &start, &goal,
+//!     &rl_plan::PlanOptions::default(), options.speed, Some(&options.stop),
+//! )?;
+//! // The robot must stand at the start: here a fake H7 whose arm rests there.
+//! let fake = FakeH7::spawn(FakeH7Config::for_model(&loaded.model, &start)?)?;
+//! let h7 = MitsubishiH7::new(MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr()))?;
+//! let run = ControlRun::<_, 16, 16>::start_with(h7, loaded, options, planned.motion)?;
+//! println!("{}", run.join());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use core::fmt;
+
+use rl_core::Model;
+use rl_plan::budget::Cancel;
+use rl_plan::execute::{Execution, ExecutionLimits};
+use rl_plan::solve::plan_cancellable;
+use rl_plan::{JointSpace, PlanOptions, PlanResult, Validity};
+use rl_rt::StopFlag;
+
+use super::MAX_WAYPOINTS;
+use super::plan::{Motion, MotionLimits, PlanError, PlanTrajectory, joint_name};
+
+/// Why no motion was planned. Nothing was opened or moved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlannedMotionError {
+    /// The planning space's joints are not the controller model's (names, in order).
+    Joints {
+        /// The space's coordinates.
+        space: Vec<String>,
+        /// The model's joints.
+        model: Vec<String>,
+    },
+    /// The planner refused the problem (e.g. the start or goal in collision) or the path
+    /// could not be made a trajectory.
+    Planner(rl_plan::PlanError),
+    /// No path was found within the time budget.
+    NotSolved {
+        /// The planner's name.
+        planner: String,
+        /// The budget.
+        time: std::time::Duration,
+        /// Iterations it ran.
+        iterations: u64,
+    },
+    /// The model's limits or the controller's capacity refuse the motion.
+    Limits(PlanError),
+    /// A stop was requested while planning.
+    Cancelled,
+}
+
+impl fmt::Display for PlannedMotionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Joints { space, model } => write!(
+                f,
+                "the planning model's joints {space:?} are not the controller model's {model:?}"
+            ),
+            Self::Planner(e) => write!(f, "planning failed: {e}"),
+            Self::NotSolved {
+                planner,
+                time,
+                iterations,
+            } => write!(
+                f,
+                "no collision-free path found: {planner} ran {iterations} iterations within its \
+                 {time:?} budget (give more time, another seed or planner, or check the problem)"
+            ),
+            Self::Limits(e) => write!(f, "{e}"),
+            Self::Cancelled => f.write_str("planning was cancelled by a stop request"),
+        }
+    }
+}
+
+impl std::error::Error for PlannedMotionError {}
+
+impl From<rl_plan::PlanError> for PlannedMotionError {
+    fn from(e: rl_plan::PlanError) -> Self {
+        match e {
+            rl_plan::PlanError::Cancelled => Self::Cancelled,
+            e => Self::Planner(e),
+        }
+    }
+}
+
+/// A planned motion: what the planner found and the trajectory along its path.
+#[derive(Clone, Debug)]
+pub struct PlannedMotion<const J: usize> {
+    /// The trajectory for [`ControlRun::start_with`](super::ControlRun::start_with) (source
+    /// `"plan"`).
+    pub motion: Motion<J>,
+    /// The planner's report (times, iterations, collision checks, lengths, paths).
+    pub result: PlanResult,
+    /// The optimised path's waypoints the trajectory stops at (start first, goal last; circle
+    /// joints unwrapped).
+    pub waypoints: Vec<Vec<f64>>,
+    /// The trajectory's duration, s.
+    pub duration_s: f64,
+}
+
+/// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
+/// optimised path a trajectory within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
+/// with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
+/// model: its joints must be the space's, in the same order. `stop` cancels planning.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_motion<const B: usize, const J: usize>(
+    model: &Model<B>,
+    space: &JointSpace,
+    validity: &mut dyn Validity,
+    start: &[f64],
+    goal: &[f64],
+    options: &PlanOptions,
+    speed: f64,
+    stop: Option<&StopFlag>,
+) -> Result<PlannedMotion<J>, PlannedMotionError> {
+    let limits = MotionLimits::<J>::from_model(model, speed).map_err(PlannedMotionError::Limits)?;
+    let names: Vec<String> = (0..model.dof()).map(|k| joint_name(model, k)).collect();
+    let coordinates: Vec<String> = space.coordinates().iter().map(|c| c.name.clone()).collect();
+    if !space.is_vector() || names != coordinates {
+        return Err(PlannedMotionError::Joints {
+            space: coordinates,
+            model: names,
+        });
+    }
+    let cancel = stop
+        .cloned()
+        .map(|s| Cancel::when(move || s.is_stop_requested()));
+    let result = plan_cancellable(space, validity, start, goal, options, cancel.as_ref())?;
+    let Some(path) = result.optimized.as_ref() else {
+        return Err(PlannedMotionError::NotSolved {
+            planner: result.planner.to_owned(),
+            time: options.time,
+            iterations: result.iterations,
+        });
+    };
+    let dof = model.dof();
+    let execution = Execution::new(
+        space,
+        path,
+        ExecutionLimits {
+            velocity: limits.velocity[..dof].to_vec(),
+            acceleration: limits.acceleration[..dof].to_vec(),
+            jerk: limits.jerk[..dof].to_vec(),
+        },
+    )?;
+    let trajectory: Box<PlanTrajectory<J>> =
+        Box::new(execution.trajectory::<J, { MAX_WAYPOINTS + 1 }>()?);
+    let duration_s = rl_core::traj::Trajectory::duration(&*trajectory);
+    let description = format!(
+        "planned path by {} (seed {}) in {:.1} ms: {} waypoints, {:.3} rad long, at {:.0} % of \
+         the speed limits",
+        result.planner,
+        options.seed,
+        (result.planning_time + result.optimization_time).as_secs_f64() * 1e3,
+        execution.waypoints().len(),
+        result.length_after,
+        speed * 100.0
+    );
+    Ok(PlannedMotion {
+        motion: Motion::trajectory(trajectory, "plan", description),
+        waypoints: execution.waypoints().to_vec(),
+        result,
+        duration_s,
+    })
+}

@@ -1,0 +1,735 @@
+//! `rl run --plan` end to end on MotionBenchMaker Panda problems against the in-process fake
+//! H7, and the library path behind it (`rl::controller::planned`, `ControlRun::start_with`):
+//! the run follows the planned path from the request's start to its goal, every position the
+//! fake was sent is collision-free for the exact meshes (rl-sg, not the planner's spheres), and
+//! problems that cannot be run fail before the servo goes on.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use rl::controller::planned::{PlannedMotionError, plan_motion};
+use rl::controller::{ControlRun, RunError, RunOptions};
+use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+use rl::rt::StopFlag;
+use rl_plan::PlanOptions;
+use rl_plan::Validity;
+use rl_plan::problem::Robot;
+use rl_plan::problem::moveit::MotionRequest;
+
+fn data(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/mbm")
+        .join(p)
+}
+
+fn panda() -> PathBuf {
+    data("panda/panda.urdf")
+}
+
+fn problem(name: &str) -> (PathBuf, PathBuf) {
+    let dir = data("panda/problems").join(name);
+    (dir.join("scene0001.yaml"), dir.join("request0001.yaml"))
+}
+
+/// Fraction of the speed limits the runs use: quick, with room below the limits for the
+/// loop's timing on a busy machine.
+const SPEED: &str = "0.6";
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("rl-run-plan-{}-{name}", std::process::id()))
+}
+
+/// One test at a time: a controller run is a SCHED_FIFO loop and a fake at real-time priority,
+/// and anything else busy on two CPUs (another run, a planner loading meshes) takes their
+/// cycles.
+fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static RUNS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    RUNS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// `rl ARGS`, killed and failed beyond `limit`.
+fn rl(args: &[&str], limit: Duration) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    let start = Instant::now();
+    loop {
+        if child.try_wait().expect("wait").is_some() {
+            return child.wait_with_output().expect("output");
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().expect("output");
+            panic!(
+                "rl did not finish within {limit:?}; stderr:\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// The request's start and goal, read independently of the binary (rl-plan's MoveIt reader).
+fn start_and_goal(robot: &Robot, request: &Path) -> (Vec<f64>, Vec<f64>) {
+    MotionRequest::load(request)
+        .expect("request")
+        .configurations(&robot.space)
+        .expect("start and goal")
+}
+
+/// Commanded and measured joints per telemetry row.
+struct Telemetry {
+    commanded: Vec<Vec<f64>>,
+    measured: Vec<Vec<f64>>,
+}
+
+fn telemetry(path: &Path, joints: usize) -> Telemetry {
+    let csv = std::fs::read_to_string(path).expect("telemetry written");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let cmd = header
+        .iter()
+        .position(|h| h.starts_with("cmd_"))
+        .expect("cmd_ columns");
+    let meas = header
+        .iter()
+        .position(|h| h.starts_with("meas_"))
+        .expect("meas_ columns");
+    assert_eq!(header[cmd], "cmd_panda_joint1");
+    let (mut commanded, mut measured) = (Vec::new(), Vec::new());
+    for line in lines {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|x| x.parse().expect("number"))
+            .collect();
+        commanded.push(v[cmd..cmd + joints].to_vec());
+        measured.push(v[meas..meas + joints].to_vec());
+    }
+    assert!(commanded.len() > 10, "{} rows", commanded.len());
+    Telemetry {
+        commanded,
+        measured,
+    }
+}
+
+/// Checks what a run on `problem` sent and measured: it started at the request's start, every
+/// commanded position is free for the exact meshes, and the arm ended at the goal within
+/// `tolerance` per joint.
+fn check_motion(problem_name: &str, tel: &Telemetry, tolerance: &[f64]) {
+    let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
+    let (scene, request) = problem(problem_name);
+    let (start, goal) = start_and_goal(&robot, &request);
+    let env = rl::sg::load::moveit::load_environment(&scene).expect("scene");
+    let mut exact = robot.exact_checker(env).expect("exact checker");
+    for k in 0..7 {
+        // The wire and the CSV carry single precision.
+        assert!(
+            (tel.commanded[0][k] - start[k]).abs() < 1e-5,
+            "joint {k} did not start at the request's start: {:?} vs {start:?}",
+            tel.commanded[0]
+        );
+        let end = tel.measured.last().expect("rows")[k];
+        assert!(
+            (end - goal[k]).abs() <= tolerance[k],
+            "joint {k} ended at {end}, the goal is {} (tolerance {})",
+            goal[k],
+            tolerance[k]
+        );
+    }
+    let mut moved = 0.0f64;
+    for (i, q) in tel.commanded.iter().enumerate() {
+        assert!(
+            exact.is_valid(q),
+            "telemetry row {i}: the fake was sent {q:?}, in collision with the exact meshes"
+        );
+        moved = moved.max(q.iter().zip(&start).map(|(a, b)| (a - b).abs()).sum());
+    }
+    assert!(moved > 0.5, "the arm hardly moved: {moved} rad");
+}
+
+#[test]
+fn run_plan_follows_the_path_to_the_goal_and_says_so() {
+    let _run = one_run_at_a_time();
+    let (scene, request) = problem("box_panda");
+    let tel = temp("box.csv");
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--speed",
+            SPEED,
+            "--no-mlock",
+            "--telemetry",
+            tel.to_str().unwrap(),
+        ],
+        Duration::from_secs(120),
+    );
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}",
+        out.status
+    );
+    assert!(stdout.contains("result: ok"), "{stdout}");
+    assert!(
+        stdout.contains("trajectory (plan): planned path by RRT Extend Connect (seed 0)"),
+        "the report says where the trajectory came from:\n{stdout}"
+    );
+    assert!(stdout.contains("end: completed"), "{stdout}");
+    assert!(stdout.contains("plan: solved by"), "{stdout}");
+    assert!(
+        stdout.contains("fake H7 saw 1 end packet, servo off"),
+        "{stdout}"
+    );
+    // The bound the run supervised: its report row, in mrad.
+    let bound: Vec<f64> = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("tracking bound mrad"))
+        .expect("tracking bound row")
+        .split_whitespace()
+        .skip(3)
+        .map(|x| x.parse::<f64>().expect("number") * 1e-3)
+        .collect();
+    assert_eq!(bound.len(), 7, "{stdout}");
+    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    std::fs::remove_file(&tel).ok();
+}
+
+#[test]
+fn run_plan_json_has_the_plan_and_ends_at_its_goal() {
+    let _run = one_run_at_a_time();
+    let (scene, request) = problem("bookshelf_thin_panda");
+    let tel = temp("bookshelf.csv");
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--seed",
+            "2",
+            "--plan-time",
+            "2s",
+            "--speed",
+            SPEED,
+            "--no-mlock",
+            "--json",
+            "--telemetry",
+            tel.to_str().unwrap(),
+        ],
+        Duration::from_secs(120),
+    );
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        out.status,
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(v["failed"], false, "{v}");
+    assert_eq!(v["trajectory_source"], "plan", "{v}");
+    assert_eq!(v["end"], "completed", "{v}");
+    assert_eq!(v["limit_violations"], 0, "{v}");
+    assert_eq!(v["fake_servo_on"], false, "{v}");
+    let plan = &v["plan"];
+    assert_eq!(plan["solved"], true, "{v}");
+    assert_eq!(plan["seed"], 2, "{v}");
+    let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
+    let (start, goal) = start_and_goal(&robot, &request);
+    let numbers = |x: &serde_json::Value| -> Vec<f64> {
+        x.as_array()
+            .expect("array")
+            .iter()
+            .map(|n| n.as_f64().expect("number"))
+            .collect()
+    };
+    assert_eq!(numbers(&plan["start"]), start);
+    assert_eq!(numbers(&plan["goal"]), goal);
+    let waypoints = plan["waypoints"].as_array().expect("waypoints");
+    assert!(waypoints.len() >= 2);
+    assert_eq!(numbers(waypoints.last().unwrap()), goal);
+    // The whole trajectory ran: its duration is the plan's, and the run's.
+    let duration = plan["trajectory_duration_s"].as_f64().unwrap();
+    assert!((v["plan_duration_s"].as_f64().unwrap() - duration).abs() < 1e-9);
+    assert!((v["trajectory_time_s"].as_f64().unwrap() - duration).abs() < 0.01);
+    let bound = numbers(&v["tracking_error_rad"]["bound_per_joint"]);
+    check_motion("bookshelf_thin_panda", &telemetry(&tel, 7), &bound);
+    std::fs::remove_file(&tel).ok();
+}
+
+#[test]
+fn a_start_in_collision_fails_before_anything_starts() {
+    let _run = one_run_at_a_time();
+    // A block around the Panda's base: the request's start (and every configuration) collides.
+    let scene = temp("block.yaml");
+    std::fs::write(
+        &scene,
+        "world:\n  collision_objects:\n    - id: block\n      primitive_poses:\n        \
+         - position: [0.0, 0.0, 0.3]\n          orientation: [0, 0, 0, 1]\n      primitives:\n        \
+         - type: box\n          dimensions: [0.4, 0.4, 0.4]\n",
+    )
+    .unwrap();
+    let (_, request) = problem("box_panda");
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+        ],
+        Duration::from_secs(60),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("the start configuration is invalid: in collision"),
+        "{stderr}"
+    );
+    // What touches, by name (the exact meshes' verdict).
+    assert!(
+        stderr.contains("touching: ") && stderr.contains("panda_link0") && stderr.contains("block"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("nothing was started"), "{stderr}");
+    // No report: no device was opened, let alone switched on.
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    std::fs::remove_file(&scene).ok();
+}
+
+/// A request with no solution: every joint but the first pinned by `--limits` (the space is
+/// one-dimensional), and a post in the way of the arm as joint 1 turns from 0 to 1.5 rad
+/// (start and goal are free: the post stands between them).
+fn unsolvable() -> (PathBuf, PathBuf, &'static str) {
+    let scene = temp("post.yaml");
+    std::fs::write(
+        &scene,
+        "world:\n  collision_objects:\n    - id: post\n      primitive_poses:\n        \
+         - position: [0.22, 0.20, 0.45]\n          orientation: [0, 0, 0, 1]\n      primitives:\n        \
+         - type: box\n          dimensions: [0.08, 0.08, 0.5]\n",
+    )
+    .unwrap();
+    let request = temp("turn.yaml");
+    let mut text = String::from(
+        "group_name: panda_arm\nstart_state:\n  joint_state:\n    name: [panda_joint1, \
+         panda_joint2, panda_joint3, panda_joint4, panda_joint5, panda_joint6, panda_joint7]\n    \
+         position: [0, -0.785, 0, -2.356, 0, 1.571, 0.785]\ngoal_constraints:\n  - joint_constraints:\n",
+    );
+    for (k, q) in [1.5, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]
+        .iter()
+        .enumerate()
+    {
+        text += &format!(
+            "      - joint_name: panda_joint{}\n        position: {q}\n",
+            k + 1
+        );
+    }
+    std::fs::write(&request, text).unwrap();
+    let pinned = "panda_joint2=-0.785:-0.785,panda_joint3=0:0,panda_joint4=-2.356:-2.356,\
+                  panda_joint5=0:0,panda_joint6=1.571:1.571,panda_joint7=0.785:0.785";
+    (scene, request, pinned)
+}
+
+#[test]
+fn an_unsolvable_request_fails_before_anything_starts() {
+    let _run = one_run_at_a_time();
+    let (scene, request, pinned) = unsolvable();
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--limits",
+            pinned,
+            "--plan-time",
+            "300ms",
+        ],
+        Duration::from_secs(60),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    std::fs::remove_file(&scene).ok();
+    std::fs::remove_file(&request).ok();
+}
+
+/// Ctrl-C while `rl run --plan` plans (a search that cannot succeed, with a two-minute budget)
+/// ends the planning at once: exit code 130, nothing started, no report.
+#[test]
+fn ctrl_c_while_planning_stops_before_anything_starts() {
+    use std::io::{BufRead, BufReader};
+    let _run = one_run_at_a_time();
+    let (scene, request, pinned) = unsolvable();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--limits",
+            pinned,
+            "--plan-time",
+            "120s",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    let stderr = child.stderr.take().expect("stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains("planning a collision-free path") {
+                let _ = tx.send(());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    rx.recv_timeout(Duration::from_secs(60))
+        .expect("the planning line within 60 s");
+    std::thread::sleep(Duration::from_millis(300));
+    let interrupted = Instant::now();
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .expect("SIGINT");
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait") {
+            break s;
+        }
+        if interrupted.elapsed() > Duration::from_secs(20) {
+            let _ = child.kill();
+            panic!("rl went on planning for 20 s after SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let stderr = reader.join().expect("stderr");
+    let mut stdout = String::new();
+    std::io::Read::read_to_string(&mut child.stdout.take().expect("stdout"), &mut stdout)
+        .expect("stdout");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("stopped on request before the motion started"),
+        "{stderr}"
+    );
+    assert!(stdout.is_empty(), "no run, no report: {stdout}");
+    std::fs::remove_file(&scene).ok();
+    std::fs::remove_file(&request).ok();
+}
+
+#[test]
+fn no_path_within_the_budget_fails_before_anything_starts() {
+    let _run = one_run_at_a_time();
+    // The straight motion collides (the planner must search), and a microsecond is not enough.
+    let (scene, request) = problem("box_panda");
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            panda().to_str().unwrap(),
+            "--plan",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--request",
+            request.to_str().unwrap(),
+            "--plan-time",
+            "1us",
+        ],
+        Duration::from_secs(60),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+}
+
+#[test]
+fn plan_flags_are_checked_before_anything_starts() {
+    let _run = one_run_at_a_time();
+    let (scene, request) = problem("box_panda");
+    let (scene, request) = (scene.to_str().unwrap(), request.to_str().unwrap());
+    let panda = panda();
+    let model = panda.to_str().unwrap();
+    for (args, says) in [
+        (
+            vec!["run", "--scene", scene],
+            "--scene describes a planned motion: add --plan",
+        ),
+        (
+            vec!["run", "--plan", "--scene", scene],
+            "--plan needs --scene",
+        ),
+        (
+            vec!["run", "--plan", "--scene", scene, "--request", request],
+            "--plan needs --model",
+        ),
+        (
+            vec![
+                "run",
+                "--model",
+                model,
+                "--plan",
+                "--scene",
+                scene,
+                "--request",
+                request,
+                "--planner",
+                "astar",
+            ],
+            "unknown planner \"astar\"",
+        ),
+    ] {
+        let out = rl(&args, Duration::from_secs(30));
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
+}
+
+/// Library: a robot that does not stand at the trajectory's start is refused before the device
+/// is started (the check `rl run --plan` makes for a real robot).
+#[test]
+fn a_robot_away_from_the_start_is_refused_before_servo_on() {
+    let _run = one_run_at_a_time();
+    let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
+    let (scene, request) = problem("box_panda");
+    let (start, goal) = start_and_goal(&robot, &request);
+    let env = rl::sg::load::moveit::load_environment(&scene).expect("scene");
+    let mut checker = robot.hybrid_checker(&env).expect("checker");
+    let loaded = rl::core::loader::load_file::<16>(panda()).expect("model");
+    let planned = plan_motion::<16, 8>(
+        &loaded.model,
+        &robot.space,
+        &mut checker,
+        &start,
+        &goal,
+        &PlanOptions::default(),
+        0.5,
+        None,
+    )
+    .expect("planned");
+    assert!(planned.result.solved);
+    assert_eq!(planned.waypoints.first().unwrap(), &start);
+    // The fake stands 0.2 rad away from the start on joint 1.
+    let mut away = start.clone();
+    away[0] += 0.2;
+    let fake = FakeH7::spawn(FakeH7Config::for_model(&loaded.model, &away).expect("config"))
+        .expect("fake");
+    let h7 =
+        MitsubishiH7::new(MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr())).expect("device");
+    let options = RunOptions {
+        lock_memory: false,
+        priority: 50,
+        ..RunOptions::default()
+    };
+    let e = ControlRun::<_, 16, 8>::start_with(h7, loaded, options, planned.motion)
+        .err()
+        .expect("refused");
+    match &e {
+        RunError::NotAtStart {
+            joint,
+            start: s,
+            measured,
+            ..
+        } => {
+            assert_eq!(joint, "panda_joint1");
+            assert!((s - start[0]).abs() < 1e-12);
+            // The H7 carries positions at about 1.5e-5 rad.
+            assert!((measured - away[0]).abs() < 1e-4, "{e}");
+        }
+        e => panic!("expected NotAtStart, got {e}"),
+    }
+    assert!(e.to_string().contains("where the trajectory starts"), "{e}");
+    let status = fake.status();
+    assert!(!status.servo_on, "the servo went on");
+    assert_eq!(status.moves, 0, "the fake was sent motion");
+}
+
+/// Library: a raised stop flag cancels planning (Ctrl-C while `rl run --plan` plans).
+#[test]
+fn a_stop_request_cancels_planning() {
+    let _run = one_run_at_a_time();
+    let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
+    let (scene, request) = problem("box_panda");
+    let (start, goal) = start_and_goal(&robot, &request);
+    let env = rl::sg::load::moveit::load_environment(&scene).expect("scene");
+    let mut checker = robot.hybrid_checker(&env).expect("checker");
+    let loaded = rl::core::loader::load_file::<16>(panda()).expect("model");
+    let stop = StopFlag::new();
+    stop.request_stop();
+    let e = plan_motion::<16, 8>(
+        &loaded.model,
+        &robot.space,
+        &mut checker,
+        &start,
+        &goal,
+        &PlanOptions::default(),
+        0.5,
+        Some(&stop),
+    )
+    .expect_err("cancelled");
+    assert_eq!(e, PlannedMotionError::Cancelled);
+}
+
+/// `--limits` overrides the model's joint limits for planning, in `rl plan` and `rl run --plan`:
+/// the path stays within them, a goal outside them is refused, and an unknown joint is named.
+#[test]
+fn joint_limit_overrides_bound_the_path_and_name_unknown_joints() {
+    let _run = one_run_at_a_time();
+    let (scene, request) = problem("box_panda");
+    let (scene, request) = (scene.to_str().unwrap(), request.to_str().unwrap());
+    let panda = panda();
+    let model = panda.to_str().unwrap();
+    let path = temp("limited-path.csv");
+    // The request goes from panda_joint1 = 0 to 0.4534; the override keeps joint 1 within
+    // [-0.1, 0.6] and joint 3 within [-0.3, 0.3] (the model allows ±2.9671 for both).
+    let limits = "panda_joint1=-0.1:0.6,panda_joint3=-0.3:0.3";
+    let out = rl(
+        &[
+            "plan",
+            model,
+            "--scene",
+            scene,
+            "--request",
+            request,
+            "--limits",
+            limits,
+            "--out",
+            path.to_str().unwrap(),
+        ],
+        Duration::from_secs(60),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["solved"], true, "{v}");
+    let csv = std::fs::read_to_string(&path).expect("path written");
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() >= 2);
+    for row in &rows {
+        assert!((-0.1..=0.6).contains(&row[0]), "{row:?}");
+        assert!((-0.3..=0.3).contains(&row[2]), "{row:?}");
+    }
+    std::fs::remove_file(&path).ok();
+
+    // A goal outside the override is refused, naming the joint.
+    let out = rl(
+        &[
+            "plan",
+            model,
+            "--scene",
+            scene,
+            "--request",
+            request,
+            "--limits",
+            "panda_joint1=-0.1:0.4",
+        ],
+        Duration::from_secs(60),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("goal configuration is invalid") && stderr.contains("panda_joint1"),
+        "{stderr}"
+    );
+
+    // Unknown joints and malformed entries are usage errors, in both commands, before
+    // anything starts.
+    for args in [
+        vec![
+            "plan",
+            model,
+            "--scene",
+            scene,
+            "--request",
+            request,
+            "--limits",
+            "panda_joint9=0:1",
+        ],
+        vec![
+            "run",
+            "--model",
+            model,
+            "--plan",
+            "--scene",
+            scene,
+            "--request",
+            request,
+            "--limits",
+            "panda_joint9=0:1",
+        ],
+    ] {
+        let out = rl(&args, Duration::from_secs(60));
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("--limits: unknown joint \"panda_joint9\"")
+                && stderr.contains("panda_joint7"),
+            "{args:?}: {stderr}"
+        );
+        assert!(out.stdout.is_empty(), "{args:?}: nothing ran");
+    }
+    let out = rl(
+        &[
+            "run",
+            "--model",
+            model,
+            "--plan",
+            "--scene",
+            scene,
+            "--request",
+            request,
+            "--limits",
+            "panda_joint1=1:0",
+        ],
+        Duration::from_secs(60),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("MIN is above MAX"));
+}
