@@ -129,8 +129,14 @@ impl std::fmt::Debug for Viewer {
     }
 }
 
-/// Stack of the viewer's threads: kinematic models and their scratch are large values.
-pub(crate) const WORKER_STACK: usize = 64 << 20;
+/// Stack of the thread that loads the world: kinematic models and their scratch are large
+/// values, copied more than once in unoptimised builds. It ends once the world is loaded.
+const LOAD_STACK: usize = 64 << 20;
+
+/// Stack of the viewer's long-lived threads (listeners, connections, broadcast). Small on
+/// purpose: under `mlockall(MCL_FUTURE)` (a real-time process such as `rl run --view`) every
+/// thread's whole stack is locked in RAM.
+pub(crate) const WORKER_STACK: usize = 4 << 20;
 
 fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>, ViewError> {
     std::thread::Builder::new()
@@ -149,7 +155,7 @@ impl Viewer {
         let (http, coach) = (options.http, options.coach);
         std::thread::Builder::new()
             .name("rl-view-load".into())
-            .stack_size(WORKER_STACK)
+            .stack_size(LOAD_STACK)
             .spawn(move || {
                 let world = World::load(&load)?;
                 Self::start_world(world, http, coach)
