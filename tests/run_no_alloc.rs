@@ -1,6 +1,9 @@
 //! The controller's steady-state cycle allocates nothing: read, trajectory, RNEA, command,
 //! device step against the fake H7, telemetry queue and progress mailbox, counted by a global
-//! allocator that counts only on the thread under test (the fake runs its own threads).
+//! allocator that counts only on the thread under test (the fake runs its own threads). With
+//! the viewer attached (`rl run --view`), the loop's hand-over of measured and commanded
+//! positions to the viewer's lock-free mailbox allocates nothing either (the viewer's threads
+//! are its own).
 
 mod common;
 
@@ -50,6 +53,82 @@ fn steady_state_control_cycle_allocates_nothing() {
     assert_eq!(counted, 0, "allocations in 400 steady-state control cycles");
     assert_eq!(control.failed_steps(), 0);
     assert!(control.tracking().max_error() > 0.0, "the arm moved");
+
+    let mut robot = control.into_robot();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}
+
+#[cfg(feature = "view")]
+#[test]
+fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
+    use rl::controller::{RV6SL_XML, ViewHook};
+
+    assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
+
+    let dof = rv6sl().expect("embedded model").model.dof();
+    let view = ViewHook::start(
+        rl_view::ModelSource::Text {
+            name: "RV-6SL".into(),
+            text: RV6SL_XML.into(),
+        },
+        "127.0.0.1:0".parse().unwrap(),
+    )
+    .expect("viewer starts");
+    let mut shown = view.attach(dof).expect("the viewer's model is the run's");
+    assert!(
+        view.attach(dof + 1).is_err(),
+        "a model of other joints is refused"
+    );
+    let fake = common::immediate_fake(dof);
+    let mut control = Box::new(common::demo_controller(&fake));
+    let (mut telemetry, mut sink) = queue::<CycleRecord>(1024);
+
+    // What the real-time loop of `ControlRun` does each cycle with a view attached.
+    let mut cycle = |control: &mut Controller<MitsubishiH7>| {
+        let out = control.cycle();
+        let _ = telemetry.try_send(out.record);
+        shown.show(&out.record);
+        out.finished
+    };
+    for _ in 0..50 {
+        assert!(!cycle(&mut control));
+    }
+    while sink.try_recv().is_some() {}
+    let mut finished = false;
+    let counted = allocations(|| {
+        for _ in 0..400 {
+            finished |= cycle(&mut control);
+        }
+    });
+    assert!(!finished, "the plan is longer than 450 cycles");
+    assert_eq!(
+        counted, 0,
+        "allocations in 400 control cycles publishing to the viewer"
+    );
+    assert_eq!(shown.published(), 450);
+    assert_eq!(shown.refused(), 0);
+    // The viewer took the newest frame: the controller's last measured and commanded q.
+    let end = std::time::Instant::now() + std::time::Duration::from_secs(10);
+    let last = control.tracking().last_error().to_vec();
+    loop {
+        let state = view.viewer().state();
+        let m = &state["models"][0];
+        let q: Vec<f64> = serde_json::from_value(m["q"].clone()).unwrap();
+        let c: Option<Vec<f64>> = serde_json::from_value(m["q_cmd"].clone()).unwrap();
+        if let Some(c) = c {
+            let e: Vec<f64> = c.iter().zip(&q).map(|(c, q)| c - q).collect();
+            if e.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-12) {
+                assert_eq!(m["source"], "live");
+                break;
+            }
+        }
+        assert!(
+            std::time::Instant::now() < end,
+            "the viewer shows {m}, the last error is {last:?}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
 
     let mut robot = control.into_robot();
     robot.stop().expect("stop");

@@ -97,7 +97,8 @@ impl Shared {
                 if r.has_update() {
                     let f = r.read();
                     // Lengths are checked by `publish`; a non-finite value is refused here.
-                    let _ = e.set_q(model, &f.q[..f.len], Source::Live);
+                    let q_cmd = f.commanded.then(|| &f.q_cmd[..f.len]);
+                    let _ = e.set_q_commanded(model, &f.q[..f.len], q_cmd, Source::Live);
                 }
             }
         }
@@ -128,8 +129,14 @@ impl std::fmt::Debug for Viewer {
     }
 }
 
-/// Stack of the viewer's threads: kinematic models and their scratch are large values.
-pub(crate) const WORKER_STACK: usize = 64 << 20;
+/// Stack of the thread that loads the world: kinematic models and their scratch are large
+/// values, copied more than once in unoptimised builds. It ends once the world is loaded.
+const LOAD_STACK: usize = 64 << 20;
+
+/// Stack of the viewer's long-lived threads (listeners, connections, broadcast). Small on
+/// purpose: under `mlockall(MCL_FUTURE)` (a real-time process such as `rl run --view`) every
+/// thread's whole stack is locked in RAM.
+pub(crate) const WORKER_STACK: usize = 4 << 20;
 
 fn spawn(name: &str, f: impl FnOnce() + Send + 'static) -> Result<JoinHandle<()>, ViewError> {
     std::thread::Builder::new()
@@ -148,7 +155,7 @@ impl Viewer {
         let (http, coach) = (options.http, options.coach);
         std::thread::Builder::new()
             .name("rl-view-load".into())
-            .stack_size(WORKER_STACK)
+            .stack_size(LOAD_STACK)
             .spawn(move || {
                 let world = World::load(&load)?;
                 Self::start_world(world, http, coach)

@@ -1,6 +1,8 @@
 //! The real-time hook: a real-time loop hands joint positions to the viewer through rl-rt's
 //! lock-free latest-value mailbox ([`rl_rt::exchange::mailbox`]). [`Publisher::publish`] copies
-//! `q` into a preallocated frame and commits it: no lock, no allocation, no system call. The
+//! `q` into a preallocated frame and commits it: no lock, no allocation, no system call;
+//! [`Publisher::publish_commanded`] hands the commanded position along with the measured one,
+//! so the page can show the tracking error (`q_cmd` in the state). The
 //! viewer's broadcast thread takes the newest frame of each model every period (older ones are
 //! overwritten, as a display only needs the newest; the mailbox counts them).
 
@@ -8,13 +10,17 @@ use rl_rt::exchange::{MailboxReader, MailboxWriter, mailbox};
 
 use crate::load::CAPACITY;
 
-/// One model's joint positions, fixed size.
+/// One model's joint positions (and, from a controller, the commanded ones), fixed size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
-    /// Values used in `q`.
+    /// Values used in `q` (and in `q_cmd` when `commanded`).
     pub len: usize,
-    /// Joint positions (the first `len`).
+    /// Joint positions (the first `len`): measured, for a controller.
     pub q: [f64; CAPACITY],
+    /// Whether `q_cmd` holds the commanded positions.
+    pub commanded: bool,
+    /// Commanded joint positions (the first `len`, when `commanded`).
+    pub q_cmd: [f64; CAPACITY],
 }
 
 impl Default for Frame {
@@ -22,6 +28,8 @@ impl Default for Frame {
         Frame {
             len: 0,
             q: [0.0; CAPACITY],
+            commanded: false,
+            q_cmd: [0.0; CAPACITY],
         }
     }
 }
@@ -81,23 +89,56 @@ pub(crate) fn channel(nq: &[usize]) -> (Publisher, LiveReader) {
 }
 
 impl Publisher {
-    /// Hands model `model`'s joint positions to the viewer. Wait-free, allocation-free.
+    /// Hands model `model`'s joint positions to the viewer (no commanded positions: the
+    /// state's `q_cmd` is null). Wait-free, allocation-free.
     pub fn publish(&mut self, model: usize, q: &[f64]) -> Result<(), PublishError> {
+        self.write(model, q, None)
+    }
+
+    /// Hands model `model`'s measured joint positions `q` and the commanded ones `q_cmd` (the
+    /// position the controller asked for at the same time) to the viewer, which shows `q` and
+    /// the tracking error `q_cmd − q`. Wait-free, allocation-free.
+    pub fn publish_commanded(
+        &mut self,
+        model: usize,
+        q: &[f64],
+        q_cmd: &[f64],
+    ) -> Result<(), PublishError> {
+        self.write(model, q, Some(q_cmd))
+    }
+
+    fn write(
+        &mut self,
+        model: usize,
+        q: &[f64],
+        q_cmd: Option<&[f64]>,
+    ) -> Result<(), PublishError> {
         let (n, w) = self
             .writers
             .get_mut(model)
             .ok_or(PublishError::UnknownModel { model })?;
-        if q.len() != *n {
-            return Err(PublishError::Dimension {
-                expected: *n,
-                got: q.len(),
-            });
+        for got in [Some(q.len()), q_cmd.map(<[f64]>::len)]
+            .into_iter()
+            .flatten()
+        {
+            if got != *n {
+                return Err(PublishError::Dimension { expected: *n, got });
+            }
         }
         let f = w.buffer_mut();
         f.len = q.len();
         f.q[..q.len()].copy_from_slice(q);
+        f.commanded = q_cmd.is_some();
+        if let Some(c) = q_cmd {
+            f.q_cmd[..c.len()].copy_from_slice(c);
+        }
         w.commit();
         Ok(())
+    }
+
+    /// Joints of model `model` (the length `publish` expects), if there is such a model.
+    pub fn joints(&self, model: usize) -> Option<usize> {
+        self.writers.get(model).map(|(n, _)| *n)
     }
 
     /// Frames overwritten before the viewer took them, per model.

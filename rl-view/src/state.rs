@@ -81,6 +81,8 @@ pub struct CoachStats {
 #[derive(Clone, Debug)]
 struct ModelState {
     q: Vec<f64>,
+    /// The commanded positions that came with `q` (from a controller), if any.
+    q_cmd: Option<Vec<f64>>,
     qd: Option<Vec<f64>>,
     source: Source,
     /// Coach `0` overrides by body index, until the next joint update.
@@ -133,6 +135,7 @@ impl Engine {
             .iter()
             .map(|r| ModelState {
                 q: r.initial_q.clone(),
+                q_cmd: None,
                 qd: None,
                 source: Source::Init,
                 body_overrides: BTreeMap::new(),
@@ -191,8 +194,26 @@ impl Engine {
     }
 
     /// Sets model `model`'s joint positions (every value finite, `nq` of them); clears its
-    /// Coach body overrides.
+    /// Coach body overrides and the commanded positions (`q_cmd` is null until a controller
+    /// sends them again).
     pub fn set_q(&mut self, model: usize, q: &[f64], source: Source) -> Result<(), String> {
+        self.set_q_commanded(model, q, None, source)
+    }
+
+    /// Model `model`'s commanded joint positions, when the last update carried them.
+    pub fn q_cmd(&self, model: usize) -> Option<&[f64]> {
+        self.models.get(model).and_then(|m| m.q_cmd.as_deref())
+    }
+
+    /// [`Engine::set_q`] with the commanded positions that go with the measured `q` (from a
+    /// controller): the state shows both, and the page the tracking error `q_cmd − q`.
+    pub fn set_q_commanded(
+        &mut self,
+        model: usize,
+        q: &[f64],
+        q_cmd: Option<&[f64]>,
+        source: Source,
+    ) -> Result<(), String> {
         let m = self
             .models
             .get_mut(model)
@@ -207,7 +228,24 @@ impl Engine {
         if let Some(k) = q.iter().position(|v| !v.is_finite()) {
             return Err(format!("value {k} is not a finite number"));
         }
+        if let Some(c) = q_cmd {
+            if c.len() != q.len() {
+                return Err(format!(
+                    "model {model} has {} joints, {} commanded values given",
+                    q.len(),
+                    c.len()
+                ));
+            }
+            if let Some(k) = c.iter().position(|v| !v.is_finite()) {
+                return Err(format!("commanded value {k} is not a finite number"));
+            }
+        }
         m.q.copy_from_slice(q);
+        match (q_cmd, &mut m.q_cmd) {
+            (Some(c), Some(old)) => old.copy_from_slice(c),
+            (Some(c), slot) => *slot = Some(c.to_vec()),
+            (None, slot) => *slot = None,
+        }
         m.source = source;
         m.body_overrides.clear();
         self.geometry_dirty = true;
@@ -348,6 +386,7 @@ impl Engine {
                 let m = &mut self.models[model];
                 m.q.copy_from_slice(&q);
                 m.source = Source::Ik;
+                m.q_cmd = None;
                 m.body_overrides.clear();
                 IkReport {
                     model,
@@ -527,7 +566,8 @@ impl Engine {
                     .iter()
                     .map(|((b, s), x)| json!([b, s, pose7(x)]))
                     .collect();
-                json!({"index": i, "q": st.q, "qd": st.qd, "source": st.source.as_str(),
+                json!({"index": i, "q": st.q, "q_cmd": st.q_cmd, "qd": st.qd,
+                       "source": st.source.as_str(),
                        "bodies": bodies, "shapes": shapes})
             })
             .collect();

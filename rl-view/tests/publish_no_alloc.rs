@@ -51,3 +51,53 @@ fn publish_allocates_nothing_and_reaches_the_page() {
         "older frames are overwritten, counted"
     );
 }
+
+#[test]
+fn publish_commanded_allocates_nothing_and_the_page_gets_q_cmd() {
+    let v = start(vec![puma()]);
+    let (mut page, hello) = Page::connect(v.http_addr());
+    assert!(
+        hello["state"]["models"][0]["q_cmd"].is_null(),
+        "no commanded positions before a controller sends them"
+    );
+    let mut publisher = v.publisher();
+    let mut q = [0.0; 6];
+    let mut q_cmd = [0.0; 6];
+    let (allocations, results) = rl_testkit::allocations(|| {
+        let mut ok = 0;
+        for k in 0..10_000 {
+            q_cmd[1] = k as f64 * 1e-4;
+            q[1] = q_cmd[1] - 0.01;
+            if publisher.publish_commanded(0, &q, &q_cmd).is_ok() {
+                ok += 1;
+            }
+            std::hint::black_box((&q, &q_cmd));
+        }
+        let short = publisher.publish_commanded(0, &q, &q_cmd[..3]);
+        (ok, short)
+    });
+    assert_eq!(allocations, 0, "publish_commanded allocated");
+    assert_eq!(results.0, 10_000);
+    assert_eq!(
+        results.1,
+        Err(PublishError::Dimension {
+            expected: 6,
+            got: 3
+        })
+    );
+    let s = page.wait_state(|s| {
+        let c = floats(&s["models"][0]["q_cmd"]);
+        c.len() == 6 && (c[1] - 0.9999).abs() < 1e-12
+    });
+    let m = &s["models"][0];
+    assert_eq!(m["source"], "live");
+    let (q, c) = (floats(&m["q"]), floats(&m["q_cmd"]));
+    assert!(((c[1] - q[1]) - 0.01).abs() < 1e-12, "q {q:?}, q_cmd {c:?}");
+    // A joint update without a command (here: the page's own `set_q`) clears q_cmd: the
+    // state never pairs a q with a command that was not given for it.
+    page.send(
+        serde_json::json!({"type": "set_q", "model": 0, "q": [0.1, 0.0, 0.0, 0.0, 0.0, 0.0]}),
+    );
+    let s = page.wait_state(|s| s["models"][0]["source"] == "ui");
+    assert!(s["models"][0]["q_cmd"].is_null(), "{}", s["models"][0]);
+}

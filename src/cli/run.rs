@@ -22,6 +22,7 @@
 mod device;
 mod plot;
 mod progress;
+mod view;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -149,6 +150,14 @@ pub struct RunArgs {
     /// Time budget for planning, and as much again for shortening the path [default: 1s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", help_heading = "Planned motion")]
     pub plan_time: Option<Duration>,
+    /// Show the run live in the robot viewer's page (as `rl view`), served by this process on
+    /// ADDR while the run goes; the address is printed before the run starts. Port 0 picks a
+    /// free port [default ADDR: 127.0.0.1:8080].
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    pub view: Option<std::net::SocketAddr>,
+    /// With --view: keep serving the page after the report, until Ctrl-C.
+    #[arg(long, requires = "view")]
+    pub view_hold: bool,
 }
 
 /// The planning problem of `--plan`, checked before anything starts.
@@ -549,6 +558,8 @@ fn drive<const B: usize, const J: usize>(
     if let Some(d) = args.max_plan_duration {
         options.max_plan_duration = d;
     }
+    let view = view::start(args)?;
+    options.view = view.clone();
     let robot: Box<dyn JointRobot + Send> = opened.robot;
     let mut run = match ControlRun::<_, B, J>::start_with(robot, loaded, options, motion) {
         Ok(run) => run,
@@ -645,6 +656,7 @@ fn drive<const B: usize, const J: usize>(
     };
     // A closed standard output ends quietly with the run's own status.
     printed.or_else(|e| if e.is_closed_output() { Ok(()) } else { Err(e) })?;
+    view::hold(view, args.view_hold, &stop);
     Ok(ExitCode::from(report.exit_code() as u8))
 }
 

@@ -19,6 +19,7 @@
 //! - [`tracking`]: tracking error, feed-forward peaks and limit checks of the measured motion;
 //! - [`telemetry`]: one `Copy` record per cycle for a lock-free queue, and its CSV form;
 //! - [`report`]: the end-of-run report as text and JSON.
+//! - `view` (feature `view`): the run's motion and tracking error, live in rl-view's page.
 //!
 //! A caller who wants its own loop steps a [`Controller`] itself:
 //!
@@ -58,6 +59,8 @@ pub mod runtime;
 pub mod supervise;
 pub mod telemetry;
 pub mod tracking;
+#[cfg(feature = "view")]
+pub mod view;
 
 pub use clock::TrajectoryClock;
 pub use control::{Controller, CycleResult, CycleTiming, RunEnd};
@@ -71,6 +74,8 @@ pub use runtime::{ControlRun, Progress, RunError, RunOptions};
 pub use supervise::{Fault, Supervision};
 pub use telemetry::{CycleRecord, TelemetryFile};
 pub use tracking::Tracking;
+#[cfg(feature = "view")]
+pub use view::{ViewHook, ViewPublisher};
 
 use rl_core::loader::{self, LoadError, LoadedModel};
 

@@ -93,6 +93,10 @@ pub struct RunOptions {
     pub model_name: String,
     /// Name of the device for the report.
     pub device_name: String,
+    /// Show the motion in this viewer: the loop publishes every cycle's measured and
+    /// commanded positions through its lock-free mailbox (feature `view`).
+    #[cfg(feature = "view")]
+    pub view: Option<super::view::ViewHook>,
 }
 
 impl Default for RunOptions {
@@ -112,6 +116,8 @@ impl Default for RunOptions {
             stop: StopFlag::new(),
             model_name: String::new(),
             device_name: String::new(),
+            #[cfg(feature = "view")]
+            view: None,
         }
     }
 }
@@ -350,6 +356,8 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
         let dof = model.dof();
         let joints: Vec<String> = (0..dof).map(|k| joint_name(&model, k)).collect();
         let stop = options.stop.clone();
+        #[cfg(feature = "view")]
+        let mut view = options.view.as_ref().map(|v| v.attach(dof)).transpose()?;
 
         robot.open().map_err(|error| RunError::Device {
             stage: "open",
@@ -584,6 +592,10 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
                     faulted: controller.fault().is_some(),
                     stop: level,
                 });
+                #[cfg(feature = "view")]
+                if let Some(v) = &mut view {
+                    v.show(&record);
+                }
                 if out.finished {
                     ControlFlow::Break(())
                 } else {

@@ -129,6 +129,8 @@ window.rlView = {
   setSlider(model, joint, value) { return panel.setSlider(model, joint, value); },
   /** Drags the IK target to [x,y,z,qx,qy,qz,qw]; resolves with the server's IK answer. */
   dragTarget(model, pose) { return ik.drag(model, pose); },
+  /** The live plot's tracking-error strip: {shown, max} (max |q_cmd − q|, degrees or mm). */
+  plotTracking() { return plot.trackingShown(); },
   /** Meshes drawn per model, and mesh file loading counts. */
   meshCounts() { return models.map((m) => m.meshCount()); },
   meshLoading() { return meshTotals(); },

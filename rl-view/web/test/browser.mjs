@@ -118,6 +118,49 @@ function startServer(args) {
   });
 }
 
+/** `rl run ARGS... --view 127.0.0.1:0 --view-hold`: a controller with the viewer in its
+ * process; resolves when it has printed the page's address. */
+function startRun(args) {
+  return new Promise((resolve, reject) => {
+    const child = spawn(rlBin, ['run', ...args, '--view', '127.0.0.1:0', '--view-hold'],
+      { cwd: repo, stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    let done = false;
+    const server = {
+      child,
+      http: null,
+      output: () => out,
+      kill() {
+        servers.delete(server);
+        if (child.exitCode !== null || child.signalCode !== null) return;
+        child.kill('SIGTERM');
+        const t = setTimeout(() => child.kill('SIGKILL'), 5000);
+        child.once('exit', () => clearTimeout(t));
+      },
+      exited: new Promise((r) => child.once('exit', r)),
+    };
+    servers.add(server);
+    const timer = setTimeout(() => {
+      if (!done) { done = true; server.kill(); reject(new Error(`rl run printed no view address in ${WAIT_MS} ms:\n${out}`)); }
+    }, WAIT_MS);
+    const scan = (chunk) => {
+      out += chunk;
+      const http = /view: open (http:\/\/[0-9.]+:\d+)/.exec(out);
+      if (!done && http) {
+        done = true;
+        clearTimeout(timer);
+        server.http = http[1];
+        resolve(server);
+      }
+    };
+    child.stdout.on('data', (d) => scan(d.toString()));
+    child.stderr.on('data', (d) => scan(d.toString()));
+    child.once('exit', (code, sig) => {
+      if (!done) { done = true; clearTimeout(timer); reject(new Error(`rl run exited (${code ?? sig}):\n${out}`)); }
+    });
+  });
+}
+
 /** A Coach client (RL's protocol: ASCII lines over TCP). */
 function coachClient(addr) {
   return new Promise((resolve, reject) => {
@@ -440,9 +483,42 @@ async function defaultRobotSteps() {
   const info = await page.evaluate(() => ({ name: rlView.scene.models[0].name, joints: rlView.scene.models[0].joints.length, meshes: rlView.meshCounts() }));
   check(info.joints > 0 && info.meshes[0] > 0, `the default robot is drawn (${JSON.stringify(info)})`);
   await page.screenshot({ path: path.join(outDir, '12-default-robot.png') });
-  ok(`rl view with no model: ${info.name}, ${info.joints} joints, ${info.meshes[0]} meshes drawn`);
+  const plotted = await page.evaluate(() => rlView.plotTracking());
+  check(!plotted.shown, 'no tracking-error strip without q_cmd');
+  ok(`rl view with no model: ${info.name}, ${info.joints} joints, ${info.meshes[0]} meshes drawn; the plot shows q only`);
   await page.close();
   server.kill();
+}
+
+async function runViewSteps() {
+  // `rl run --view`: the controller's measured and commanded q reach the page, whose plot
+  // draws the tracking error q_cmd − q.
+  const run = await startRun(['--duration', '4s']);
+  const page = await openPage(`${run.http}/`);
+  await page.waitForFunction(() => rlView.state.models[0].source === 'live'
+    && Array.isArray(rlView.state.models[0].q_cmd) && rlView.plotTracking().shown
+    && rlView.plotTracking().max > 0, null, { timeout: WAIT_MS });
+  const caption = await page.$eval('#plot-caption', (el) => el.textContent);
+  check(/q_cmd − q/.test(caption), `the caption names the tracking error: ${caption}`);
+  await page.waitForTimeout(1000);
+  const t = await page.evaluate(() => rlView.plotTracking());
+  const box = await page.$('#plot-box');
+  await box.screenshot({ path: path.join(outDir, '13-run-view-tracking.png') });
+  ok(`rl run --view: live states with q_cmd; the plot draws the tracking error (max ${t.max.toFixed(3)}° so far)`);
+  await page.close();
+  // The run ends on its own and the page stays (--view-hold) until SIGTERM.
+  const until = Date.now() + WAIT_MS;
+  while (!/view: still serving/.test(run.output())) {
+    check(Date.now() < until, `rl run did not end its run in ${WAIT_MS} ms`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+  run.kill();
+  const code = await run.exited;
+  // SIGTERM ends the hold: the run's own status (0, or 1 if the run faulted: on this 2-core
+  // machine the browser's software rendering competes with the in-process fake robot, whose
+  // threads are not real-time), never a signal or a crash.
+  check(code === 0 || code === 1, `rl run --view-hold ends with its run's status on SIGTERM (got ${code}):\n${run.output()}`);
+  if (code === 1) console.log(`# note: the run under the browser's load ended with a fault:\n${run.output().split('\n').filter((l) => /result|fault|fail/i.test(l)).join('\n')}`);
 }
 
 async function rlModelSteps() {
@@ -587,6 +663,7 @@ try {
   await rlModelSteps();
   await formatsAndPathSteps();
   await defaultRobotSteps();
+  await runViewSteps();
   console.log(`screenshots: ${outDir}`);
   console.log(`${passed} passed, 0 failed`);
   await cleanup();

@@ -1,0 +1,70 @@
+//! `rl run --view [ADDR]`: the run's robot in the viewer's page (rl-view), served by this
+//! process while the run goes. The library does the work ([`rl::controller::ViewHook`]: the
+//! viewer on ordinary threads, the real-time loop publishing through its lock-free mailbox);
+//! this starts it for the run's model, prints the address and, with `--view-hold`, keeps
+//! serving after the report until Ctrl-C.
+
+use std::time::Duration;
+
+use rl::controller::{RV6SL_XML, ViewHook};
+use rl_rt::{StopFlag, StopLevel};
+use rl_view::ModelSource;
+
+use super::RunArgs;
+use crate::cli::CliError;
+
+/// Starts the viewer for the run's model when `--view` is given, and prints its address.
+pub(super) fn start(args: &RunArgs) -> Result<Option<ViewHook>, CliError> {
+    let Some(http) = args.view else {
+        return Ok(None);
+    };
+    let robot = match &args.model {
+        Some(path) => ModelSource::File(path.clone()),
+        None => ModelSource::Text {
+            name: "the embedded RV-6SL".into(),
+            text: RV6SL_XML.into(),
+        },
+    };
+    // A planned run shows its obstacles (and the SRDF's allowed pairs) too.
+    let load = rl_view::LoadOptions {
+        models: vec![robot],
+        env: args.scene.clone().filter(|_| args.plan),
+        srdf: args.srdf.clone().filter(|_| args.plan),
+        ..rl_view::LoadOptions::default()
+    };
+    let hook =
+        ViewHook::start_with(load, http).map_err(|e| CliError::usage(format!("--view: {e}")))?;
+    let viewer = hook.viewer();
+    for w in viewer.warnings() {
+        eprintln!("rl run: view: note: {w}");
+    }
+    if !rl_view::is_loopback(&viewer.http_addr()) {
+        eprintln!(
+            "rl run: warning: the view listens on {} beyond this machine and has no \
+             authentication",
+            viewer.http_addr()
+        );
+    }
+    eprintln!("rl run: view: open {}", viewer.url());
+    Ok(Some(hook))
+}
+
+/// With `--view-hold`, keeps the viewer serving after the report until a (further) Ctrl-C;
+/// otherwise it stops with the run.
+pub(super) fn hold(view: Option<ViewHook>, hold: bool, stop: &StopFlag) {
+    let Some(view) = view else { return };
+    if !hold {
+        return;
+    }
+    let level = stop.level();
+    if level == StopLevel::Now {
+        return;
+    }
+    eprintln!(
+        "rl run: view: still serving {} (Ctrl-C to end)",
+        view.viewer().url()
+    );
+    while stop.level() == level {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
