@@ -134,3 +134,99 @@ fn view_takes_an_rl_scene_with_its_kinematics_as_rl_coach_mdl_does() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--kinematics"));
 }
+
+/// `rl run --device coach://…` with `rl view` running: the controller's motion shows in the
+/// viewer's state while the run goes (polled over HTTP during the run), from the Coach source,
+/// with nothing rejected.
+#[test]
+fn rl_run_over_coach_moves_the_robot_in_rl_view_as_it_happens() {
+    let mut view = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "view",
+            "--http",
+            "127.0.0.1:0",
+            "--coach",
+            "127.0.0.1:0",
+            "--seconds",
+            "120",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rl view");
+    let mut lines = BufReader::new(view.stdout.take().unwrap()).lines();
+    let first = lines.next().expect("a line").expect("text");
+    let url = first
+        .strip_prefix("rl view: open http://")
+        .and_then(|u| u.strip_suffix('/'))
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+    let second = lines.next().expect("a line").expect("text");
+    let coach = second
+        .strip_prefix("rl view: Coach listening on ")
+        .unwrap_or_else(|| panic!("{second}"))
+        .trim()
+        .to_string();
+    let q_now = |url: &str| -> (Vec<f64>, Value) {
+        let (head, body) = get(url, "/api/state");
+        assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+        let s: Value = serde_json::from_slice(&body).expect("state JSON");
+        let q = s["models"][0]["q"]
+            .as_array()
+            .expect("q")
+            .iter()
+            .map(|v| v.as_f64().expect("number"))
+            .collect();
+        (q, s)
+    };
+    let (q0, _) = q_now(&url);
+
+    let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "run",
+            "--device",
+            &format!("coach://{coach}"),
+            "--duration",
+            "2s",
+            "--json",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rl run");
+    let mut seen: Vec<Vec<f64>> = Vec::new();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = run.try_wait().expect("wait") {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "rl run did not end"
+        );
+        let (q, s) = q_now(&url);
+        if q != q0 && s["models"][0]["source"] == "coach" && seen.last() != Some(&q) {
+            seen.push(q);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let out = run.wait_with_output().expect("output");
+    assert!(
+        status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).expect("run JSON");
+    assert!(report["cycles"].as_u64().unwrap() > 0, "{report}");
+    // Polled every 50 ms over a 2 s motion: the viewer showed it moving, not just its end.
+    assert!(
+        seen.len() >= 5,
+        "only {} distinct configurations seen during the run: {seen:?}",
+        seen.len()
+    );
+    let (_, s) = q_now(&url);
+    assert_eq!(s["coach"]["rejected"], 0, "{}", s["coach"]);
+    let _ = view.kill();
+    let _ = view.wait();
+}
