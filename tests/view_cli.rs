@@ -25,8 +25,9 @@ fn get(addr: &str, path: &str) -> (String, Vec<u8>) {
     )
 }
 
-#[test]
-fn view_serves_the_default_robot_and_prints_its_address() {
+/// Starts `rl view` with the default robot on free ports; returns the child, the HTTP address
+/// and the Coach address it printed.
+fn start_view() -> (std::process::Child, String, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
         .args([
             "view",
@@ -48,15 +49,25 @@ fn view_serves_the_default_robot_and_prints_its_address() {
         .and_then(|u| u.strip_suffix('/'))
         .unwrap_or_else(|| panic!("{first}"))
         .to_string();
+    let second = lines.next().expect("a line").expect("text");
+    let coach = second
+        .strip_prefix("rl view: Coach listening on ")
+        .unwrap_or_else(|| panic!("{second}"))
+        .trim()
+        .to_string();
+    // Keep reading what it prints later, so its stdout never meets a closed pipe.
+    std::thread::spawn(move || lines.for_each(drop));
+    (child, url, coach)
+}
+
+#[test]
+fn view_serves_the_default_robot_and_prints_its_address() {
+    let (mut child, url, coach) = start_view();
     assert!(
         url.starts_with("127.0.0.1:") && !url.ends_with(":0"),
         "{url}"
     );
-    let coach = lines.next().expect("a line").expect("text");
-    assert!(
-        coach.starts_with("rl view: Coach listening on 127.0.0.1:"),
-        "{coach}"
-    );
+    assert!(coach.starts_with("127.0.0.1:"), "{coach}");
 
     let (head, body) = get(&url, "/");
     assert!(head.starts_with("HTTP/1.1 200"), "{head}");
@@ -140,33 +151,7 @@ fn view_takes_an_rl_scene_with_its_kinematics_as_rl_coach_mdl_does() {
 /// with nothing rejected.
 #[test]
 fn rl_run_over_coach_moves_the_robot_in_rl_view_as_it_happens() {
-    let mut view = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "view",
-            "--http",
-            "127.0.0.1:0",
-            "--coach",
-            "127.0.0.1:0",
-            "--seconds",
-            "120",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start rl view");
-    let mut lines = BufReader::new(view.stdout.take().unwrap()).lines();
-    let first = lines.next().expect("a line").expect("text");
-    let url = first
-        .strip_prefix("rl view: open http://")
-        .and_then(|u| u.strip_suffix('/'))
-        .unwrap_or_else(|| panic!("{first}"))
-        .to_string();
-    let second = lines.next().expect("a line").expect("text");
-    let coach = second
-        .strip_prefix("rl view: Coach listening on ")
-        .unwrap_or_else(|| panic!("{second}"))
-        .trim()
-        .to_string();
+    let (mut view, url, coach) = start_view();
     let q_now = |url: &str| -> (Vec<f64>, Value) {
         let (head, body) = get(url, "/api/state");
         assert!(head.starts_with("HTTP/1.1 200"), "{head}");
