@@ -124,28 +124,39 @@ fn session() -> Session {
             }
         })
         .unwrap();
+    // What the checks need is taken at once, and the drives are stopped at once: drives left
+    // enabled without SYNC fault after two periods (as real ones do), so nothing else may come
+    // between the loop's end and the stop.
     let stats = control.robot().link_statistics();
     let counters = control.robot().counters();
     let control_end = control.end();
+    let failed_steps = control.failed_steps();
+    let max_tracking = control.tracking().max_error();
+    let mut q = [0.0; 6];
+    let measured = control.robot().joint_position(&mut q);
+    let at_end = fake.status();
+    let mut robot = control.into_robot();
+    let stopped = robot.stop();
+    let closed = robot.close();
+    // How late the fake's thread ran (its own deadlines, and frames taken after their kernel
+    // receive time), read after the stop: a stall still going on when the loop ended shows only
+    // once the fake's thread runs again.
+    let fake_late = fake.status().max_lateness;
     println!(
-        "{cycles} cycles, {} overruns, max wake-up latency {:?} ns, max step {:?} ns; link {stats:?}; device {counters:?}; max tracking error {:.2e} rad",
+        "{cycles} cycles, {} overruns, max wake-up latency {:?} ns, max step {:?} ns, fake drives' thread up to {:?} late; link {stats:?}; device {counters:?}; max tracking error {max_tracking:.2e} rad",
         report.stats.overruns,
         report.stats.wakeup.max_ns(),
         report.stats.step.max_ns(),
-        control.tracking().max_error()
+        fake_late,
     );
     // The fake drives share this machine's CPUs; real drives have their own. A session that
     // failed while the loop overran, woke more than half a period late, or while the fake was
     // held up for longer than the master waits for its TPDOs is the machine's, not a verdict on
     // the master.
-    let fake_late = fake.status().max_lateness;
     let loop_late = Duration::from_nanos(report.stats.wakeup.max_ns().unwrap_or(0));
     let clean =
         matches!(control_end, Some(RunEnd::CycleLimit)) && stats.lost == 0 && stats.late == 0;
     if !clean && (report.stats.overruns > 0 || loop_late > PERIOD / 2 || fake_late > PERIOD / 2) {
-        let mut robot = control.into_robot();
-        let _ = robot.stop();
-        let _ = robot.close();
         return Session::MachineLate(format!(
             "{} overruns, max wake-up latency {:.2} ms, the fake drives' thread up to {:.2} ms \
              late, end {:?}, {} TPDOs lost",
@@ -157,21 +168,18 @@ fn session() -> Session {
         ));
     }
     assert!(
-        matches!(control.end(), Some(RunEnd::CycleLimit)),
-        "{:?}",
-        control.end()
+        matches!(control_end, Some(RunEnd::CycleLimit)),
+        "{control_end:?}"
     );
     assert!(cycles >= CYCLES, "{cycles}");
     assert_eq!(stats.lost, 0, "lost TPDOs");
     assert_eq!((stats.late, stats.corrupt, stats.rejected), (0, 0, 0));
-    assert_eq!(control.failed_steps(), 0);
+    assert_eq!(failed_steps, 0);
     assert_eq!(counters.commands_clamped, 0);
     assert_eq!(counters.syncs, counters.tpdos / 6 + counters.tpdos_lost);
-    // The drives are where the controller's last measurement says.
-    let mut q = [0.0; 6];
-    control.robot().joint_position(&mut q).unwrap();
-    let s = fake.status();
-    for (k, n) in s.nodes.iter().enumerate() {
+    // The drives were where the controller's last measurement says.
+    measured.unwrap();
+    for (k, n) in at_end.nodes.iter().enumerate() {
         assert!(
             (n.position - q[k]).abs() < 1e-3,
             "joint {k}: drive {} vs measured {}",
@@ -179,9 +187,8 @@ fn session() -> Session {
             q[k]
         );
     }
-    let mut robot = control.into_robot();
-    robot.stop().unwrap();
-    robot.close().unwrap();
+    stopped.unwrap();
+    closed.unwrap();
     fake.wait_for(Duration::from_secs(1), |s| {
         s.nodes
             .iter()

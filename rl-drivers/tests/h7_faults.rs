@@ -452,7 +452,12 @@ fn a_controller_a_cycle_behind_is_caught_up_by_holding_one_request() {
             .kind(),
         ErrorKind::Timeout
     );
-    // From here on one request a cycle, on the controller's period.
+    // From here on one request a cycle, on the controller's period, half a cycle away from its
+    // ticks. (The failed step ended just after a tick; a client that stayed there would send
+    // each request just after a tick and wait almost a whole period for its reply, so any
+    // lateness of the fake's (not real-time) thread would push replies past the step's
+    // budget — the edge of the cycle, not the catching up that this test is about.)
+    std::thread::sleep(UPDATE_PERIOD / 2);
     let mut next = Instant::now();
     let mut outcomes = Vec::new();
     // How late this (not real-time) thread started each step: a step that failed after a

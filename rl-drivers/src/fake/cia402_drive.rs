@@ -37,6 +37,7 @@ use crate::transport::can::cannelloni_udp::CannelloniUdp;
 use crate::transport::can::record::{CandumpLog, PcapLog};
 use crate::transport::can::socketcan::SocketCan;
 use crate::transport::can::{CanAddress, CanTransport};
+use crate::transport::timestamp;
 use node::{Node, Outbox};
 
 /// The EDS shipped for the fake drive.
@@ -286,7 +287,7 @@ pub struct FakeStatus {
     /// Master connections accepted (TCP).
     pub connections: u64,
     /// The longest the fake's own thread woke after it meant to (a wait's deadline, a frame's
-    /// due time): real drives have their own CPU; a fake that shares one may be held up, and
+    /// due time, a received frame's kernel timestamp where the transport has one): real drives have their own CPU; a fake that shares one may be held up, and
     /// a test can tell that apart from a defect of the master.
     pub max_lateness: Duration,
     /// The last transport error (a dropped TCP peer, …).
@@ -534,6 +535,11 @@ impl Worker {
             match received {
                 Ok(Some(r)) => {
                     self.frames_received += 1;
+                    // How long the frame waited in the socket for this thread to take it.
+                    if let Some(at) = r.timestamp {
+                        let late = timestamp::since_epoch().saturating_sub(at);
+                        self.max_lateness = self.max_lateness.max(late);
+                    }
                     self.record(&r.frame);
                     let now = Instant::now();
                     for n in &mut self.nodes {

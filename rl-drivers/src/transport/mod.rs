@@ -3,6 +3,7 @@
 pub mod can;
 pub mod packet;
 pub mod tcp;
+pub mod timestamp;
 pub mod udp;
 
 use std::io;

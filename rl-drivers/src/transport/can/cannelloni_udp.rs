@@ -2,7 +2,8 @@
 //! last one as one version 2 datagram (never the cannelloni tool's 100 ms batching: a control
 //! loop flushes once per cycle). Received datagrams are checked — from the peer, version 2,
 //! DATA, every frame valid — or dropped whole and counted; gaps in the sequence numbers are
-//! counted as lost datagrams.
+//! counted as lost datagrams. Each frame carries the kernel's receive time of its datagram
+//! (`SO_TIMESTAMPNS`, [`timestamp`](crate::transport::timestamp)), as on SocketCAN.
 //!
 //! A master [`connect`](CannelloniUdp::connect)s to a fixed peer: datagrams from any other
 //! address are rejected. A fake [`serve`](CannelloniUdp::serve)s on a bound address and
@@ -11,14 +12,14 @@
 use std::io;
 use std::net::{SocketAddr, UdpSocket};
 use std::os::fd::AsFd;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use socket2::{Domain, Protocol, Socket, Type};
 
 use super::{CanTransport, Received, RxQueue, TransportCounters};
 use crate::proto::can::Frame;
 use crate::proto::can::cannelloni::{self, HEADER_LEN};
-use crate::transport::{Readiness, wait};
+use crate::transport::{Readiness, timestamp, wait};
 
 /// Bytes of one datagram at most (an Ethernet MTU's UDP payload).
 pub const MAX_DATAGRAM: usize = 1472;
@@ -43,6 +44,7 @@ fn bind(local: SocketAddr) -> io::Result<UdpSocket> {
     let socket = Socket::new(Domain::for_address(local), Type::DGRAM, Some(Protocol::UDP))?;
     socket.set_nonblocking(true)?;
     socket.bind(&local.into())?;
+    timestamp::enable(socket.as_fd())?;
     Ok(socket.into())
 }
 
@@ -110,7 +112,7 @@ impl CannelloniUdp {
         Ok(())
     }
 
-    fn take_datagram(&mut self, n: usize, from: SocketAddr) {
+    fn take_datagram(&mut self, n: usize, from: SocketAddr, at: Option<Duration>) {
         match self.peer {
             Some(p) if p == from => {}
             _ if self.follow_sender => {}
@@ -144,7 +146,7 @@ impl CannelloniUdp {
             self.counters.frames_received += 1;
             self.rx.push(Received {
                 frame,
-                timestamp: None,
+                timestamp: at,
             });
         }
     }
@@ -177,8 +179,9 @@ impl CanTransport for CannelloniUdp {
             if let Some(r) = self.rx.pop() {
                 return Ok(Some(r));
             }
-            match self.socket.recv_from(&mut self.rx_buf) {
-                Ok((n, from)) => self.take_datagram(n, from),
+            match timestamp::recv(self.socket.as_fd(), &mut self.rx_buf) {
+                Ok((n, Some(from), at)) => self.take_datagram(n, from, at),
+                Ok((_, None, _)) => self.counters.rejected += 1,
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                     if !wait(self.socket.as_fd(), Readiness::Readable, deadline)? {
                         return Ok(None);
@@ -227,6 +230,15 @@ mod tests {
             (Some(0x080), Some(0x201))
         );
         assert_eq!(fake.peer(), Some(master.local_addr().unwrap()));
+        // Both frames carry the kernel's receive time of their datagram: before now, and not
+        // before the send.
+        let (ta, tb) = (a.timestamp.unwrap(), b.timestamp.unwrap());
+        assert_eq!(ta, tb);
+        let now = timestamp::since_epoch();
+        assert!(
+            ta <= now && now - ta < Duration::from_secs(1),
+            "{ta:?} vs {now:?}"
+        );
         // The fake answers; a stranger's datagram to the master is rejected.
         let stranger = UdpSocket::bind(any).unwrap();
         stranger

@@ -59,7 +59,7 @@ impl SocketCan {
         if fd_frames {
             sys::set_fd_frames(&fd)?;
         }
-        sys::set_timestamps(&fd)?;
+        crate::transport::timestamp::enable(fd.as_fd())?;
         sys::bind(&fd, index)?;
         Ok(Self {
             fd,
@@ -121,8 +121,8 @@ impl CanTransport for SocketCan {
                 return Ok(Some(r));
             }
             let mut buf = [0u8; CANFD_FRAME_LEN];
-            match sys::recv(&self.fd, &mut buf) {
-                Ok((n, timestamp)) => {
+            match crate::transport::timestamp::recv(self.fd.as_fd(), &mut buf) {
+                Ok((n, _, timestamp)) => {
                     let frame = match n {
                         CAN_FRAME_LEN | CANFD_FRAME_LEN => {
                             Frame::read_socketcan(&buf[..n], IdOrder::Host)
@@ -167,7 +167,6 @@ mod sys {
     use std::io;
     use std::mem::{size_of, zeroed};
     use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
-    use std::time::Duration;
 
     use super::CanFilter;
 
@@ -249,15 +248,6 @@ mod sys {
         )
     }
 
-    pub(super) fn set_timestamps(fd: &OwnedFd) -> io::Result<()> {
-        setsockopt(
-            fd,
-            libc::SOL_SOCKET,
-            libc::SO_TIMESTAMPNS,
-            &[1 as libc::c_int],
-        )
-    }
-
     pub(super) fn bind(fd: &OwnedFd, index: libc::c_int) -> io::Result<()> {
         // SAFETY: an all-zero `sockaddr_can` is a valid value (plain integers and a union of
         // integers); the fields that matter are set below.
@@ -283,45 +273,6 @@ mod sys {
         } else {
             Ok(n as usize)
         }
-    }
-
-    /// One frame and its kernel timestamp.
-    pub(super) fn recv(fd: &OwnedFd, buf: &mut [u8]) -> io::Result<(usize, Option<Duration>)> {
-        let mut iov = libc::iovec {
-            iov_base: buf.as_mut_ptr().cast(),
-            iov_len: buf.len(),
-        };
-        // Room for one `timespec` control message, aligned like the header it follows.
-        let mut control = [0u64; 8];
-        // SAFETY: an all-zero `msghdr` is valid (null pointers, zero lengths); the pointers
-        // set below point to `iov` and `control`, which outlive the `recvmsg` call.
-        let mut msg: libc::msghdr = unsafe { zeroed() };
-        msg.msg_iov = &raw mut iov;
-        msg.msg_iovlen = 1;
-        msg.msg_control = control.as_mut_ptr().cast();
-        msg.msg_controllen = std::mem::size_of_val(&control) as _;
-        // SAFETY: `msg` describes buffers valid for writes of their stated lengths.
-        let n = unsafe { libc::recvmsg(fd.as_raw_fd(), &raw mut msg, libc::MSG_DONTWAIT) };
-        if n < 0 {
-            return Err(io::Error::last_os_error());
-        }
-        let mut timestamp = None;
-        // SAFETY: the CMSG macros walk the control buffer the kernel filled, within
-        // `msg_controllen`; a `SCM_TIMESTAMPNS` message carries one `timespec`, read
-        // unaligned.
-        unsafe {
-            let mut cmsg = libc::CMSG_FIRSTHDR(&raw const msg);
-            while !cmsg.is_null() {
-                if (*cmsg).cmsg_level == libc::SOL_SOCKET
-                    && (*cmsg).cmsg_type == libc::SCM_TIMESTAMPNS
-                {
-                    let ts: libc::timespec = std::ptr::read_unaligned(libc::CMSG_DATA(cmsg).cast());
-                    timestamp = Some(Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32));
-                }
-                cmsg = libc::CMSG_NXTHDR(&raw const msg, cmsg);
-            }
-        }
-        Ok((n as usize, timestamp))
     }
 }
 
