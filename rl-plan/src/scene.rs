@@ -16,6 +16,10 @@ use crate::error::PlanError;
 use crate::space::JointSpace;
 use crate::validity::Validity;
 
+mod certify;
+
+pub use certify::{Certificate, CertifyOptions, PathCertificate, Uncertified};
+
 /// Body capacity of the kinematic models the planners load.
 pub const MAX_BODIES: usize = 32;
 
@@ -32,6 +36,8 @@ pub struct SceneValidity {
     space: JointSpace,
     checks: u64,
     free: u64,
+    /// The motion bounds of certified edges, made on first use.
+    bounds: Option<certify::MotionBounds>,
 }
 
 impl std::fmt::Debug for SceneValidity {
@@ -80,6 +86,7 @@ impl SceneValidity {
             space,
             checks: 0,
             free: 0,
+            bounds: None,
         })
     }
 
@@ -168,5 +175,9 @@ impl Validity for SceneValidity {
 
     fn free_checks(&self) -> u64 {
         self.free
+    }
+
+    fn exact_checker(&mut self) -> Option<&mut SceneValidity> {
+        Some(self)
     }
 }

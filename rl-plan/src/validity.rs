@@ -47,6 +47,12 @@ pub trait Validity {
     /// Of those, the number found valid (a checker that tests batches counts the
     /// configurations of batches that passed: a lower bound).
     fn free_checks(&self) -> u64;
+
+    /// The exact geometry behind this checker, where it has one: what certifies a path's edges
+    /// ([`SceneValidity::certify_path`](crate::scene::SceneValidity::certify_path)).
+    fn exact_checker(&mut self) -> Option<&mut crate::scene::SceneValidity> {
+        None
+    }
 }
 
 /// Every configuration within the space's bounds is valid: for tests and for measuring a

@@ -114,6 +114,10 @@ impl Validity for HybridChecker {
         true
     }
 
+    fn exact_checker(&mut self) -> Option<&mut SceneValidity> {
+        Some(&mut self.exact)
+    }
+
     fn checks(&self) -> u64 {
         self.checks
     }
