@@ -1,6 +1,7 @@
 //! RL's scene files: every shipped `.wrl` and rlsg file loads, into the models, bodies and
 //! shapes RL's own loader makes of them; RL's two collision tests (the two tori, the Puma 560
-//! among boxes) reproduced; the VRML reader never panics on arbitrary bytes.
+//! among boxes) reproduced, the Puma with its convex links and with its visual ones (each
+//! inside its convex hull); the VRML reader never panics on arbitrary bytes.
 
 mod support;
 
@@ -25,6 +26,15 @@ fn shapes(s: &Scene) -> usize {
 fn every_shipped_wrl_loads() {
     let all = files(".wrl");
     assert!(all.len() >= 18, "{}", all.len());
+    // The visual (non-convex) Puma 560 is among them: its robot file and its seven links.
+    for f in ["unimation-puma560.wrl", "unimation-puma560_boxes.wrl"]
+        .into_iter()
+        .map(String::from)
+        .chain((0..7).map(|i| format!("unimation-puma560/link{i}.wrl")))
+        .chain(["unimation-puma560/unimation-puma560.wrl".to_string()])
+    {
+        assert!(all.contains(&rlsg_data().join(&f)), "{f} not found");
+    }
     for f in &all {
         let s = rlsg::load_vrml(f).unwrap_or_else(|e| panic!("{e}"));
         println!(
@@ -57,11 +67,23 @@ fn every_shipped_rlsg_file_loads_as_rl_reads_it() {
             .collect()
     };
     let load = |f: &str| rlsg::load_scene(&rlsg_data().join(f)).unwrap_or_else(|e| panic!("{e}"));
-    for f in files(".xml") {
+    let all = files(".xml");
+    for f in &all {
         load(f.file_name().unwrap().to_str().unwrap());
     }
-    let s = load("unimation-puma560_boxes.convex.xml");
+    for f in ["unimation-puma560.xml", "unimation-puma560_boxes.xml"] {
+        assert!(all.contains(&rlsg_data().join(f)), "{f} not found");
+    }
+    // The visual Puma among boxes has the convex scene's models, bodies and shape counts.
     let links: Vec<_> = (0..7).map(|i| (format!("link{i}"), 1)).collect();
+    assert_eq!(
+        names(&load("unimation-puma560_boxes.xml")),
+        vec![
+            ("unimation-puma560".into(), links.clone()),
+            ("boxes".into(), vec![(String::new(), 8)])
+        ]
+    );
+    let s = load("unimation-puma560_boxes.convex.xml");
     // The boxes model's body "" is the inlined file's root group: all eight boxes.
     assert_eq!(
         names(&s),
@@ -663,4 +685,370 @@ fn the_tx60l_reaches_through_rls_wall_where_it_has_holes_and_hits_it_where_not()
         "{hits:?}"
     );
     assert!(s.is_colliding(&CollisionFilter::All));
+}
+
+/// An RL link file's `IndexedFaceSet` counted as text, apart from the VRML reader: the points
+/// (the numbers of the `point [...]` list over three, `#` comments skipped), the count its
+/// `# points` comment declares, and the faces (the `-1` ends of `coordIndex [...]`).
+fn count_in_file(path: &Path) -> (usize, usize, usize) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let list = |key: &str| -> (Vec<&str>, &str) {
+        let at = text.find(key).unwrap() + key.len();
+        let open = at + text[at..].find('[').unwrap() + 1;
+        let close = open + text[open..].find(']').unwrap();
+        let body = &text[open..close];
+        let tokens = body
+            .lines()
+            .map(|l| l.split('#').next().unwrap())
+            .flat_map(|l| l.split([',', ' ', '\t']))
+            .filter(|t| !t.is_empty())
+            .collect();
+        (tokens, body)
+    };
+    let (points, body) = list("point");
+    assert_eq!(points.len() % 3, 0, "{}", path.display());
+    let declared = body
+        .split("# points")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{}: no `# points` comment", path.display()));
+    let (index, _) = list("coordIndex");
+    let faces = index.iter().filter(|t| **t == "-1").count();
+    (points.len() / 3, declared, faces)
+}
+
+/// The mesh of a one-shape body, its vertices in the body's frame.
+fn body_mesh(b: &rl_sg::Body) -> (Vec<DVec3>, &[[u32; 3]]) {
+    assert_eq!(b.shapes().len(), 1, "{}", b.name());
+    let sh = &b.shapes()[0];
+    let Geometry::Mesh(mesh) = sh.geometry() else {
+        panic!("{}: {} is not a mesh", b.name(), sh.geometry().kind())
+    };
+    let x = sh.local_pose();
+    (
+        mesh.vertices()
+            .iter()
+            .map(|p| x.transform_point(*p))
+            .collect(),
+        mesh.triangles(),
+    )
+}
+
+#[test]
+fn the_visual_puma_has_every_point_and_triangle_of_rls_files() {
+    // RL's unimation-puma560.xml: the Puma 560 with its visual (non-convex) links. Counted with
+    // a Python script over the files as they were written (the `# points` comments agree):
+    // vertices 121 + 56 + 84 + 18 + 62 + 24 + 28 = 393, triangles (coordIndex faces, all of
+    // three corners, none without area) 236 + 108 + 268 + 32 + 120 + 44 + 52 = 860.
+    const VERTICES: [usize; 7] = [121, 56, 84, 18, 62, 24, 28];
+    const TRIANGLES: [usize; 7] = [236, 108, 268, 32, 120, 44, 52];
+    let visual = rlsg::load_scene(&rlsg_data().join("unimation-puma560.xml")).unwrap();
+    let convex = rlsg::load_scene(&rlsg_data().join("unimation-puma560.convex.xml")).unwrap();
+    assert_eq!(visual.models().len(), 1);
+    let m = &visual.models()[0];
+    assert_eq!(m.name(), "unimation-puma560");
+    assert_eq!(m.bodies().len(), 7);
+    assert_eq!(shapes(&visual), 7);
+    let (mut vertices, mut triangles) = (0, 0);
+    for (i, (b, c)) in m
+        .bodies()
+        .iter()
+        .zip(convex.models()[0].bodies())
+        .enumerate()
+    {
+        assert_eq!(b.name(), format!("link{i}"));
+        // The same robot file as the convex scene's: the same body frames.
+        assert!((b.pose().translation - c.pose().translation).length() < 1e-12);
+        let e = (b.pose().rotation - c.pose().rotation)
+            .abs()
+            .to_cols_array();
+        assert!(e.iter().all(|v| *v < 1e-12), "{}: {e:?}", b.name());
+        let (points, tris) = body_mesh(b);
+        let file = rlsg_data().join(format!("unimation-puma560/link{i}.wrl"));
+        let (n, declared, faces) = count_in_file(&file);
+        assert_eq!(n, declared, "{}", file.display());
+        assert_eq!((points.len(), tris.len()), (n, faces), "{}", b.name());
+        assert_eq!((n, faces), (VERTICES[i], TRIANGLES[i]), "{}", b.name());
+        vertices += n;
+        triangles += faces;
+        // RL's link2 lists its faces from both sides (two triangulations of the same quads):
+        // 112 edges are shared by four triangles. The other links are proper surfaces.
+        let Geometry::Mesh(mesh) = b.shapes()[0].geometry() else {
+            unreachable!()
+        };
+        let (shared, _) = mesh.non_manifold_edges();
+        assert_eq!(shared, if i == 2 { 112 } else { 0 }, "{}", b.name());
+    }
+    assert_eq!((vertices, triangles), (393, 860));
+}
+
+/// The face planes (unit outward normal `n`, offset `d`: inside is `n·p ≤ d`) of a convex
+/// surface mesh. Faces under 1e-9 m² are left out: slivers whose normal the files' 8-digit
+/// coordinates do not fix (RL's convex link4 has three, of 1e-11 m²); leaving a plane out can
+/// only make the hull larger, and these faces have no extent to bound anything. Every plane
+/// kept must have every vertex behind it within `tol` (the mesh is convex), outward normals
+/// taken away from the vertices' mean (inside a convex body).
+fn hull_planes(points: &[DVec3], triangles: &[[u32; 3]], tol: f64) -> Vec<(DVec3, f64)> {
+    let centre = points.iter().sum::<DVec3>() / points.len() as f64;
+    let mut planes = Vec::new();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| points[i as usize]);
+        let n = (b - a).cross(c - a);
+        if n.length() * 0.5 < 1e-9 {
+            continue;
+        }
+        let mut n = n.normalize();
+        if n.dot(centre - a) > 0.0 {
+            n = -n;
+        }
+        let d = n.dot(a);
+        let worst = points
+            .iter()
+            .map(|p| n.dot(*p) - d)
+            .fold(f64::MIN, f64::max);
+        assert!(
+            worst <= tol,
+            "not convex: a vertex {worst} m outside face {t:?}"
+        );
+        planes.push((n, d));
+    }
+    planes
+}
+
+#[test]
+fn each_visual_puma_link_lies_in_its_convex_hull_which_it_spans() {
+    // RL made unimation-puma560.convex/ from these meshes. Tolerance: the visual files give
+    // coordinates to 1e-6 m, the hull files to 8 significant digits (≤ 5e-9 m here), and the
+    // links' rotation angles differ (3.14159 against 3.1415901: 1e-7 rad, ≤ 7e-8 m at the
+    // links' ≤ 0.7 m radius). 2e-7 m covers that threefold and is below the visual files'
+    // last digit: a vertex mistyped in its last place that leaves the hull is caught.
+    const TOL: f64 = 2e-7;
+    let visual = rlsg::load_scene(&rlsg_data().join("unimation-puma560.xml")).unwrap();
+    let convex = rlsg::load_scene(&rlsg_data().join("unimation-puma560.convex.xml")).unwrap();
+    for (v, c) in visual.models()[0]
+        .bodies()
+        .iter()
+        .zip(convex.models()[0].bodies())
+    {
+        let (mesh, _) = body_mesh(v);
+        let (hull, hull_triangles) = body_mesh(c);
+        let planes = hull_planes(&hull, hull_triangles, TOL);
+        assert!(planes.len() + 3 >= hull_triangles.len(), "{}", v.name());
+        // Every vertex of the mesh (and so every point of it) is inside the hull.
+        let outside = |p: &DVec3| {
+            planes
+                .iter()
+                .map(|(n, d)| n.dot(*p) - d)
+                .fold(f64::MIN, f64::max)
+        };
+        let worst = mesh.iter().map(outside).fold(f64::MIN, f64::max);
+        // And the hull is the mesh's: each of its corners is a vertex of the mesh.
+        let corner = hull
+            .iter()
+            .map(|h| {
+                mesh.iter()
+                    .map(|p| (*p - *h).length())
+                    .fold(f64::MAX, f64::min)
+            })
+            .fold(f64::MIN, f64::max);
+        println!(
+            "{}: {} vertices at most {worst:.1e} m outside the hull's {} planes; hull corners \
+             within {corner:.1e} m of a vertex",
+            v.name(),
+            mesh.len(),
+            planes.len()
+        );
+        assert!(worst <= TOL, "{}: a vertex {worst} m outside", v.name());
+        assert!(
+            corner <= TOL,
+            "{}: a hull corner {corner} m from the mesh",
+            v.name()
+        );
+    }
+}
+
+/// Whether body `inner`'s mesh lies wholly inside the convex hull that is body `outer`'s mesh,
+/// in the scene's current poses.
+fn hull_inside(s: &Scene, outer: rl_sg::BodyId, inner: rl_sg::BodyId) -> bool {
+    let world = |id: rl_sg::BodyId| {
+        let b = s.body(id).unwrap();
+        let (points, triangles) = body_mesh(b);
+        let points: Vec<_> = points
+            .iter()
+            .map(|p| b.pose().transform_point(*p))
+            .collect();
+        (points, triangles.to_vec())
+    };
+    let (hull, triangles) = world(outer);
+    let planes = hull_planes(&hull, &triangles, 2e-7);
+    world(inner)
+        .0
+        .iter()
+        .all(|p| planes.iter().all(|(n, d)| n.dot(*p) <= *d))
+}
+
+#[test]
+fn the_visual_puma_among_boxes_collides_only_where_its_convex_hulls_do() {
+    // RL's rlCollisionTest scene with the visual links (unimation-puma560_boxes.xml) beside
+    // the convex one, both linked to RL's kinematics, at the convex tests' configurations:
+    // q = 0 and raised straight up (above), and the 20 random ones of the coal fixture
+    // (coal.rs). A hull contains its mesh, so the meshes may only collide where the hulls do
+    // and are never nearer a box than their hulls. (Meshes are surfaces: a box wholly inside a
+    // hull would break this, but RL's boxes are larger than any link.)
+    const TOL: f64 = 1e-6;
+    let (mut convex, loaded) = puma();
+    let (mut visual, _) = linked("unimation-puma560_boxes.xml", "unimation-puma560.xml");
+    let fx: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(repo().join("rl-sg/tests/data/coal/puma_boxes.json")).unwrap(),
+    )
+    .unwrap();
+    let up = std::f64::consts::FRAC_PI_2;
+    let mut configs = vec![vec![0.0; 6], vec![0.0, -up, up, 0.0, 0.0, 0.0]];
+    for c in fx["scene"]["configs"].as_array().unwrap() {
+        let q: Vec<f64> = c["q"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        if !configs.contains(&q) {
+            configs.push(q);
+        }
+    }
+    assert_eq!(configs.len(), 22);
+    // And 300 more, uniform within the joint limits of RL's model (degrees, from
+    // tests/data/rlmdl/unimation-puma560.xml), where the meshes and hulls come to differ.
+    const LIMITS: [(f64, f64); 6] = [
+        (-160.0, 160.0),
+        (-225.0, 45.0),
+        (-45.0, 225.0),
+        (-110.0, 170.0),
+        (-100.0, 100.0),
+        (-266.0, 266.0),
+    ];
+    let mut r = Rng::new(560);
+    for _ in 0..300 {
+        configs.push(
+            LIMITS
+                .iter()
+                .map(|(lo, hi)| r.range(*lo, *hi).to_radians())
+                .collect(),
+        );
+    }
+    let boxes = visual.models()[1].bodies()[0].shapes().len();
+    assert_eq!(boxes, 8);
+    let mut data = Box::new(rl_core::Data::<8>::new());
+    let (mut both, mut hull_only, mut clear) = (0, Vec::new(), 0);
+    // Per link: pairs colliding for both, and the largest distance the mesh gains on its hull
+    // (with the configuration and box).
+    let mut per_link = [(0, 0.0_f64, 0, 0); 7];
+    let mut same_answer = 0;
+    let mut mesh_only = Vec::new();
+    let mut hull_only_bodies = Vec::new();
+    for (k, q) in configs.iter().enumerate() {
+        for s in [&mut convex, &mut visual] {
+            s.set_configuration(ModelId(0), &loaded.model, &mut data, q)
+                .unwrap();
+        }
+        // Whole scene (robot against boxes, and the robot's own pairs RL checks).
+        let hits_c = convex.colliding_bodies(&CollisionFilter::All);
+        let hits_v = visual.colliding_bodies(&CollisionFilter::All);
+        if hits_v == hits_c {
+            same_answer += 1;
+        }
+        for h in hits_v.iter().filter(|h| !hits_c.contains(h)) {
+            // Only where one hull lies wholly inside the other: surfaces that do not meet.
+            let nested = h.0.model == 0
+                && h.1.model == 0
+                && (hull_inside(&convex, h.0, h.1) || hull_inside(&convex, h.1, h.0));
+            assert!(
+                nested,
+                "config {k}: the meshes of {} and {} collide, their hulls not",
+                visual.body_name(h.0),
+                visual.body_name(h.1)
+            );
+            mesh_only.push((k, visual.body_name(h.0), visual.body_name(h.1)));
+        }
+        // Where the hulls alone collide, the meshes are apart.
+        for h in hits_c.iter().filter(|h| !hits_v.contains(h)) {
+            let d = visual.body_distance(h.0, h.1).unwrap().distance;
+            assert!(d > 0.0, "config {k}: {h:?} {d}");
+            hull_only_bodies.push((k, visual.body_name(h.0), visual.body_name(h.1), d));
+        }
+        // Each link against each box.
+        for (body, link) in per_link.iter_mut().enumerate() {
+            for shape in 0..boxes {
+                let a = rl_sg::ShapeId {
+                    model: 0,
+                    body,
+                    shape: 0,
+                };
+                let b = rl_sg::ShapeId {
+                    model: 1,
+                    body: 0,
+                    shape,
+                };
+                let hit_c = convex.shapes_collide(a, b).unwrap();
+                let hit_v = visual.shapes_collide(a, b).unwrap();
+                let d_c = convex.shape_distance(a, b).unwrap().distance;
+                let d_v = visual.shape_distance(a, b).unwrap().distance;
+                if hit_c && hit_v {
+                    both += 1;
+                    link.0 += 1;
+                } else if hit_c {
+                    hull_only.push((k, body, shape, d_c, d_v));
+                } else {
+                    assert!(
+                        !hit_v,
+                        "config {k}: link{body}'s mesh hits box {shape}, its hull not"
+                    );
+                    assert!(
+                        d_v >= d_c - TOL,
+                        "config {k}: link{body}'s mesh {d_v} m from box {shape}, its hull {d_c} m"
+                    );
+                    clear += 1;
+                    if d_v - d_c > link.1 {
+                        *link = (link.0, d_v - d_c, k, shape);
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "{} configurations × 7 links × {boxes} boxes: {clear} pairs clear for both, {both} \
+         colliding for both, {} colliding for the hulls only; the whole scene's colliding \
+         bodies the same in {same_answer} configurations",
+        configs.len(),
+        hull_only.len()
+    );
+    for (k, a, b) in &mesh_only {
+        let deg: Vec<_> = configs[*k].iter().map(|q| q.to_degrees().round()).collect();
+        println!(
+            "  config {k} ({deg:?}°): the meshes of {a} and {b} collide; their hull surfaces \
+             do not meet, one hull wholly inside the other"
+        );
+    }
+    println!(
+        "  body pairs colliding for the hulls only: {}",
+        hull_only_bodies.len()
+    );
+    for (k, a, b, d) in &hull_only_bodies {
+        println!("  config {k}: {a} and {b}: the meshes {d:.4} m apart");
+    }
+    for (body, (hits, gain, k, shape)) in per_link.iter().enumerate() {
+        println!(
+            "  link{body}: colliding for both {hits} times; the mesh at most {gain:.1e} m \
+             farther than its hull (config {k}, box {shape})"
+        );
+    }
+    for (k, body, shape, d_c, d_v) in &hull_only {
+        let deg: Vec<_> = configs[*k].iter().map(|q| q.to_degrees().round()).collect();
+        println!(
+            "  config {k} ({deg:?}°): link{body} and box {shape}: hull {d_c:.4} m, mesh {d_v:.4} m"
+        );
+    }
+    assert!(clear > 0 && both + hull_only.len() > 0);
+    // A pair the hull alone hits is one the mesh clears: a positive distance for the mesh.
+    assert!(hull_only.iter().all(|h| h.4 > 0.0), "{hull_only:?}");
 }
