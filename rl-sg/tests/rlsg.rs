@@ -1052,3 +1052,62 @@ fn the_visual_puma_among_boxes_collides_only_where_its_convex_hulls_do() {
     // A pair the hull alone hits is one the mesh clears: a positive distance for the mesh.
     assert!(hull_only.iter().all(|h| h.4 > 0.0), "{hull_only:?}");
 }
+
+/// A face set with a triangle of no area loads, and the model says what was dropped and where
+/// (nothing is dropped silently).
+#[test]
+fn a_dropped_degenerate_triangle_is_reported() {
+    let text = "#VRML V2.0 utf8\n\
+        DEF part Shape {\n\
+          geometry IndexedFaceSet {\n\
+            coord Coordinate { point [ 0 0 0, 1 0 0, 0 1 0, 0 0 1, 2 0 0 ] }\n\
+            coordIndex [ 0 1 2 -1, 0 2 3 -1, 0 3 1 -1, 1 3 2 -1, 0 1 4 -1 ]\n\
+          }\n\
+        }\n";
+    let model = VrmlScene::from_str(text, Path::new("degenerate.wrl"))
+        .unwrap()
+        .to_model("m")
+        .unwrap();
+    let w = model.warnings();
+    assert!(
+        w.iter()
+            .any(|n| n.contains("degenerate.wrl line 3") && n.contains("1 of 5 triangles")),
+        "{w:?}"
+    );
+    // A clean tetrahedron has nothing to report.
+    let clean = text.replace(", 0 1 4 -1", "");
+    let model = VrmlScene::from_str(&clean, Path::new("clean.wrl"))
+        .unwrap()
+        .to_model("m")
+        .unwrap();
+    assert!(model.warnings().is_empty(), "{:?}", model.warnings());
+}
+
+/// Nodes nested 64 deep (transforms, the shape and its box) load; one level more is a typed error naming the limit — and neither
+/// overflows the 2 MiB stack of a test thread, even in a debug build.
+#[test]
+fn nesting_is_bounded_with_a_clear_error() {
+    let nested = |depth: usize| {
+        let mut t = String::from("#VRML V2.0 utf8\n");
+        for _ in 0..depth - 2 {
+            t.push_str("Transform { children [ ");
+        }
+        t.push_str("Shape { geometry Box { size 1 1 1 } }");
+        for _ in 0..depth - 2 {
+            t.push_str(" ] }");
+        }
+        t
+    };
+    let ok = VrmlScene::from_str(&nested(64), Path::new("deep.wrl"))
+        .unwrap()
+        .to_model("m")
+        .unwrap();
+    assert_eq!(ok.bodies()[0].shapes().len(), 1);
+    let e = VrmlScene::from_str(&nested(65), Path::new("deeper.wrl"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("deeper than 64") && e.contains("deeper.wrl"),
+        "{e}"
+    );
+}

@@ -96,6 +96,9 @@ pub fn scene_from_str(text: &str, path: &Path) -> Result<Scene, SgError> {
                 .map_err(|e| at(b, SgError::nested(e)))?;
             let mut built = Vec::with_capacity(shapes.len());
             for s in shapes {
+                for n in &s.notes {
+                    model.warn(format!("body {bname}: {n}"));
+                }
                 built.push(Shape::new(s.name, s.geometry, s.pose).map_err(|e| at(b, e))?);
             }
             let body = model.add_body(bname);

@@ -28,7 +28,7 @@ use rl_core::spatial::PlueckerTransform;
 use self::parse::{Document, Node, Value};
 use super::{dir_of, read_text};
 use crate::error::{SgError, SgErrorKind};
-use crate::geometry::{Geometry, TriangleMesh};
+use crate::geometry::{Geometry, MeshStats, TriangleMesh};
 use crate::scene::{Model, Shape};
 
 /// How deep `Inline`s may nest (a file inlining itself is caught by this too).
@@ -62,6 +62,9 @@ pub struct FoundShape {
     pub geometry: Geometry,
     /// Its pose in the frame of the node searched from.
     pub pose: PlueckerTransform,
+    /// What the mesh check reported (dropped degenerate triangles, non-manifold edges), for
+    /// the model's warnings; empty when all is well.
+    pub notes: Vec<String>,
 }
 
 impl VrmlScene {
@@ -296,11 +299,22 @@ impl VrmlScene {
             // A Shape without geometry draws nothing and collides with nothing.
             _ => return Ok(()),
         };
-        let (geometry, pose) = self.geometry(g, x).map_err(|e| self.error_at(g, e))?;
+        let (geometry, pose, stats) = self.geometry(g, x).map_err(|e| self.error_at(g, e))?;
+        let notes = stats.map_or_else(Vec::new, |s| {
+            let n = self.node(g);
+            let what = format!(
+                "{} line {}: {}",
+                self.files[g.0].0.display(),
+                n.line,
+                n.describe()
+            );
+            s.notes(&what)
+        });
         out.push(FoundShape {
             name,
             geometry,
             pose,
+            notes,
         });
         Ok(())
     }
@@ -320,8 +334,13 @@ impl VrmlScene {
         }
     }
 
-    /// The geometry node `g` under the affine map `x`: the geometry and its rigid pose.
-    fn geometry(&self, g: NodeRef, x: DAffine3) -> Result<(Geometry, PlueckerTransform), SgError> {
+    /// The geometry node `g` under the affine map `x`: the geometry, its rigid pose, and for a
+    /// mesh what its check reported.
+    fn geometry(
+        &self,
+        g: NodeRef,
+        x: DAffine3,
+    ) -> Result<(Geometry, PlueckerTransform, Option<MeshStats>), SgError> {
         let n = self.node(g);
         // VRML's y axis onto our z for cylinders and cones.
         let y_up = DMat3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
@@ -376,11 +395,15 @@ impl VrmlScene {
             )));
         }
         let geometry = geometry.scaled(s)?;
-        Ok((geometry, PlueckerTransform::new(r, x.translation)))
+        Ok((geometry, PlueckerTransform::new(r, x.translation), None))
     }
 
     /// An `IndexedFaceSet` under `x` (baked into the vertices when not rigid).
-    fn face_set(&self, g: NodeRef, x: DAffine3) -> Result<(Geometry, PlueckerTransform), SgError> {
+    fn face_set(
+        &self,
+        g: NodeRef,
+        x: DAffine3,
+    ) -> Result<(Geometry, PlueckerTransform, Option<MeshStats>), SgError> {
         let n = self.node(g);
         let coord = match n.field("coord") {
             Some(Value::Nodes(v)) if !v.is_empty() => (g.0, v[0]),
@@ -462,10 +485,10 @@ impl VrmlScene {
                 .flatten()
                 .map(|&i| vertices[i as usize])
                 .collect();
-            Ok((Geometry::convex_hull(&used)?, pose))
+            Ok((Geometry::convex_hull(&used)?, pose, None))
         } else {
-            let (mesh, _) = TriangleMesh::new(vertices, triangles)?;
-            Ok((Geometry::mesh(mesh), pose))
+            let (mesh, stats) = TriangleMesh::new(vertices, triangles)?;
+            Ok((Geometry::mesh(mesh), pose, Some(stats)))
         }
     }
 
@@ -474,8 +497,13 @@ impl VrmlScene {
     pub fn to_model(&self, name: &str) -> Result<Model, SgError> {
         let mut model = Model::new(name);
         let body = model.add_body("");
+        let mut notes = Vec::new();
         for s in self.shapes_under((0, ROOT))? {
+            notes.extend(s.notes);
             body.push_shape(Shape::new(s.name, s.geometry, s.pose)?);
+        }
+        for n in notes {
+            model.warn(n);
         }
         Ok(model)
     }

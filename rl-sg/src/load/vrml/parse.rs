@@ -11,7 +11,9 @@ use std::collections::HashMap;
 use super::lexer::{Lexer, Spanned, Token};
 use crate::error::SgError;
 
-const MAX_DEPTH: usize = 256;
+/// How deep nodes may nest in one file: RL's files nest fewer than ten deep, CAD exports a few
+/// dozen; the bound keeps the recursive reader within a 2 MiB thread stack even in a debug build.
+const MAX_DEPTH: usize = 64;
 const MAX_NODES: usize = 1_000_000;
 
 /// A node's index in its file's arena.
