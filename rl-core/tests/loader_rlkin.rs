@@ -215,6 +215,21 @@ fn same_fk(kin: &str, mdl: &str, mdl_tool: &str) {
         worst = worst.max(gap(&a, &b));
     }
     assert!(worst < 1e-9, "{kin} vs {mdl}: tool poses differ by {worst}");
+    // Every link frame is the rlmdl body frame of the same index (RL's scenes pair both with
+    // the same link geometry).
+    let mut worst = 0.0f64;
+    for _ in 0..50 {
+        let q = rng.q(&k.model);
+        for i in 0..7 {
+            let a = frame_pose(&k, &q, &format!("link{i}"));
+            let b = frame_pose(&m, &q, &format!("body{i}"));
+            worst = worst.max(gap(&a, &b));
+        }
+    }
+    assert!(
+        worst < 1e-9,
+        "{kin} vs {mdl}: link frames differ by {worst}"
+    );
 }
 
 #[test]

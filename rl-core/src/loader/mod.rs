@@ -380,7 +380,8 @@ pub fn load_urdf_str<const N: usize>(
     load_as(text, &LoadOptions::urdf(options), Some(Format::Urdf))
 }
 
-/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with default URDF options.
+/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with default URDF
+/// options.
 pub fn load_file<const N: usize>(path: impl AsRef<Path>) -> Result<LoadedModel<N>, LoadError> {
     load_file_with(path, &UrdfOptions::default())
 }
@@ -393,8 +394,8 @@ pub fn load_file_with<const N: usize>(
     load_file_options(path, &LoadOptions::urdf(urdf))
 }
 
-/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with every option. A file larger
-/// than [`InputLimits::max_bytes`] is refused before it is read.
+/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with every option.
+/// A file larger than [`InputLimits::max_bytes`] is refused before it is read.
 pub fn load_file_options<const N: usize>(
     path: impl AsRef<Path>,
     options: &LoadOptions,

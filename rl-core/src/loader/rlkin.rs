@@ -395,8 +395,8 @@ mod tests {
 
     #[test]
     fn dh_is_pauls_product() {
-        // Tz(d)·Rz(θ)·Tx(a)·Rx(α) by hand for θ = 90°, α = 90°: x₁ = y₀, y₁ = z₀, z₁ = x₀,
-        // origin (0, a, d).
+        // Tz(d)·Rz(θ)·Tx(a)·Rx(α) by hand for θ = 90°, α = 90°:
+        // x₁ = y₀, y₁ = z₀, z₁ = x₀, origin (0, a, d).
         let t = dh_transform(0.5, 90.0 * DEG, 0.25, 90.0 * DEG);
         let x = t.rotation * DVec3::X;
         let y = t.rotation * DVec3::Y;
