@@ -114,6 +114,40 @@ fn plan_an_rl_scenario() {
 }
 
 #[test]
+fn plan_an_rl_scenario_with_rlkin_kinematics() {
+    // RL's Mitsubishi RV-6SL among boxes names its Denavit–Hartenberg kinematics
+    // (../rlkin/mitsubishi-rv6sl.xml), without a type attribute, as RL's own file does.
+    let scenario = data("rlplan/mitsubishi-rv6sl_boxes_rrtConCon.xml");
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    assert!(text.contains("../rlkin/mitsubishi-rv6sl.xml"));
+    let dir = tmp("rlkin");
+    let out = dir.join("path.csv");
+    let o = rl(&[
+        "plan",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], true, "{v}");
+    assert_eq!(v["planner"], "RRT Connect Connect");
+    assert_eq!(v["checker"], "exact");
+    // The path starts at RL's start (0°, 90°, 0, …) and ends at its goal (90°, 90°, 0, …).
+    let (_, rows) = csv(&out);
+    let deg = std::f64::consts::PI / 180.0;
+    let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+    let start = [0.0, 90.0 * deg, 0.0, 0.0, 0.0, 0.0];
+    let goal = [90.0 * deg, 90.0 * deg, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!((first.len(), last.len()), (6, 6));
+    for k in 0..6 {
+        assert!((first[k] - start[k]).abs() < 1e-9, "{first:?}");
+        assert!((last[k] - goal[k]).abs() < 1e-9, "{last:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn bench_writes_ompl_logs_and_rl_csv() {
     let dir = tmp("bench");
     let o = rl(&[

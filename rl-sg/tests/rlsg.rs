@@ -584,8 +584,9 @@ fn the_rv6sl_among_boxes_is_clear_at_home_and_hits_a_box_it_is_laid_into() {
 }
 
 /// RL's Stäubli TX60L kinematics from its `examples/rlkin/staeubli-tx60l.xml` (RL ships this
-/// robot in the DH format rlkin only, which rl-core does not load): (d, θ, a, α) per joint, m
-/// and degrees, standard DH `Rz(θ + q) Tz(d) Tx(a) Rx(α)`.
+/// robot in the DH format rlkin only), written out by hand as the independent check of
+/// rl-core's rlkin reader: (d, θ, a, α) per joint, m and degrees, standard DH
+/// `Rz(θ + q) Tz(d) Tx(a) Rx(α)`.
 const TX60L_DH: [(f64, f64, f64, f64); 6] = [
     (0.375, 0.0, 0.0, -90.0),
     (0.0, -90.0, 0.4, 0.0),
@@ -1110,4 +1111,44 @@ fn nesting_is_bounded_with_a_clear_error() {
         e.contains("deeper than 64") && e.contains("deeper.wrl"),
         "{e}"
     );
+}
+
+#[test]
+fn the_tx60l_linked_through_its_rlkin_file_follows_the_dh_table_and_rls_ignores() {
+    // rl-core reads tests/data/rlkin/staeubli-tx60l.xml; link_rlkin pairs the scene's link0 …
+    // link6 with its <link>s. At random configurations every scene body sits where the
+    // hand-written DH table above puts it (the robot's base at the world's origin here).
+    let rlkin = repo().join("tests/data/rlkin/staeubli-tx60l.xml");
+    let loaded = rl_core::loader::load_file::<8>(&rlkin).unwrap();
+    let mut s = rlsg::load_scene(&rlsg_data().join("staeubli-tx60l_wall.convex.xml")).unwrap();
+    rlsg::link_kinematics(s.model_mut(ModelId(0)).unwrap(), &rlkin, &loaded).unwrap();
+    let m = &s.models()[0];
+    // link0: `<ignore/>` and `<ignore idref="link1"/>`; link4 allows link2, link3, link5, link6.
+    assert!(!m.bodies()[0].collision_enabled());
+    assert!(m.bodies()[1..].iter().all(|b| b.collision_enabled()));
+    let allowed = m.allowed_collisions();
+    assert!(allowed.is_allowed(0, 1) && allowed.is_allowed(1, 0));
+    assert!([2, 3, 5, 6].iter().all(|&j| allowed.is_allowed(4, j)));
+    assert!(!allowed.is_allowed(0, 2) && !allowed.is_allowed(1, 3));
+    let mut data = Box::new(rl_core::Data::<8>::new());
+    let mut seed = 0x2545_f491_u64;
+    let mut worst = 0.0f64;
+    for _ in 0..100 {
+        let q: [f64; 6] = std::array::from_fn(|_| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 300.0
+        });
+        let rad = q.map(f64::to_radians);
+        s.set_configuration(ModelId(0), &loaded.model, &mut data, &rad)
+            .unwrap();
+        let want = tx60l_frames(PlueckerTransform::IDENTITY, q);
+        for (b, x) in s.models()[0].bodies().iter().zip(&want) {
+            worst = worst.max((b.pose().translation - x.translation).length());
+            let e = (b.pose().rotation - x.rotation).abs().to_cols_array();
+            worst = e.iter().fold(worst, |w, v| w.max(*v));
+        }
+    }
+    assert!(worst < 1e-12, "scene bodies off the DH table by {worst}");
 }

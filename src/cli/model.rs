@@ -40,7 +40,7 @@ pub enum ModelCommand {
 /// How to read a model file.
 #[derive(Args, Debug, Clone)]
 pub struct ModelFile {
-    /// A URDF or RL XML (rlmdl) model file.
+    /// A URDF or RL XML model file (rlmdl, or rlkin: RL's Denavit–Hartenberg kinematics).
     pub file: PathBuf,
     /// URDF only: add a six-DOF root joint (a floating base, as Pinocchio's free-flyer).
     #[arg(long)]

@@ -94,8 +94,8 @@ pub struct RobotArgs {
     /// The robot: a URDF, or an RL scene (rlsg XML) whose first model is the robot (then give
     /// its kinematic model with --kinematics).
     model: PathBuf,
-    /// RL scenes: the robot's kinematic model (rlmdl XML); its bodies pair with the scene's
-    /// first model's in order, its <ignore> elements apply.
+    /// RL scenes: the robot's kinematic model (rlmdl or rlkin XML); its bodies (rlkin: links)
+    /// pair with the scene's first model's in order, its <ignore> elements apply.
     #[arg(long, value_name = "FILE")]
     kinematics: Option<PathBuf>,
     /// The SRDF with the robot's allowed collision pairs (default: adjacent links and links

@@ -38,7 +38,7 @@ pub enum LoadErrorKind {
     Io(String),
     /// The text is not well-formed XML (the message carries roxmltree's line:column).
     Xml(String),
-    /// The root element is neither RL's `rlmdl`/`rl` nor URDF's `robot`.
+    /// The root element is neither RL's `rlmdl`/`rlkin`/`rl` nor URDF's `robot`.
     UnknownFormat {
         /// The root element's tag.
         root: String,
@@ -136,8 +136,8 @@ impl fmt::Display for LoadErrorKind {
             LoadErrorKind::Xml(e) => write!(f, "XML syntax error: {e}"),
             LoadErrorKind::UnknownFormat { root } => write!(
                 f,
-                "unknown model format: the root element is <{root}>, expected <rlmdl>, <rl> \
-                 (RL XML) or <robot> (URDF)"
+                "unknown model format: the root element is <{root}>, expected <rlmdl>, <rlkin>, \
+                 <rl> (RL XML) or <robot> (URDF)"
             ),
             LoadErrorKind::UnknownJointType { joint_type } => {
                 write!(f, "unknown joint type \"{joint_type}\"")

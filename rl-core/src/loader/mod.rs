@@ -1,7 +1,7 @@
-//! Model loading (feature `std`): RL's XML model format (`rlmdl`) and URDF, into a
-//! fixed-capacity [`Model`].
+//! Model loading (feature `std`): RL's XML model format (`rlmdl`), RL's older
+//! Denavit–Hartenberg kinematics format (`rlkin`) and URDF, into a fixed-capacity [`Model`].
 //!
-//! Both formats describe a tree of frames joined by transforms. Loading walks it depth-first
+//! All three formats describe a tree of frames joined by transforms. Loading walks it depth-first
 //! from the root, adds one body per moving joint (so joints are numbered as RL and Pinocchio
 //! number them) and merges everything reached through fixed transforms into its moving
 //! ancestor: placements are composed, inertias added. Tools are the leaves of the frame tree
@@ -19,6 +19,7 @@
 
 mod error;
 mod physical;
+mod rlkin;
 mod rlmdl;
 mod tree;
 mod urdf;
@@ -38,6 +39,9 @@ use crate::spatial::PlueckerTransform;
 pub enum Format {
     /// RL's XML model format (`<rlmdl>` or `<rl><mdl>`).
     Rlmdl,
+    /// RL's Denavit–Hartenberg kinematics format (`<rlkin>` or `<rl><kin>`): kinematics only,
+    /// the bodies have no mass.
+    Rlkin,
     /// URDF (`<robot>`).
     Urdf,
 }
@@ -298,7 +302,7 @@ fn display_name(s: &str) -> &str {
     &s[..end]
 }
 
-/// Loads RL XML or URDF from `text`, by its root element; URDF with `urdf` options.
+/// Loads RL XML (rlmdl, rlkin) or URDF from `text`, by its root element; URDF with `urdf` options.
 pub fn load_str<const N: usize>(
     text: &str,
     urdf: &UrdfOptions,
@@ -306,7 +310,7 @@ pub fn load_str<const N: usize>(
     load_str_options(text, &LoadOptions::urdf(urdf))
 }
 
-/// Loads RL XML or URDF from `text`, by its root element, with every option.
+/// Loads RL XML (rlmdl, rlkin) or URDF from `text`, by its root element, with every option.
 pub fn load_str_options<const N: usize>(
     text: &str,
     options: &LoadOptions,
@@ -323,15 +327,29 @@ fn load_as<const N: usize>(
 ) -> Result<LoadedModel<N>, LoadError> {
     let doc = xml::parse(text, &options.input)?;
     let root = doc.root_element();
-    let urdf = match format {
-        Some(f) => f == Format::Urdf,
-        None => root.tag_name().name() == "robot",
+    let format = format.unwrap_or_else(|| {
+        if root.tag_name().name() == "robot" {
+            Format::Urdf
+        } else if rlkin::is_rlkin(root) {
+            Format::Rlkin
+        } else {
+            Format::Rlmdl
+        }
+    });
+    let mut loaded = match format {
+        Format::Urdf => urdf::from_document(root, options)?,
+        Format::Rlkin => rlkin::from_document(root, options)?,
+        Format::Rlmdl => rlmdl::from_document(root, options)?,
     };
-    let mut loaded = if urdf {
-        urdf::from_document(root, options)?
-    } else {
-        rlmdl::from_document(root, options)?
-    };
+    if format == Format::Rlkin {
+        // The format has no masses at all: one note instead of one per joint.
+        loaded.warnings.push(
+            "rlkin describes kinematics only: the bodies have no mass, so the dynamics \
+             (mass matrix, forward dynamics) are not defined for this model"
+                .into(),
+        );
+        return Ok(loaded);
+    }
     for k in physical::massless_dofs(&loaded.model) {
         let b = loaded.model.dof_body(k);
         loaded.warnings.push(std::format!(
@@ -349,6 +367,11 @@ pub fn load_rlmdl_str<const N: usize>(text: &str) -> Result<LoadedModel<N>, Load
     load_as(text, &LoadOptions::default(), Some(Format::Rlmdl))
 }
 
+/// Loads RL's Denavit–Hartenberg kinematics format (`rlkin`) from `text`.
+pub fn load_rlkin_str<const N: usize>(text: &str) -> Result<LoadedModel<N>, LoadError> {
+    load_as(text, &LoadOptions::default(), Some(Format::Rlkin))
+}
+
 /// Loads URDF from `text`.
 pub fn load_urdf_str<const N: usize>(
     text: &str,
@@ -357,12 +380,13 @@ pub fn load_urdf_str<const N: usize>(
     load_as(text, &LoadOptions::urdf(options), Some(Format::Urdf))
 }
 
-/// Loads a model file (RL XML or URDF, by its root element) with default URDF options.
+/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with default URDF
+/// options.
 pub fn load_file<const N: usize>(path: impl AsRef<Path>) -> Result<LoadedModel<N>, LoadError> {
     load_file_with(path, &UrdfOptions::default())
 }
 
-/// Loads a model file (RL XML or URDF, by its root element).
+/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element).
 pub fn load_file_with<const N: usize>(
     path: impl AsRef<Path>,
     urdf: &UrdfOptions,
@@ -370,8 +394,8 @@ pub fn load_file_with<const N: usize>(
     load_file_options(path, &LoadOptions::urdf(urdf))
 }
 
-/// Loads a model file (RL XML or URDF, by its root element) with every option. A file larger
-/// than [`InputLimits::max_bytes`] is refused before it is read.
+/// Loads a model file (RL XML rlmdl or rlkin, or URDF, by its root element) with every option.
+/// A file larger than [`InputLimits::max_bytes`] is refused before it is read.
 pub fn load_file_options<const N: usize>(
     path: impl AsRef<Path>,
     options: &LoadOptions,

@@ -1,16 +1,19 @@
 //! RL's planning scenarios (`rlplan` XML, as rlPlanDemo reads them): the planner element
 //! (`prm`, `rrt`, `rrtGoalBias`, `rrtDual`, `rrtConCon`, `rrtExtCon`, `rrtExtExt`) with its
-//! settings, the model (an `rlmdl` kinematic model, optionally placed by `<world>`, and a
-//! `rlsg` scene with the robot's index in it), start and goal, the nearest-neighbour structure,
+//! settings, the model (a kinematic model, RL's `rlmdl` or its older Denavit–Hartenberg
+//! `rlkin`, optionally placed by `<world>`, and a `rlsg` scene with the robot's index in it,
+//! whose bodies are linked to the rlmdl bodies or rlkin links in order), start and goal, the
+//! nearest-neighbour structure,
 //! the sampler, the verifier, and an optional optimiser after the planner element.
 //!
 //! Units as RL reads them: `<q unit="deg">` and `<delta unit="deg">` are degrees, else radians
 //! or metres; `<world>` rotations are degrees about x, y, z applied as `Rz·Ry·Rx`. The viewer
 //! element is ignored. RL's RRTs have no verifier element — they check each new vertex and
 //! rely on a small `delta` — so for them the verifier is sequential at the planner's `delta`,
-//! which checks exactly the new vertex of each step. Not supported (an error says so): the
-//! `rlkin` kinematics format (`type="kin"`), and the planners `eet`, `prmUtilityGuided`,
-//! `addRrtConCon` and `rrtCon`.
+//! which checks exactly the new vertex of each step. The kinematics file is read by its root
+//! element; RL reads it by `<kinematics type>` (`kin` when absent), so a type that contradicts
+//! the file is an error. Not supported (an error says so): the planners `eet`,
+//! `prmUtilityGuided`, `addRrtConCon` and `rrtCon`.
 //!
 //! An `href` that does not exist is also looked up case-insensitively in its directory: RL's
 //! own `box-6d-300505_maze` scenarios name `box-6d-300505.sixdof.xml` for the file
@@ -20,6 +23,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use glam::{DMat3, DVec3};
+use rl_core::loader::Format;
 use rl_core::model::ROOT;
 use rl_core::spatial::PlueckerTransform;
 use rl_sg::ModelId;
@@ -34,6 +38,15 @@ use crate::scene::{MAX_BODIES, SceneValidity};
 use crate::solve::PlanOptions;
 use crate::space::JointSpace;
 use crate::verifier::Verifier;
+
+/// RL's two kinematics formats, as `<kinematics type>` names them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KinematicsType {
+    /// `kin`: RL's Denavit–Hartenberg format (`rlkin`).
+    Kin,
+    /// `mdl`: RL's XML model format (`rlmdl`).
+    Mdl,
+}
 
 /// A scenario read from an rlplan file.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,6 +75,10 @@ pub struct Scenario {
     pub goal: Vec<f64>,
     /// The kinematic model file.
     pub kinematics: PathBuf,
+    /// `<kinematics type>` as written: RL's `kin` (rlkin, RL's default when there is none) or
+    /// `mdl` (rlmdl). The file is read by its root element; a type that contradicts it is an
+    /// error when the scenario is built.
+    pub kinematics_type: Option<KinematicsType>,
     /// `<kinematics><world>`: where the model's world frame is placed.
     pub world: Option<PlueckerTransform>,
     /// The robot's model index in the scene.
@@ -171,12 +188,19 @@ impl Scenario {
         let href = kin
             .attribute("href")
             .ok_or_else(|| err(path, &doc, kin, "no href"))?;
-        if kin.attribute("type") == Some("kin") {
-            return Err(PlanError::Unsupported(format!(
-                "{}: RL's rlkin kinematics (type=\"kin\"); use the rlmdl scenarios (*.mdl.xml)",
-                path.display()
-            )));
-        }
+        let kinematics_type = match kin.attribute("type") {
+            None => None,
+            Some("kin") => Some(KinematicsType::Kin),
+            Some("mdl") => Some(KinematicsType::Mdl),
+            Some(other) => {
+                return Err(err(
+                    path,
+                    &doc,
+                    kin,
+                    format!("type=\"{other}\": RL's kinematics types are \"kin\" and \"mdl\""),
+                ));
+            }
+        };
         let world = match child(kin, "world") {
             Some(w) => {
                 let v = |e: Option<Node>, k: &str| -> Result<f64, PlanError> {
@@ -330,6 +354,7 @@ impl Scenario {
             start,
             goal,
             kinematics: resolve(dir, href),
+            kinematics_type,
             world,
             model_index: model_index as usize,
             scene: resolve(dir, scene_href),
@@ -340,13 +365,26 @@ impl Scenario {
     /// the robot linked to it (RL's `<ignore>` applied), the base placed by `<world>`.
     pub fn build(&self) -> Result<(JointSpace, SceneValidity), PlanError> {
         let loaded = rl_core::loader::load_file::<MAX_BODIES>(&self.kinematics)?;
+        let expected = match self.kinematics_type {
+            Some(KinematicsType::Kin) => Some(Format::Rlkin),
+            Some(KinematicsType::Mdl) => Some(Format::Rlmdl),
+            None => None,
+        };
+        if let Some(f) = expected.filter(|f| *f != loaded.format) {
+            return Err(PlanError::Load(format!(
+                "{}: <kinematics type> says {f:?}, but {} is {:?}",
+                self.path.display(),
+                self.kinematics.display(),
+                loaded.format
+            )));
+        }
         let mut scene = rl_sg::load::rlsg::load_scene(&self.scene)?;
         let id = ModelId(self.model_index);
         let robot = scene.model_mut(id).ok_or_else(|| PlanError::UnknownName {
             what: "scene model index",
             name: self.model_index.to_string(),
         })?;
-        rl_sg::load::rlsg::link_rlmdl(robot, &self.kinematics, &loaded)?;
+        rl_sg::load::rlsg::link_kinematics(robot, &self.kinematics, &loaded)?;
         let space = JointSpace::from_model(&loaded.model)?;
         let mut checker = SceneValidity::new(scene, id, loaded.model.clone(), space.clone())?;
         if let Some(w) = self.world {

@@ -18,11 +18,16 @@
 //!
 //! [`link_rlmdl`] links such a robot model to RL's kinematic model (`rlmdl`), body by body in
 //! order, and applies the model's `<ignore>` elements: `<ignore/>` takes a body out of checks
-//! against other models (a base on the floor), `<ignore idref>` allows a pair.
+//! against other models (a base on the floor), `<ignore idref>` allows a pair. [`link_rlkin`]
+//! does the same for RL's older Denavit–Hartenberg format (`rlkin`), whose `<link>` elements
+//! carry the `<ignore>`s: as RL's `rl::plan::Model` pairs `rl::kin` links with scene bodies,
+//! the scene's bodies go to the links in the order RL's depth-first walk from the world reaches
+//! them (file order for a serial chain). [`link_kinematics`] picks one by the loaded format.
 
 use std::path::Path;
 
-use rl_core::loader::LoadedModel;
+use rl_core::loader::{Format, LoadedModel};
+use roxmltree::Node;
 
 use super::vrml::{VrmlScene, rigid};
 use super::xml::{at, attr, child, children, parse};
@@ -128,7 +133,8 @@ pub fn load_vrml(path: &Path) -> Result<Scene, SgError> {
 }
 
 /// Reads the rlsg scene at `scene` whose first model is the robot of RL's kinematic model file
-/// `rlmdl` (loaded by rl-core as `loaded`), and links that model to it ([`link_rlmdl`]).
+/// `rlmdl` (`rlmdl` or `rlkin`, loaded by rl-core as `loaded`), and links that model to it
+/// ([`link_kinematics`]).
 pub fn load_robot_scene<const N: usize>(
     scene: &Path,
     rlmdl: &Path,
@@ -138,8 +144,71 @@ pub fn load_robot_scene<const N: usize>(
     let model = s
         .model_mut(crate::ModelId(0))
         .ok_or_else(|| SgError::missing("a model (the robot) in the scene").in_file(scene))?;
-    link_rlmdl(model, rlmdl, loaded)?;
+    link_kinematics(model, rlmdl, loaded)?;
     Ok(s)
+}
+
+/// Links `model` to RL's kinematics file `path` by the format rl-core loaded it as:
+/// [`link_rlkin`] for `rlkin`, else [`link_rlmdl`].
+pub fn link_kinematics<const N: usize>(
+    model: &mut Model,
+    path: &Path,
+    loaded: &LoadedModel<N>,
+) -> Result<(), SgError> {
+    match loaded.format {
+        Format::Rlkin => link_rlkin(model, path, loaded),
+        _ => link_rlmdl(model, path, loaded),
+    }
+}
+
+/// Links `model`'s bodies to the `<link>` elements of RL's Denavit–Hartenberg kinematics file
+/// `rlkin` (loaded by rl-core as `loaded`), in the order RL's depth-first walk from the world
+/// reaches them, and applies their `<ignore>` elements (see the module docs). Turns
+/// self-collision on.
+pub fn link_rlkin<const N: usize>(
+    model: &mut Model,
+    rlkin: &Path,
+    loaded: &LoadedModel<N>,
+) -> Result<(), SgError> {
+    let text = read_text(rlkin)?;
+    link_rlkin_str(model, &text, loaded).map_err(|e| e.in_file(rlkin))
+}
+
+/// [`link_rlkin`] from the file's text.
+pub fn link_rlkin_str<const N: usize>(
+    model: &mut Model,
+    rlkin: &str,
+    loaded: &LoadedModel<N>,
+) -> Result<(), SgError> {
+    let doc = parse(rlkin)?;
+    let root = doc.root_element();
+    let kin = match root.tag_name().name() {
+        "rlkin" => Some(root),
+        "rl" => child(root, "kin"),
+        _ => None,
+    }
+    .and_then(|c| {
+        c.children().find(|n| {
+            n.is_element() && matches!(n.tag_name().name(), "kinematics" | "puma" | "rhino")
+        })
+    })
+    .ok_or_else(|| {
+        at(
+            root,
+            SgError::missing("<rlkin><kinematics> (or <puma>, <rhino>)"),
+        )
+    })?;
+    let mut links = Vec::new();
+    for l in children(kin, "link") {
+        links.push((attr(l, "id")?, l));
+    }
+    // RL's `Kinematics::links`: the links the walk from the world reaches, in its order.
+    let ordered: Vec<Node> = loaded
+        .frames
+        .iter()
+        .filter_map(|f| links.iter().find(|(id, _)| *id == f.name).map(|(_, l)| *l))
+        .collect();
+    link_bodies(model, loaded, &ordered, "link (idref)")
 }
 
 /// Links `model`'s bodies, in order, to the `<body>` elements of RL's kinematic model file
@@ -169,6 +238,17 @@ pub fn link_rlmdl_str<const N: usize>(
     }
     .ok_or_else(|| at(root, SgError::missing("<rlmdl><model>")))?;
     let bodies: Vec<_> = children(mdl, "body").collect();
+    link_bodies(model, loaded, &bodies, "body (idref)")
+}
+
+/// Links `model`'s bodies in order to the frames of the elements `bodies` (by their `id`) and
+/// applies the elements' `<ignore>` children; `what` names an `idref` in errors.
+fn link_bodies<const N: usize>(
+    model: &mut Model,
+    loaded: &LoadedModel<N>,
+    bodies: &[Node],
+    what: &'static str,
+) -> Result<(), SgError> {
     let ids: Vec<String> = bodies
         .iter()
         .map(|b| attr(*b, "id").map(str::to_string))
@@ -192,7 +272,7 @@ pub fn link_rlmdl_str<const N: usize>(
                         return Err(at(
                             ig,
                             SgError::new(SgErrorKind::UnknownName {
-                                what: "body (idref)",
+                                what,
                                 name: r.to_string(),
                             }),
                         ));

@@ -65,7 +65,7 @@ impl RobotSetup {
             (scene, r.kinematics)
         } else {
             let k = self.kinematics.as_ref().ok_or_else(|| {
-                SgError::missing("the kinematic model (rlmdl) of the scene's first model")
+                SgError::missing("the kinematic model (rlmdl or rlkin) of the scene's first model")
                     .in_file(&self.model)
             })?;
             let kin = core_loader::load_file::<N>(k)
