@@ -368,8 +368,9 @@ fn finish_robot(
 /// A robot and its collision model.
 type RobotAndGeometry = (Robot, Model);
 
-/// The robots of an RL scene (its first `kinematics.len()` models, linked to their rlmdl files
-/// as rl-sg's [`load::rlsg::link_rlmdl`] does) and the scene's other models (obstacles).
+/// The robots of an RL scene (its first `kinematics.len()` models, linked to their rlmdl
+/// or rlkin files as rl-sg's [`load::rlsg::link_kinematics`] does) and the scene's other models
+/// (obstacles).
 fn rl_scene_robots(
     first_index: usize,
     scene: &std::path::Path,
@@ -400,7 +401,7 @@ fn rl_scene_robots(
         let kwhat = kpath.display().to_string();
         let k = core_loader::load_file::<CAPACITY>(kpath).map_err(|e| load_err(&kwhat, e))?;
         let mut model = s.models()[j].clone();
-        load::rlsg::link_rlmdl(&mut model, kpath, &k).map_err(|e| load_err(&kwhat, e))?;
+        load::rlsg::link_kinematics(&mut model, kpath, &k).map_err(|e| load_err(&kwhat, e))?;
         let warnings = Vec::new();
         robots.push(finish_robot(
             first_index + j,

@@ -241,6 +241,21 @@ fn an_rl_scene_with_the_kinematics_of_its_robot() {
     let s = page.wait_state(|s| s["models"][0]["source"] == "coach");
     assert!(max_diff(&before, &bodies(&s, 0)) > 0.05);
 
+    // RL's rlCoachKin: the RV-6SL among boxes with its rlkin (Denavit–Hartenberg) kinematics.
+    let mut o = options(vec![]);
+    o.coach = None;
+    o.load.models = vec![rl_view::ModelSource::RlScene {
+        scene: repo().join("tests/data/rlsg/mitsubishi-rv6sl_boxes.convex.xml"),
+        kinematics: vec![repo().join("tests/data/rlkin/mitsubishi-rv6sl.xml")],
+    }];
+    let v = rl_view::Viewer::start(&o).unwrap();
+    let (_page, hello) = Page::connect(v.http_addr());
+    let m = &hello["scene"]["models"][0];
+    assert_eq!(m["joints"].as_array().unwrap().len(), 6, "{m}");
+    assert_eq!(m["bodies"].as_array().unwrap().len(), 7, "{m}");
+    assert!(hello["state"]["distance"]["value"].is_f64());
+    drop(v);
+
     // A scene without its kinematics is refused with a hint.
     let mut o = options(vec![
         repo().join("tests/data/rlsg/unimation-puma560_boxes.convex.xml"),
