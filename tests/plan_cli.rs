@@ -67,6 +67,16 @@ fn plan_a_motionbenchmaker_problem() {
     assert_eq!(v["seed"], 3);
     assert!(v["collision_checks"].as_u64().unwrap() > 0);
     assert!(v["length_after"].as_f64().unwrap() <= v["length_before"].as_f64().unwrap());
+    // Every edge of the path certified on the exact meshes (conservative advancement).
+    let c = &v["certified"];
+    assert_eq!(c["certified"], true, "{c}");
+    assert_eq!(c["edges"], c["edges_certified"]);
+    assert_eq!(
+        c["edges"].as_u64().unwrap() + 1,
+        v["waypoints_after"].as_u64().unwrap()
+    );
+    assert!(c["min_distance"].as_f64().unwrap() >= c["margin"].as_f64().unwrap());
+    assert!(c["failure"].is_null());
     let (header, rows) = csv(&out);
     let joints: Vec<String> = (1..=7).map(|i| format!("panda_joint{i}")).collect();
     assert_eq!(header, joints);
@@ -111,6 +121,24 @@ fn plan_an_rl_scenario() {
     assert_eq!(v["solved"], true);
     assert_eq!(v["planner"], "PRM");
     assert_eq!(v["checker"], "exact");
+    assert_eq!(v["certified"]["certified"], true, "{}", v["certified"]);
+    // Asked not to, it does not certify; a margin larger than the room there is refuses.
+    let scenario = data("rlplan/unimation-puma560_boxes_prm.mdl.xml");
+    let o = rl(&["plan", scenario.to_str().unwrap(), "--no-certify"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["certified"].is_null(), "{v}");
+    let o = rl(&["plan", scenario.to_str().unwrap(), "--certify-margin", "10"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let c = &v["certified"];
+    assert_eq!(c["certified"], false, "{c}");
+    assert_eq!(c["failure"]["edge"], 0, "{c}");
+    assert!(
+        c["failure"]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("come within"),
+        "{c}"
+    );
 }
 
 #[test]

@@ -25,9 +25,10 @@ use rl_plan::problem::moveit::MotionRequest;
 use rl_plan::problem::rlplan::Scenario;
 use rl_plan::problem::{COVER_SPACING, Robot, mbm};
 use rl_plan::sampler::SamplerKind;
+use rl_plan::scene::CertifyOptions;
 use rl_plan::space::parse_bounds;
 use rl_plan::verifier::Verifier;
-use rl_plan::{JointSpace, Path as PlanPath, PlanOptions, PlanResult, plan};
+use rl_plan::{JointSpace, Path as PlanPath, PlanOptions, PlanResult, Validity, plan};
 use serde_json::json;
 
 use super::{CliError, CliResult, parse_duration};
@@ -62,6 +63,14 @@ pub struct PlanArgs {
     /// Fraction of the model's speed limits for --trajectory, in (0, 1].
     #[arg(long, default_value_t = 0.5)]
     pub speed: f64,
+    /// Clearance below which a path's edge is not certified, m: every edge of the returned path
+    /// is checked by conservative advancement on the exact geometry (nothing passes between
+    /// samples); the JSON's "certified" says what came out.
+    #[arg(long, default_value_t = CertifyOptions::default().margin)]
+    pub certify_margin: f64,
+    /// Do not certify the returned path.
+    #[arg(long)]
+    pub no_certify: bool,
 }
 
 /// Settings shared by `rl plan` and `rl plan bench`.
@@ -269,7 +278,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     let is_scenario = std::fs::read_to_string(model)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
         .map_err(|e| usage(format!("{}: {e}", model.display())))?;
-    let (space, result, names, checker_name) = if is_scenario {
+    let (space, result, names, checker_name, certified) = if is_scenario {
         let sc = Scenario::load(model).map_err(failed)?;
         let (mut space, mut checker) = sc.build().map_err(failed)?;
         override_limits(&mut space, &args.common)?;
@@ -279,8 +288,9 @@ pub fn run(args: PlanArgs) -> CliResult {
             opts.optimize_time = args.common.time;
         }
         let r = plan(&space, &mut checker, &sc.start, &sc.goal, &opts).map_err(failed)?;
+        let cert = certify(&args, &r, Some(&mut checker))?;
         let names = names_of(&space);
-        (space, r, names, "exact")
+        (space, r, names, "exact", cert)
     } else {
         let (scene, request) = match (&args.scene, &args.request) {
             (Some(s), Some(r)) => (s, r),
@@ -295,21 +305,29 @@ pub fn run(args: PlanArgs) -> CliResult {
         let req = MotionRequest::load(request).map_err(failed)?;
         let (start, goal) = req.configurations(&robot.space).map_err(failed)?;
         let opts = options(&args.common)?;
-        let r = match args.common.checker {
+        // The path is certified on the exact geometry of the planner's checker (the sphere
+        // checker has none: the exact checker of the same scene then).
+        let (r, cert) = match args.common.checker {
             Checker::Hybrid => {
                 let mut c = robot.hybrid_checker(&env).map_err(failed)?;
-                plan(&robot.space, &mut c, &start, &goal, &opts)
+                let r = plan(&robot.space, &mut c, &start, &goal, &opts).map_err(failed)?;
+                let cert = certify(&args, &r, Some(&mut c))?;
+                (r, cert)
             }
             Checker::Spheres => {
                 let mut c = robot.sphere_checker(&env).map_err(failed)?;
-                plan(&robot.space, &mut c, &start, &goal, &opts)
+                let r = plan(&robot.space, &mut c, &start, &goal, &opts).map_err(failed)?;
+                let mut exact = robot.exact_checker(env).map_err(failed)?;
+                let cert = certify(&args, &r, Some(&mut exact))?;
+                (r, cert)
             }
             Checker::Exact => {
                 let mut c = robot.exact_checker(env).map_err(failed)?;
-                plan(&robot.space, &mut c, &start, &goal, &opts)
+                let r = plan(&robot.space, &mut c, &start, &goal, &opts).map_err(failed)?;
+                let cert = certify(&args, &r, Some(&mut c))?;
+                (r, cert)
             }
-        }
-        .map_err(failed)?;
+        };
         let names = names_of(&robot.space);
         let name = match args.common.checker {
             Checker::Hybrid => "hybrid",
@@ -320,7 +338,7 @@ pub fn run(args: PlanArgs) -> CliResult {
         if let (Some(t), Some(path)) = (&args.trajectory, &r.optimized) {
             write_trajectory(t, &robot, path, args.speed, args.dt, &names)?;
         }
-        (robot.space, r, names, name)
+        (robot.space, r, names, name, cert)
     };
     if let (Some(out), Some(path)) = (&args.out, &result.optimized) {
         write_path(out, &names, path)?;
@@ -328,21 +346,55 @@ pub fn run(args: PlanArgs) -> CliResult {
     if args.trajectory.is_some() && is_scenario {
         eprintln!("rl plan: --trajectory is written for URDF robots only");
     }
+    let mut json = result_json(&space, &result, checker_name, args.common.seed);
+    json["certified"] = certified;
     println!(
         "{}",
-        serde_json::to_string_pretty(&result_json(
-            &space,
-            &result,
-            checker_name,
-            args.common.seed
-        ))
-        .unwrap_or_default()
+        serde_json::to_string_pretty(&json).unwrap_or_default()
     );
     Ok(if result.solved {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
     })
+}
+
+/// Certifies the returned path on `checker`'s exact geometry (unless --no-certify): the JSON
+/// for "certified" (null when not asked, not solved, or the checker has no exact geometry).
+fn certify(
+    args: &PlanArgs,
+    r: &PlanResult,
+    checker: Option<&mut dyn Validity>,
+) -> Result<serde_json::Value, CliError> {
+    let (Some(path), Some(checker), false) = (&r.optimized, checker, args.no_certify) else {
+        return Ok(serde_json::Value::Null);
+    };
+    let Some(exact) = checker.exact_checker() else {
+        return Ok(serde_json::Value::Null);
+    };
+    if !(args.certify_margin >= 0.0) {
+        return Err(usage("--certify-margin must be a distance ≥ 0 (m)"));
+    }
+    let options = CertifyOptions {
+        margin: args.certify_margin,
+        ..Default::default()
+    };
+    let started = std::time::Instant::now();
+    let c = exact.certify_path(path, &options).map_err(failed)?;
+    let finite = |x: f64| if x.is_finite() { json!(x) } else { json!(null) };
+    Ok(json!({
+        "certified": c.is_certified(),
+        "margin": options.margin,
+        "edges": c.edges,
+        "edges_certified": c.certified,
+        "steps": c.steps,
+        "min_distance": finite(c.min_distance),
+        "time_us": started.elapsed().as_secs_f64() * 1e6,
+        "failure": c.failure.as_ref().map(|(edge, why)| json!({
+            "edge": edge,
+            "reason": why.to_string(),
+        })),
+    }))
 }
 
 fn names_of(space: &JointSpace) -> Vec<String> {
