@@ -372,7 +372,7 @@ fn certify(
     let Some(exact) = checker.exact_checker() else {
         return Ok(serde_json::Value::Null);
     };
-    if !(args.certify_margin >= 0.0) {
+    if args.certify_margin.is_nan() || args.certify_margin < 0.0 {
         return Err(usage("--certify-margin must be a distance ≥ 0 (m)"));
     }
     let options = CertifyOptions {
