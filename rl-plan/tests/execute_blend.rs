@@ -10,6 +10,9 @@
 //! step `h` is an average of the `k`-th derivative over its stencil (a B-spline kernel), so it
 //! obeys the same bound; its tolerance covers rounding only: `2^k · ε · max|q| / h^k`.
 
+// Index loops over joints read as the math does (as in the crate).
+#![allow(clippy::needless_range_loop)]
+
 use std::path::PathBuf;
 use std::time::Duration;
 

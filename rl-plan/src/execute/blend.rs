@@ -53,7 +53,9 @@
 //! blend is invalid, the speeds of the two lines at that waypoint are capped at half their
 //! previous cap (a blend's deviation from the corner scales with `v²` when acceleration bounds
 //! it and `v^1.5` when jerk does) and the run is timed and checked again, at most
-//! [`BlendOptions::shrinks`] times; then the run stops at that waypoint and is split there. An
+//! [`BlendOptions::shrinks`] times; then the run stops at that waypoint and is split there (as
+//! it does at once when a shrunk run is no longer faster than stopping at each of its
+//! waypoints). An
 //! invalid sample on a line or on a move at rest lies on the path's own straight segments: the
 //! path is not valid for this checker at this resolution, and that is an error. No trajectory
 //! is returned that was not checked.
@@ -565,12 +567,15 @@ impl Checker<'_> {
                     ),
                 ));
             }
-            for i in 0..=count {
-                let t = duration * i as f64 / count as f64;
+            let samples = count;
+            for i in 0..=samples {
+                let t = duration * i as f64 / samples as f64;
                 let p = piece.position(t);
                 self.q.copy_from_slice(&p[..self.n]);
                 self.space.normalize(&mut self.q);
                 if i > 0 && self.space.distance(&self.prev, &self.q) > self.step {
+                    // The bound from the peak speed was not enough (weights, wrapping):
+                    // twice as many samples.
                     count *= 2;
                     continue 'refine;
                 }
@@ -580,6 +585,103 @@ impl Checker<'_> {
                 std::mem::swap(&mut self.q, &mut self.prev);
             }
             return Ok(None);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::path::Path;
+    use crate::space::Topology;
+    use crate::validity::AlwaysValid;
+
+    fn plane() -> JointSpace {
+        let i = Topology::Interval {
+            lower: -5.0,
+            upper: 5.0,
+        };
+        JointSpace::new(vec![("x".into(), i), ("y".into(), i)]).unwrap()
+    }
+
+    fn limits() -> ExecutionLimits {
+        ExecutionLimits {
+            velocity: vec![1.0, 1.0],
+            acceleration: vec![2.0, 2.0],
+            jerk: vec![100.0, 100.0],
+        }
+    }
+
+    /// A right-angle corner with long legs: the blend at the corner lasts `1.875 · 1 / 2` s
+    /// (acceleration-bound: the velocity of each joint changes by 1), as do the blends from
+    /// and to rest, the lines run at the speed limit, and the run lasts `Σ τ + b` with
+    /// `τ = 2 s` per leg. Jerk-continuous at every boundary.
+    #[test]
+    fn a_right_angle_corner_by_hand() {
+        let space = plane();
+        let path = Path::from_points(2, &[vec![0.0, 0.0], vec![2.0, 0.0], vec![2.0, 2.0]]);
+        let ex = Execution::new(&space, &path, limits()).unwrap();
+        let b = ex
+            .blended::<2, 8>(
+                &space,
+                &mut AlwaysValid::new(space.clone()),
+                &BlendOptions::for_resolution(0.1),
+            )
+            .unwrap();
+        let tb = 1.875 * 1.0 / 2.0;
+        assert!(
+            (b.report.duration_s - (2.0 + 2.0 + tb)).abs() < 1e-12,
+            "{}",
+            b.report
+        );
+        assert_eq!(b.trajectory.len(), 5);
+        assert_eq!(
+            b.report.waypoints,
+            vec![WaypointOutcome::Blended { shrinks: 0 }]
+        );
+        b.trajectory.check_continuity(3, 1e-9).unwrap();
+        // Halfway through the corner blend, the widest point: the corner plus
+        // Δv·tb·Σ(½) = (−1, 1)·tb·5/64.
+        let mid = b.trajectory.position(2.0 + 0.5 * tb);
+        let off = tb * 5.0 / 64.0;
+        assert!((mid[0] - (2.0 - off)).abs() < 1e-12 && (mid[1] - off).abs() < 1e-12);
+    }
+
+    /// Collinear waypoints: the blend only changes the speed, so the trajectory stays on the
+    /// line and does not stop.
+    #[test]
+    fn collinear_waypoints_are_passed_on_the_line() {
+        let space = plane();
+        let path = Path::from_points(
+            2,
+            &[
+                vec![0.0, 0.0],
+                vec![0.1, 0.05],
+                vec![3.0, 1.5],
+                vec![3.2, 1.6],
+            ],
+        );
+        let ex = Execution::new(&space, &path, limits()).unwrap();
+        let b = ex
+            .blended::<2, 16>(
+                &space,
+                &mut AlwaysValid::new(space.clone()),
+                &BlendOptions::for_resolution(0.1),
+            )
+            .unwrap();
+        assert_eq!(b.report.blended(), 2, "{}", b.report);
+        assert!(b.report.duration_s < b.report.stop_duration_s);
+        let mut t = 0.0;
+        while t < b.trajectory.duration() {
+            let s = b.trajectory.sample(t);
+            assert!(
+                (s.position[1] - 0.5 * s.position[0]).abs() < 1e-12,
+                "off the line"
+            );
+            if t > 0.1 && t < b.trajectory.duration() - 0.1 {
+                assert!(s.velocity[0] > 0.0, "stopped at t={t}");
+            }
+            t += 1e-3;
         }
     }
 }
