@@ -302,6 +302,14 @@ fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
 #[test]
 fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
     let _run = one_run_at_a_time();
+    // The flag describes a planned motion: refused without --plan, before anything starts.
+    let out = rl(&["run", "--stop-at-waypoints"], Duration::from_secs(30));
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("--stop-at-waypoints describes a planned motion: add --plan"),
+        "{}",
+        text(&out.stderr)
+    );
     let (stdout, tel) = run_box(&["--stop-at-waypoints"], false, "stops.csv");
     assert!(stdout.contains("result: ok"), "{stdout}");
     assert!(stdout.contains("end: completed"), "{stdout}");

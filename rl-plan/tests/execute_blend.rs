@@ -203,7 +203,13 @@ fn blended_panda_paths_stay_within_limits_and_free_and_beat_stopping() {
     let delta = options().verifier.delta;
     let step = delta / 10.0;
     let mut blended_somewhere = false;
-    for name in ["box_panda", "table_pick_panda", "bookshelf_small_panda"] {
+    for name in [
+        "box_panda",
+        "table_pick_panda",
+        "bookshelf_small_panda",
+        "bookshelf_tall_panda",
+        "cage_panda",
+    ] {
         let (env, _start, _goal, path) = planned(&robot, name);
         let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
         let stop = ex.trajectory::<D, 64>().unwrap();
