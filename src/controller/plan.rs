@@ -42,10 +42,11 @@ pub const DEFAULT_MAX_PLAN_DURATION: Duration = Duration::from_secs(3600);
 pub const MOVE_SEGMENTS: usize = MAX_WAYPOINTS + 1;
 
 /// Segments a blended trajectory holds: a path of up to [`MOVE_SEGMENTS`] segments blended
-/// through its waypoints needs at most three per path segment (a line and a blend each, plus
-/// the extra blend of every stretch between two stops; rl-plan's
-/// `execute::blend` module docs count them). Beyond, building the trajectory is an error.
-pub const BLENDED_SEGMENTS: usize = 3 * MOVE_SEGMENTS;
+/// through its waypoints needs at most five per path segment (a line and a blend each, plus
+/// the start and end ramps of every stretch between two stops, up to three pieces each;
+/// rl-plan's `execute::blend` module docs count them). Beyond, building the trajectory is an
+/// error.
+pub const BLENDED_SEGMENTS: usize = 5 * MOVE_SEGMENTS;
 
 /// The trajectory of a plan for `J` joints: jerk-limited moves from rest to rest (a tour, or a
 /// path that stops at every waypoint), or lines and blends mixed with such moves (a path

@@ -10,7 +10,8 @@
 //!
 //! By default ([`PathExecution::Blended`]) the trajectory does not stop at the optimised
 //! path's interior waypoints: rl-plan's blended execution ([`rl_plan::execute::blend`]) runs
-//! straight lines joined by jerk-continuous blends within every joint's velocity,
+//! straight lines joined by jerk-continuous blends (and jerk-limited ramps from and to rest)
+//! within every joint's velocity,
 //! acceleration and jerk limits, samples the whole trajectory a tenth of the planner's
 //! collision resolution apart and checks every sample with the run's validity checker, and
 //! shrinks a blend that collides, or stops at that waypoint. [`PathExecution::StopAtWaypoints`]

@@ -1,5 +1,6 @@
 //! A planned path executed without stopping at its interior waypoints: straight lines at
-//! constant velocity joined by jerk-continuous blends, each line and each blend timed so that
+//! constant velocity joined by jerk-continuous blends, started and ended by jerk-limited speed
+//! ramps, each line, blend and ramp timed so that
 //! every joint stays within its velocity, acceleration and jerk limits, and the result checked
 //! for collisions — blends leave the checked segments — with blends shrunk, or replaced by a
 //! stop, where they collide.
@@ -8,11 +9,16 @@
 //!
 //! Craig's linear segments with blends (J. J. Craig, *Introduction to Robotics*, 3rd ed.,
 //! §7.3, "linear function with parabolic blends" through via points; RL's `LinearParabolic`;
-//! rl-core's [`linear_with_blends`](rl_core::traj::spline::linear_with_blends)), with two
-//! changes: the blend is the sextic of rl-core's [`BlendShape::Sextic`](rl_core::traj::BlendShape)
-//! (velocity `va + (vb − va)·σ(τ/tb)`, `σ(s) = 10s³ − 15s⁴ + 6s⁵`, so acceleration and jerk are
-//! zero at both ends of a blend and the trajectory is C³), and every line and every blend gets
-//! its own duration from the limits (rl-core's function takes one blend rule for all).
+//! rl-core's [`linear_with_blends`](rl_core::traj::spline::linear_with_blends)), with three
+//! changes: the blend at an interior waypoint is the sextic of rl-core's
+//! [`BlendShape::Sextic`](rl_core::traj::BlendShape) (velocity `va + (vb − va)·σ(τ/tb)`,
+//! `σ(s) = 10s³ − 15s⁴ + 6s⁵`, so acceleration and jerk are zero at both ends of a blend and
+//! the trajectory is C³ through the corners); the blends from and to rest, which stay on the
+//! first and last segment, are the time-optimal jerk-limited speed ramp (jerk, constant
+//! acceleration, jerk: Biagiotti & Melchiorri, *Trajectory Planning for Automatic Machines and
+//! Robots*, 2008, §3.4, applied to the fraction of the line's velocity, so C² with jerk steps
+//! there, as rl-core's [`JerkLimited`] moves have); and every line and every blend gets its own
+//! duration from the limits (rl-core's function takes one blend rule for all).
 //!
 //! For the waypoints `p_0 … p_m` of a *run* (a stretch between two stops), `d_i = p_{i+1} − p_i`
 //! (`nq` numbers, circles unwrapped), line `i` has velocity `v_i = d_i / τ_i` and passes `p_i`
@@ -24,9 +30,12 @@
 //! - velocity: `τ_i ≥ max_k |d_{i,k}| / V_k` (a blend's velocity lies between its lines');
 //! - acceleration: `b_j ≥ max_k 1.875·Δ_k / A_k` (`max σ' = 15/8`);
 //! - jerk: `b_j ≥ max_k √(5.7735·Δ_k / J_k)` (`max |σ''| = 10/√3`);
+//! - at the run's ends, the ramp to `v` with `A = min_k A_k/|v_k|`, `J = min_k J_k/|v_k|`:
+//!   `b = 1/A + A/J` when `A²/J ≤ 1`, else `2/√J` (its speed profile is symmetric too, so it
+//!   covers `b/2` times `v`, as a blend does);
 //! - room: `τ_i ≥ (b_i + b_{i+1}) / 2` (neighbouring blends do not overlap).
 //!
-//! `b_j` is the smallest that meets both bounds; the lines start at their speed bound and a
+//! `b_j` is the smallest that meets its bounds; the lines start at their speed bound and a
 //! line whose room is short is slowed (its `τ_i` raised, which lowers the velocity changes at
 //! its ends) until every line has room: a monotone fixed-point iteration that ends because
 //! every blend is bounded by the one for velocities at the limits. The run lasts
@@ -35,10 +44,10 @@
 //! neighbours: within the bounds of the space.
 //!
 //! This is **not time-optimal**: lines keep one speed from blend to blend (a segment is not
-//! sped up between two sharp corners), and a run starts and ends with a sextic blend, about
-//! 0.3 s slower than the time-optimal jerk-limited start at the controller's limits. A run of
-//! one segment is therefore rl-core's time-optimal [`JerkLimited`] move, as the stop-at-every-
-//! waypoint execution ([`Execution::trajectory`]) makes it, and a run whose blended timing is
+//! sped up between two sharp corners, nor slowed only near a corner), and a corner's blend
+//! duration is set by its largest velocity change. A run of one segment is rl-core's
+//! time-optimal [`JerkLimited`] move, as the stop-at-every-waypoint execution
+//! ([`Execution::trajectory`]) makes it, and a run whose blended timing is
 //! not shorter than stopping at each of its waypoints stops at each of them. Time-optimal
 //! path following (Kunz & Stilman, RSS 2012; TOPP-RA, Pham & Pham, IEEE T-RO 2018) handles
 //! acceleration limits but not jerk.
@@ -55,14 +64,15 @@
 //! it and `v^1.5` when jerk does) and the run is timed and checked again, at most
 //! [`BlendOptions::shrinks`] times; then the run stops at that waypoint and is split there (as
 //! it does at once when a shrunk run is no longer faster than stopping at each of its
-//! waypoints). An
-//! invalid sample on a line or on a move at rest lies on the path's own straight segments: the
+//! waypoints). An invalid sample on a line, a ramp or a move at rest lies on the path's own
+//! straight segments: the
 //! path is not valid for this checker at this resolution, and that is an error. No trajectory
 //! is returned that was not checked.
 //!
-//! Capacity: a run of `m ≥ 2` segments gives `2m + 1` trajectory segments (`m` lines,
-//! `m + 1` blends; lines with no room left are dropped), a run of one segment one move, so a
-//! path of `n` segments needs at most `3n` (`2n + 1` when nothing is stopped at). More is
+//! Capacity: a run of `m ≥ 2` segments gives at most `2m + 5` trajectory segments (`m` lines,
+//! `m − 1` blends, two ramps of up to three pieces; lines with no room left are dropped), a
+//! run of one segment one move, so a path of `n` segments needs at most `5n` (`2n + 5` when
+//! nothing is stopped at). More is
 //! [`PlanError::Unsupported`].
 //!
 //! Cost: `O(iterations · n · nq)` for the timing, one validity check per sample. Allocates
@@ -220,7 +230,7 @@ enum Origin {
 impl Execution {
     /// The trajectory that blends through the interior waypoints where that is valid and
     /// faster, checked with `validity` (see the module docs): `D ≥ nq` axes, at most `MAX`
-    /// segments (`3·(waypoints − 1)` always suffice).
+    /// segments (`5·(waypoints − 1)` always suffice).
     pub fn blended<const D: usize, const MAX: usize>(
         &self,
         space: &JointSpace,
@@ -358,7 +368,7 @@ impl Execution {
                 PlanError::Unsupported(format!(
                     "a blended trajectory of more than {MAX} segments (a path of {segments} \
                      segments needs up to {}; simplify it or stop at every waypoint)",
-                    3 * segments
+                    5 * segments
                 ))
             })?;
         }
@@ -427,7 +437,11 @@ fn blended_run<const D: usize>(
         for j in 0..=m {
             let va = if j > 0 { Some(&v[j - 1][..]) } else { None };
             let vb = if j < m { Some(&v[j][..]) } else { None };
-            b[j] = blend_time(va, vb, limits);
+            b[j] = match (va, vb) {
+                (Some(va), Some(vb)) => blend_time(Some(va), Some(vb), limits),
+                (None, Some(v)) | (Some(v), None) => Ramp::new(v, limits).duration(),
+                (None, None) => 0.0,
+            };
         }
         settled = true;
         for i in 0..m {
@@ -455,9 +469,23 @@ fn blended_run<const D: usize>(
     for j in 0..=m {
         let va = if j > 0 { &v[j - 1] } else { &zero };
         let vb = if j < m { &v[j] } else { &zero };
-        // The blend starts on the incoming line, b/2 before it passes the waypoint:
-        // p(t) = p0 + va·t + (vb − va)·b·Σ(t/b).
-        if b[j] > 0.0 {
+        if (j == 0 || j == m) && b[j] > 0.0 {
+            // From or to rest along the line: the jerk-limited speed ramp, which also covers
+            // b/2 times the line's velocity.
+            let v = if j == 0 { vb } else { va };
+            let ramp = Ramp::new(v, limits);
+            let from = if j == 0 {
+                run[0].to_vec()
+            } else {
+                (0..n).map(|k| run[m][k] - 0.5 * b[m] * v[k]).collect()
+            };
+            for piece in ramp.pieces::<D>(&from, v, j == 0)? {
+                pieces.push(piece);
+                origins.push(Origin::Blend(j));
+            }
+        } else if b[j] > 0.0 {
+            // The blend starts on the incoming line, b/2 before it passes the waypoint:
+            // p(t) = p0 + va·t + (vb − va)·b·Σ(t/b).
             let mut c = [[0.0; D]; 7];
             for k in 0..n {
                 c[0][k] = run[j][k] - 0.5 * b[j] * va[k];
@@ -488,6 +516,95 @@ fn blended_run<const D: usize>(
     }
     let duration = tau.iter().sum::<f64>() + 0.5 * (b[0] + b[m]);
     Ok((pieces, origins, duration))
+}
+
+/// A speed ramp along a line from rest to velocity `v` (or from `v` to rest): the time-optimal
+/// jerk-limited profile of the fraction `ρ ∈ [0, 1]` of `v` (jerk `+J`, acceleration `A`,
+/// jerk `−J`; Biagiotti & Melchiorri §3.4 for a velocity change), with `A = min_k A_k / |v_k|`
+/// and `J = min_k J_k / |v_k|` so every joint keeps its own limits. `ρ` is symmetric about the
+/// middle, so the ramp covers `T/2` times `v`, as the sextic blend does.
+#[derive(Clone, Copy, Debug)]
+struct Ramp {
+    /// Jerk phases' length, s.
+    t_jerk: f64,
+    /// Constant-acceleration phase's length, s.
+    t_accel: f64,
+    /// Jerk of `ρ`, 1/s³.
+    jerk: f64,
+}
+
+impl Ramp {
+    fn new(v: &[f64], limits: &ExecutionLimits) -> Self {
+        let (mut a, mut j) = (f64::INFINITY, f64::INFINITY);
+        for (k, vk) in v.iter().enumerate() {
+            if *vk != 0.0 {
+                a = a.min(limits.acceleration[k] / vk.abs());
+                j = j.min(limits.jerk[k] / vk.abs());
+            }
+        }
+        if !a.is_finite() {
+            return Self {
+                t_jerk: 0.0,
+                t_accel: 0.0,
+                jerk: 0.0,
+            };
+        }
+        if a * a / j <= 1.0 {
+            Self {
+                t_jerk: a / j,
+                t_accel: 1.0 / a - a / j,
+                jerk: j,
+            }
+        } else {
+            Self {
+                t_jerk: 1.0 / j.sqrt(),
+                t_accel: 0.0,
+                jerk: j,
+            }
+        }
+    }
+
+    fn duration(&self) -> f64 {
+        2.0 * self.t_jerk + self.t_accel
+    }
+
+    /// The ramp's polynomial pieces from `from`: up (rest to `v`) or down (`v` to rest).
+    fn pieces<const D: usize>(
+        &self,
+        from: &[f64],
+        v: &[f64],
+        up: bool,
+    ) -> Result<Vec<Segment<D>>, PlanError> {
+        let sign = if up { 1.0 } else { -1.0 };
+        let phases = [
+            (self.t_jerk, sign * self.jerk),
+            (self.t_accel, 0.0),
+            (self.t_jerk, -sign * self.jerk),
+        ];
+        // State of the path fraction: distance s (in units of v·s), speed ρ, acceleration.
+        let (mut dist, mut rho, mut acc) = (0.0, if up { 0.0 } else { 1.0 }, 0.0);
+        let mut out = Vec::with_capacity(3);
+        for (length, jerk) in phases {
+            if length <= 0.0 {
+                continue;
+            }
+            let mut c = [[0.0; D]; 7];
+            for k in 0..v.len() {
+                c[0][k] = from[k] + v[k] * dist;
+                c[1][k] = v[k] * rho;
+                c[2][k] = v[k] * acc / 2.0;
+                c[3][k] = v[k] * jerk / 6.0;
+            }
+            out.push(Segment::Polynomial(
+                Polynomial::new(c, length)
+                    .map_err(|e| PlanError::setting("trajectory", e.to_string()))?,
+            ));
+            dist += length * (rho + length * (acc / 2.0 + length * jerk / 6.0));
+            rho += length * (acc + length * jerk / 2.0);
+            acc += length * jerk;
+        }
+        Ok(out)
+    }
 }
 
 /// Samples trajectory segments and asks the validity checker.
@@ -613,16 +730,17 @@ mod tests {
     }
 
     /// A right-angle corner with long legs: the blend at the corner lasts `1.875 · 1 / 2` s
-    /// (acceleration-bound: the velocity of each joint changes by 1), as do the blends from
-    /// and to rest, the lines run at the speed limit, and the run lasts `Σ τ + b` with
-    /// `τ = 2 s` per leg. Jerk-continuous at every boundary.
+    /// (acceleration-bound: the velocity of each joint changes by 1), the ramps from and to
+    /// rest `1/A + A/J = 0.52` s, the lines run at the speed limit, and the run lasts
+    /// `Σ τ + 0.52` with `τ = 2 s` per leg. Continuous in acceleration everywhere, in jerk
+    /// across the corner.
     #[test]
     fn a_right_angle_corner_by_hand() {
         let space = plane();
         let path = Path::from_points(2, &[vec![0.0, 0.0], vec![2.0, 0.0], vec![2.0, 2.0]]);
         let ex = Execution::new(&space, &path, limits()).unwrap();
         let b = ex
-            .blended::<2, 8>(
+            .blended::<2, 16>(
                 &space,
                 &mut AlwaysValid::new(space.clone()),
                 &BlendOptions::for_resolution(0.1),
@@ -630,19 +748,28 @@ mod tests {
             .unwrap();
         let tb = 1.875 * 1.0 / 2.0;
         assert!(
-            (b.report.duration_s - (2.0 + 2.0 + tb)).abs() < 1e-12,
+            (b.report.duration_s - (2.0 + 2.0 + 0.52)).abs() < 1e-12,
             "{}",
             b.report
         );
-        assert_eq!(b.trajectory.len(), 5);
+        // Ramp (3 pieces), line, corner blend, line, ramp (3).
+        assert_eq!(b.trajectory.len(), 9);
         assert_eq!(
             b.report.waypoints,
             vec![WaypointOutcome::Blended { shrinks: 0 }]
         );
-        b.trajectory.check_continuity(3, 1e-9).unwrap();
+        b.trajectory.check_continuity(2, 1e-9).unwrap();
+        let corner = &b.trajectory.segments()[3..6];
+        for pair in corner.windows(2) {
+            let (l, r) = (
+                pair[0].derivative(pair[0].duration(), 3),
+                pair[1].derivative(0.0, 3),
+            );
+            assert!((l[0] - r[0]).abs() < 1e-9 && (l[1] - r[1]).abs() < 1e-9);
+        }
         // Halfway through the corner blend, the widest point: the corner plus
-        // Δv·tb·Σ(½) = (−1, 1)·tb·5/64.
-        let mid = b.trajectory.position(2.0 + 0.5 * tb);
+        // Δv·tb·Σ(½) = (−1, 1)·tb·5/64; the lines pass the corner 0.26 + 2 s in.
+        let mid = b.trajectory.position(0.26 + 2.0);
         let off = tb * 5.0 / 64.0;
         assert!((mid[0] - (2.0 - off)).abs() < 1e-12 && (mid[1] - off).abs() < 1e-12);
     }
