@@ -50,10 +50,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(&options.stop),
     )?;
     eprintln!(
-        "{name}: {} waypoints, {:.2} s trajectory",
+        "{name}: {} waypoints, {:.2} s trajectory ({:.2} s stopping at every waypoint)",
         planned.waypoints.len(),
-        planned.duration_s
+        planned.duration_s,
+        planned.stop_duration_s
     );
+    if let Some(blend) = &planned.blend {
+        eprintln!("{name}: {blend}");
+    }
 
     // The fake arm stands at the start; a real one would have to (the run checks).
     let fake = FakeH7::spawn(FakeH7Config::for_model(&loaded.model, &start)?)?;

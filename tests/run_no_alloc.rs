@@ -134,3 +134,76 @@ fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
     robot.stop().expect("stop");
     robot.close().expect("close");
 }
+
+/// Following a planned path blended through its waypoints (lines and sextic blends mixed with
+/// jerk-limited moves, `PlanTrajectory::Blended`): the trajectory is built before the loop,
+/// and evaluating it in the loop allocates nothing.
+#[cfg(feature = "plan")]
+#[test]
+fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
+    use rl::controller::plan::BLENDED_SEGMENTS;
+    use rl::controller::{MotionLimits, Plan, PlanBudget, PlanTrajectory, default_waypoints};
+    use rl::drivers::JointPositionSensor;
+    use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits};
+    use rl_plan::validity::AlwaysValid;
+    use rl_plan::{JointSpace, Path};
+
+    assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
+
+    let model = rv6sl().expect("embedded model").model;
+    let dof = model.dof();
+    let fake = common::immediate_fake(dof);
+    let robot = common::started_h7(&fake, dof);
+    let mut start = vec![0.0; dof];
+    robot.joint_position(&mut start).expect("joints");
+    let mut points = vec![start.clone()];
+    points.extend(default_waypoints(&model, &start));
+    let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
+    let space = JointSpace::from_model(&model).expect("space");
+    let execution = Execution::new(
+        &space,
+        &Path::from_points(dof, &points),
+        ExecutionLimits {
+            velocity: limits.velocity[..dof].to_vec(),
+            acceleration: limits.acceleration[..dof].to_vec(),
+            jerk: limits.jerk[..dof].to_vec(),
+        },
+    )
+    .expect("execution");
+    let blended = execution
+        .blended::<8, BLENDED_SEGMENTS>(
+            &space,
+            &mut AlwaysValid::new(space.clone()),
+            &BlendOptions::for_resolution(0.05),
+        )
+        .expect("blended");
+    assert_eq!(blended.report.blended(), 2, "{}", blended.report);
+    let plan = Plan::from_trajectory(
+        &model,
+        PlanTrajectory::Blended(Box::new(blended.trajectory)),
+        &limits,
+        &PlanBudget::default(),
+    )
+    .expect("plan");
+    let mut control =
+        Box::new(Controller::new(robot, model, plan, common::PERIOD).expect("controller"));
+    for _ in 0..50 {
+        assert!(!control.cycle().finished);
+    }
+    let mut finished = false;
+    let counted = allocations(|| {
+        for _ in 0..400 {
+            finished |= control.cycle().finished;
+        }
+    });
+    assert!(!finished, "the plan is longer than 450 cycles");
+    assert_eq!(
+        counted, 0,
+        "allocations in 400 cycles following a blended path"
+    );
+    assert_eq!(control.failed_steps(), 0);
+    assert!(control.tracking().max_error() > 0.0, "the arm moved");
+    let mut robot = control.into_robot();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}

@@ -210,6 +210,127 @@ fn run_plan_follows_the_path_to_the_goal_and_says_so() {
     std::fs::remove_file(&tel).ok();
 }
 
+/// `rl run --plan` (blended by default, or `--stop-at-waypoints`) on box_panda, whose
+/// optimised path has interior waypoints: the run completes at the goal, every commanded
+/// position is free for the exact meshes, and the report (text and JSON) says how the path was
+/// executed, with both durations.
+fn run_box(extra: &[&str], json: bool, name: &str) -> (String, PathBuf) {
+    let (scene, request) = problem("box_panda");
+    let tel = temp(name);
+    let (model, scene, request, telemetry) = (
+        panda().display().to_string(),
+        scene.display().to_string(),
+        request.display().to_string(),
+        tel.display().to_string(),
+    );
+    let mut args = vec![
+        "run",
+        "--model",
+        &model,
+        "--plan",
+        "--scene",
+        &scene,
+        "--request",
+        &request,
+        "--speed",
+        SPEED,
+        "--no-mlock",
+        "--telemetry",
+        &telemetry,
+    ];
+    if json {
+        args.push("--json");
+    }
+    args.extend_from_slice(extra);
+    let out = rl(&args, Duration::from_secs(120));
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}",
+        out.status
+    );
+    (stdout, tel)
+}
+
+#[test]
+fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
+    let _run = one_run_at_a_time();
+    let (stdout, tel) = run_box(&[], true, "blended.csv");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("JSON report");
+    assert_eq!(v["end"], "completed", "{v}");
+    assert_eq!(v["limit_violations"], 0, "{v}");
+    let plan = &v["plan"];
+    assert_eq!(plan["execution"], "blended", "{v}");
+    let blend = &plan["blend"];
+    let interior = blend["interior_waypoints"].as_u64().expect("count");
+    assert_eq!(
+        interior + 2,
+        plan["waypoints"].as_array().unwrap().len() as u64,
+        "{v}"
+    );
+    assert!(interior > 0, "box_panda's path has interior waypoints: {v}");
+    assert_eq!(
+        blend["blended"].as_u64().unwrap() + blend["stopped"].as_u64().unwrap(),
+        interior
+    );
+    assert!(blend["collision_checks"].as_u64().unwrap() > 100, "{v}");
+    let (duration, stop) = (
+        plan["trajectory_duration_s"].as_f64().unwrap(),
+        plan["stop_at_waypoints_duration_s"].as_f64().unwrap(),
+    );
+    println!("box_panda: blended {duration:.3} s, stopping at every waypoint {stop:.3} s");
+    if blend["blended"].as_u64().unwrap() > 0 {
+        assert!(duration < stop, "{v}");
+    }
+    let description = v["trajectory"].as_str().expect("trajectory description");
+    assert!(description.contains("blended through"), "{description}");
+    assert!(
+        description.contains("stopping at every waypoint: "),
+        "{description}"
+    );
+    assert!((v["trajectory_time_s"].as_f64().unwrap() - duration).abs() < 0.01);
+    let bound: Vec<f64> = v["tracking_error_rad"]["bound_per_joint"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    std::fs::remove_file(&tel).ok();
+}
+
+#[test]
+fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
+    let _run = one_run_at_a_time();
+    // The flag describes a planned motion: refused without --plan, before anything starts.
+    let out = rl(&["run", "--stop-at-waypoints"], Duration::from_secs(30));
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("--stop-at-waypoints describes a planned motion: add --plan"),
+        "{}",
+        text(&out.stderr)
+    );
+    let (stdout, tel) = run_box(&["--stop-at-waypoints"], false, "stops.csv");
+    assert!(stdout.contains("result: ok"), "{stdout}");
+    assert!(stdout.contains("end: completed"), "{stdout}");
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("trajectory (plan): planned path by"))
+        .unwrap_or_else(|| panic!("no trajectory line:\n{stdout}"));
+    assert!(line.contains("stopping at every waypoint"), "{line}");
+    assert!(!stdout.contains("blended through"), "{stdout}");
+    let bound: Vec<f64> = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("tracking bound mrad"))
+        .expect("tracking bound row")
+        .split_whitespace()
+        .skip(3)
+        .map(|x| x.parse::<f64>().expect("number") * 1e-3)
+        .collect();
+    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    std::fs::remove_file(&tel).ok();
+}
+
 #[test]
 fn run_plan_json_has_the_plan_and_ends_at_its_goal() {
     let _run = one_run_at_a_time();

@@ -10,7 +10,9 @@
 //! j_s)` with `v_s = min_k v_k / |d_k|` (and alike for acceleration and jerk): every joint then
 //! has the same normalised profile `s(t) ∈ [0, 1]`, so `q(t) = a + s(t)·d` lies on the segment at
 //! every instant, and no joint exceeds its own limits. The robot stops at every waypoint
-//! (optimised paths have few).
+//! (optimised paths have few). [`blend`] is the execution that does not stop at interior
+//! waypoints (lines and jerk-continuous blends, checked for collisions where they leave the
+//! path).
 //!
 //! Circle coordinates are unwrapped along the path (the trajectory is continuous; positions
 //! may leave `[−π, π)`), which is what a joint controller wants.
@@ -20,11 +22,15 @@
 //! segments) and [`Execution::waypoints`] the unwrapped waypoints.
 
 use rl_core::Model;
-use rl_core::traj::{JerkLimited, Limits, Piecewise};
+use rl_core::traj::{JerkLimited, Limits, Piecewise, Segment};
 
 use crate::error::PlanError;
 use crate::path::Path;
 use crate::space::JointSpace;
+
+pub mod blend;
+
+pub use blend::{BlendOptions, BlendReport, Blended, StopReason, WaypointOutcome};
 
 /// Time to reach the speed limit at the acceleration limit, s (the controller's convention:
 /// `a = v / 0.5 s`, `j = a / 0.15 s`).
@@ -134,6 +140,25 @@ impl Execution {
         &self.waypoints
     }
 
+    /// The limits it is timed within.
+    pub fn limits(&self) -> &ExecutionLimits {
+        &self.limits
+    }
+
+    /// [`Execution::trajectory`] as [`Segment`]s, the type the blended execution
+    /// ([`Execution::blended`]) returns, so a controller can hold either.
+    pub fn stop_at_waypoints<const D: usize, const MAX: usize>(
+        &self,
+    ) -> Result<Piecewise<Segment<D>, MAX>, PlanError> {
+        let moves = self.trajectory::<D, MAX>()?;
+        let mut out = Piecewise::new();
+        for m in moves.segments() {
+            out.push(Segment::JerkLimited(*m))
+                .map_err(|e| PlanError::setting("trajectory", e.to_string()))?;
+        }
+        Ok(out)
+    }
+
     /// The trajectory of `D ≥ nq` axes (unused axes stay at 0) and at most `MAX` segments: one
     /// synchronised jerk-limited move per path segment (see the module docs). Segments of zero
     /// length are skipped.
@@ -148,36 +173,9 @@ impl Execution {
         }
         let mut out = Piecewise::new();
         for w in self.waypoints.windows(2) {
-            let (a, b) = (&w[0], &w[1]);
-            let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| y - x).collect();
-            if d.iter().all(|x| *x == 0.0) {
+            let Some(segment) = synchronized_move::<D>(&w[0], &w[1], &self.limits)? else {
                 continue;
-            }
-            let scale = |lim: &[f64]| {
-                d.iter()
-                    .zip(lim)
-                    .filter(|(d, _)| **d != 0.0)
-                    .map(|(d, l)| l / d.abs())
-                    .fold(f64::INFINITY, f64::min)
             };
-            let (vs, as_, js) = (
-                scale(&self.limits.velocity),
-                scale(&self.limits.acceleration),
-                scale(&self.limits.jerk),
-            );
-            let mut limits = Limits::<D>::uniform(vs, as_, js);
-            let (mut start, mut goal) = ([0.0; D], [0.0; D]);
-            for k in 0..n {
-                start[k] = a[k];
-                goal[k] = b[k];
-                if d[k] != 0.0 {
-                    limits.velocity[k] = vs * d[k].abs();
-                    limits.acceleration[k] = as_ * d[k].abs();
-                    limits.jerk[k] = js * d[k].abs();
-                }
-            }
-            let segment = JerkLimited::new(start, goal, &limits)
-                .map_err(|e| PlanError::setting("trajectory", e.to_string()))?;
             out.push(segment).map_err(|_| {
                 PlanError::Unsupported(format!(
                     "a path of more than {MAX} segments in this trajectory (simplify it first)"
@@ -186,6 +184,46 @@ impl Execution {
         }
         Ok(out)
     }
+}
+
+/// The synchronised rest-to-rest move from `a` to `b` (every joint on the same normalised
+/// profile, see the module docs), `None` when they are equal.
+pub(crate) fn synchronized_move<const D: usize>(
+    a: &[f64],
+    b: &[f64],
+    limits: &ExecutionLimits,
+) -> Result<Option<JerkLimited<D>>, PlanError> {
+    let n = limits.velocity.len();
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| y - x).collect();
+    if d.iter().all(|x| *x == 0.0) {
+        return Ok(None);
+    }
+    let scale = |lim: &[f64]| {
+        d.iter()
+            .zip(lim)
+            .filter(|(d, _)| **d != 0.0)
+            .map(|(d, l)| l / d.abs())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (vs, as_, js) = (
+        scale(&limits.velocity),
+        scale(&limits.acceleration),
+        scale(&limits.jerk),
+    );
+    let mut segment_limits = Limits::<D>::uniform(vs, as_, js);
+    let (mut start, mut goal) = ([0.0; D], [0.0; D]);
+    for k in 0..n {
+        start[k] = a[k];
+        goal[k] = b[k];
+        if d[k] != 0.0 {
+            segment_limits.velocity[k] = vs * d[k].abs();
+            segment_limits.acceleration[k] = as_ * d[k].abs();
+            segment_limits.jerk[k] = js * d[k].abs();
+        }
+    }
+    JerkLimited::new(start, goal, &segment_limits)
+        .map(Some)
+        .map_err(|e| PlanError::setting("trajectory", e.to_string()))
 }
 
 /// A plan ready for a controller: what the planner found, the waypoints it will pass

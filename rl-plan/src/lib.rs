@@ -26,8 +26,9 @@
 //!
 //! [`problem`]: MoveIt planning scenes and motion plan requests (MotionBenchMaker), RL's
 //! rlplan XML scenarios. [`bench`](mod@bench): OMPL's benchmark log and summary statistics.
-//! [`execute`]: a path becomes a jerk-limited trajectory through its waypoints that a
-//! controller can follow.
+//! [`execute`]: a path becomes a trajectory within per-joint velocity, acceleration and jerk
+//! limits that a controller can follow — stopping at every waypoint, or
+//! ([`execute::blend`]) blending through them, with the blends checked for collisions.
 #![deny(missing_docs)]
 // Index loops over coordinates, lanes and pivots read as the math does.
 #![allow(clippy::needless_range_loop)]

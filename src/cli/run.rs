@@ -12,7 +12,9 @@
 //! With `--plan --scene SCENE.yaml --request REQUEST.yaml` (a MoveIt planning scene and motion
 //! plan request, as `rl plan` takes them) the run follows a collision-free path instead of the
 //! tour: rl-plan plans it before anything is opened (bounded by `--plan-time`, Ctrl-C cancels),
-//! [`rl::controller::planned`] makes it a jerk-limited trajectory within the model's limits, the
+//! [`rl::controller::planned`] makes it a trajectory within the model's velocity, acceleration
+//! and jerk limits (blended through the path's waypoints, every sample checked for collisions;
+//! `--stop-at-waypoints` stops at each of them instead), the
 //! in-process fake stands at the request's start state (a real robot must stand there, or the
 //! run refuses to start), and the report says the trajectory came from the plan.
 //!
@@ -30,7 +32,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use rl::controller::plan::joint_name;
-use rl::controller::planned::{PlannedMotion, PlannedMotionError, plan_motion};
+use rl::controller::planned::{PathExecution, PlannedMotion, PlannedMotionError, plan_motion_with};
 use rl::controller::runtime::DEFAULT_SPEED;
 use rl::controller::{
     ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions, Supervision,
@@ -150,6 +152,11 @@ pub struct RunArgs {
     /// Time budget for planning, and as much again for shortening the path [default: 1s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", help_heading = "Planned motion")]
     pub plan_time: Option<Duration>,
+    /// Stop at every waypoint of the planned path, on its straight segments exactly, instead
+    /// of blending through them (the default: lines and jerk-continuous blends, every sample
+    /// checked for collisions, a blend that collides shrunk or replaced by a stop).
+    #[arg(long, help_heading = "Planned motion")]
+    pub stop_at_waypoints: bool,
     /// Show the run live in the robot viewer's page (as `rl view`), served by this process on
     /// ADDR while the run goes; the address is printed before the run starts. Port 0 picks a
     /// free port [default ADDR: 127.0.0.1:8080].
@@ -167,6 +174,7 @@ struct PlanSetup {
     request: PathBuf,
     common: CommonArgs,
     options: PlanOptions,
+    execution: PathExecution,
 }
 
 /// Flags and files checked before anything starts.
@@ -298,6 +306,7 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
         ("--seed", args.seed.is_some()),
         ("--plan-time", args.plan_time.is_some()),
         ("--limits", args.limits.is_some()),
+        ("--stop-at-waypoints", args.stop_at_waypoints),
     ]
     .iter()
     .filter(|(_, on)| *on)
@@ -348,6 +357,11 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
         request: request.clone(),
         common,
         options,
+        execution: if args.stop_at_waypoints {
+            PathExecution::StopAtWaypoints
+        } else {
+            PathExecution::Blended
+        },
     }))
 }
 
@@ -378,10 +392,11 @@ fn plan_for_run<const B: usize, const J: usize>(
         .hybrid_checker(&scene)
         .map_err(|e| CliError::failed(format!("--plan: collision checker: {e}")))?;
     eprintln!(
-        "rl run: planning a collision-free path with {} (seed {}, {:?} budget) before starting",
-        setup.common.planner, setup.common.seed, setup.common.time
+        "rl run: planning a collision-free path with {} (seed {}, {:?} budget) before starting, \
+         to be executed {}",
+        setup.common.planner, setup.common.seed, setup.common.time, setup.execution
     );
-    match plan_motion::<B, J>(
+    match plan_motion_with::<B, J>(
         model,
         &robot.space,
         &mut checker,
@@ -390,6 +405,7 @@ fn plan_for_run<const B: usize, const J: usize>(
         &setup.options,
         speed,
         Some(stop),
+        setup.execution,
     ) {
         Ok(planned) => Ok(Some(RunPlan {
             planned,
@@ -485,7 +501,8 @@ fn drive<const B: usize, const J: usize>(
             let r = &planned.result;
             plan_note = Some(format!(
                 "plan: solved by {} in {:.1} µs ({} iterations, {} collision checks), path {:.3} \
-                 rad shortened to {:.3} rad in {:.1} µs, {} waypoints, trajectory {:.2} s",
+                 rad shortened to {:.3} rad in {:.1} µs, {} waypoints, trajectory {:.2} s {} \
+                 (stopping at every waypoint: {:.2} s)",
                 r.planner,
                 r.planning_time.as_secs_f64() * 1e6,
                 r.iterations,
@@ -494,7 +511,9 @@ fn drive<const B: usize, const J: usize>(
                 r.length_after,
                 r.optimization_time.as_secs_f64() * 1e6,
                 planned.waypoints.len(),
-                planned.duration_s
+                planned.duration_s,
+                planned.execution,
+                planned.stop_duration_s
             ));
             plan_json = Some(serde_json::json!({
                 "solved": r.solved,
@@ -513,6 +532,20 @@ fn drive<const B: usize, const J: usize>(
                 "goal": goal,
                 "waypoints": planned.waypoints,
                 "trajectory_duration_s": planned.duration_s,
+                "execution": match planned.execution {
+                    PathExecution::Blended => "blended",
+                    PathExecution::StopAtWaypoints => "stop-at-waypoints",
+                },
+                "stop_at_waypoints_duration_s": planned.stop_duration_s,
+                "blend": planned.blend.as_ref().map(|b| serde_json::json!({
+                    "interior_waypoints": b.waypoints.len(),
+                    "blended": b.blended(),
+                    "shrunk": b.shrunk(),
+                    "stopped": b.stopped(),
+                    "stopped_for_collision": b.stopped_for_collision(),
+                    "collision_checks": b.checks,
+                    "check_step": b.check_step,
+                })),
             }));
             (planned.motion, Some(start))
         }

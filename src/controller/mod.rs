@@ -13,7 +13,8 @@
 //! - [`plan`]: limits derived from the model, default waypoints, and a [`Plan`] that is checked
 //!   against the model's position, speed and effort limits before anything moves;
 //! - [`planned`] (feature `plan`): a collision-free path from rl-plan, made a trajectory the
-//!   run follows ([`Motion::Trajectory`], [`ControlRun::start_with`]);
+//!   run follows ([`Motion::Trajectory`], [`ControlRun::start_with`]), blended through its
+//!   waypoints (checked for collisions where it leaves the path) or stopping at each;
 //! - [`supervise`]: the per-cycle checks and the [`Fault`]s that end a run;
 //! - [`clock`]: trajectory time, slowed to rest along the path when a stop is asked for;
 //! - [`tracking`]: tracking error, feed-forward peaks and limit checks of the measured motion;
@@ -83,7 +84,10 @@ use rl_core::loader::{self, LoadError, LoadedModel};
 pub const DEFAULT_BODIES: usize = 16;
 /// Default joint capacity (the H7 protocol carries 8 axes).
 pub const DEFAULT_JOINTS: usize = 8;
-/// Most waypoints of a plan (besides the start, which the plan returns to at the end).
+/// Most waypoints of a plan (besides the start, which the plan returns to at the end); a
+/// planned path may have `MAX_WAYPOINTS + 1` segments ([`plan::MOVE_SEGMENTS`] moves when it
+/// stops at every waypoint, at most [`plan::BLENDED_SEGMENTS`] lines, blends and moves when it
+/// is blended). More is a typed error before anything moves.
 pub const MAX_WAYPOINTS: usize = 32;
 
 /// The Mitsubishi RV-6SL (RL's `mitsubishi-rv6sl.xml`, BSD-2-Clause, see

@@ -18,7 +18,7 @@ use core::fmt;
 use std::time::Duration;
 
 use rl_core::algo::rnea;
-use rl_core::traj::{JerkLimited, Limits, Piecewise, Trajectory, TrajectoryError};
+use rl_core::traj::{JerkLimited, Limits, Piecewise, Sample, Segment, Trajectory, TrajectoryError};
 use rl_core::{Data, Model};
 use rl_rt::StopFlag;
 
@@ -37,11 +37,76 @@ pub const MAX_CHECK_SAMPLES: usize = 200_000;
 /// The longest trajectory a plan accepts by default.
 pub const DEFAULT_MAX_PLAN_DURATION: Duration = Duration::from_secs(3600);
 
-/// Segments a plan holds: start → waypoints → start.
-const SEGMENTS: usize = MAX_WAYPOINTS + 1;
+/// Segments a tour holds: start → waypoints → start (and a path stopping at each of its
+/// waypoints: one jerk-limited move per path segment).
+pub const MOVE_SEGMENTS: usize = MAX_WAYPOINTS + 1;
 
-/// The jerk-limited trajectory type of a plan for `J` joints.
-pub type PlanTrajectory<const J: usize> = Piecewise<JerkLimited<J>, SEGMENTS>;
+/// Segments a blended trajectory holds: a path of up to [`MOVE_SEGMENTS`] segments blended
+/// through its waypoints needs at most five per path segment (a line and a blend each, plus
+/// the start and end ramps of every stretch between two stops, up to three pieces each;
+/// rl-plan's `execute::blend` module docs count them). Beyond, building the trajectory is an
+/// error.
+pub const BLENDED_SEGMENTS: usize = 5 * MOVE_SEGMENTS;
+
+/// The trajectory of a plan for `J` joints: jerk-limited moves from rest to rest (a tour, or a
+/// path that stops at every waypoint), or lines and blends mixed with such moves (a path
+/// blended through its waypoints). Each is boxed, and evaluation is one `match` and the
+/// segment's closed form: no allocation in the control loop.
+#[derive(Clone, Debug)]
+pub enum PlanTrajectory<const J: usize = DEFAULT_JOINTS> {
+    /// Rest-to-rest jerk-limited moves.
+    Moves(Box<Piecewise<JerkLimited<J>, MOVE_SEGMENTS>>),
+    /// Lines, blends and moves ([`Segment`]).
+    Blended(Box<Piecewise<Segment<J>, BLENDED_SEGMENTS>>),
+}
+
+impl<const J: usize> PlanTrajectory<J> {
+    /// Number of segments.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Moves(p) => p.len(),
+            Self::Blended(p) => p.len(),
+        }
+    }
+
+    /// `true` without segments.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Where segment `i` starts (zeros beyond the last).
+    pub fn segment_start(&self, i: usize) -> [f64; J] {
+        match self {
+            Self::Moves(p) => p.segments().get(i).map(|s| s.position(0.0)),
+            Self::Blended(p) => p.segments().get(i).map(|s| s.position(0.0)),
+        }
+        .unwrap_or([0.0; J])
+    }
+}
+
+impl<const J: usize> Trajectory<J> for PlanTrajectory<J> {
+    fn duration(&self) -> f64 {
+        match self {
+            Self::Moves(p) => p.duration(),
+            Self::Blended(p) => p.duration(),
+        }
+    }
+
+    fn derivative(&self, t: f64, order: usize) -> [f64; J] {
+        match self {
+            Self::Moves(p) => p.derivative(t, order),
+            Self::Blended(p) => p.derivative(t, order),
+        }
+    }
+
+    #[inline]
+    fn sample(&self, t: f64) -> Sample<J> {
+        match self {
+            Self::Moves(p) => p.sample(t),
+            Self::Blended(p) => p.sample(t),
+        }
+    }
+}
 
 /// What planning may spend: the longest trajectory accepted and a flag that cancels it (Ctrl-C
 /// during planning).
@@ -388,8 +453,9 @@ pub enum Motion<const J: usize = DEFAULT_JOINTS> {
 /// A trajectory for a run to follow, and where it came from (for the report).
 #[derive(Clone, Debug)]
 pub struct FollowTrajectory<const J: usize = DEFAULT_JOINTS> {
-    /// The trajectory (rl-core's jerk-limited segments; axes beyond the model's joints unused).
-    pub trajectory: Box<PlanTrajectory<J>>,
+    /// The trajectory (rl-core's jerk-limited moves, or lines and blends; axes beyond the
+    /// model's joints unused).
+    pub trajectory: PlanTrajectory<J>,
     /// A short tag for scripts, e.g. `"plan"` (the report's `trajectory_source`).
     pub source: String,
     /// One line for people, e.g. which planner found the path.
@@ -399,7 +465,7 @@ pub struct FollowTrajectory<const J: usize = DEFAULT_JOINTS> {
 impl<const J: usize> Motion<J> {
     /// Follow `trajectory`; `source` and `description` go into the report.
     pub fn trajectory(
-        trajectory: Box<PlanTrajectory<J>>,
+        trajectory: PlanTrajectory<J>,
         source: impl Into<String>,
         description: impl Into<String>,
     ) -> Self {
@@ -415,9 +481,9 @@ impl<const J: usize> Motion<J> {
 #[derive(Clone, Debug)]
 pub struct Plan<const J: usize = DEFAULT_JOINTS> {
     dof: usize,
-    /// Boxed: a segment per waypoint for every joint (about 1 MB at 256 joints) is no stack
-    /// value.
-    trajectory: Box<PlanTrajectory<J>>,
+    /// Its segments are boxed: a segment per waypoint for every joint (about 1 MB at 256
+    /// joints) is no stack value.
+    trajectory: PlanTrajectory<J>,
     points: Vec<[f64; J]>,
     limits: MotionLimits<J>,
     peak_velocity: [f64; J],
@@ -457,12 +523,12 @@ impl<const J: usize> Plan<J> {
             points.push(to_point(model, format!("waypoint {}", i + 1), w)?);
         }
         points.push(points[0]);
-        let mut trajectory = Box::new(PlanTrajectory::<J>::new());
+        let mut moves = Box::new(Piecewise::<JerkLimited<J>, MOVE_SEGMENTS>::new());
         let tl = limits.trajectory_limits();
         let max_s = budget.max_duration.as_secs_f64();
         for pair in points.windows(2) {
             let segment = JerkLimited::new(pair[0], pair[1], &tl)?;
-            let total = trajectory.duration() + segment.duration();
+            let total = moves.duration() + segment.duration();
             if total.is_nan() || total > max_s {
                 // The slowest joint sets the pace.
                 let k = (0..dof)
@@ -475,8 +541,9 @@ impl<const J: usize> Plan<J> {
                     speed: limits.velocity[k],
                 });
             }
-            trajectory.push(segment)?;
+            moves.push(segment)?;
         }
+        let trajectory = PlanTrajectory::Moves(moves);
         let mut plan = Self {
             dof,
             trajectory,
@@ -497,7 +564,7 @@ impl<const J: usize> Plan<J> {
     /// ([`Plan::start`]) when the device starts.
     pub fn from_trajectory<const N: usize>(
         model: &Model<N>,
-        trajectory: Box<PlanTrajectory<J>>,
+        trajectory: PlanTrajectory<J>,
         limits: &MotionLimits<J>,
         budget: &PlanBudget,
     ) -> Result<Self, PlanError> {
@@ -523,13 +590,13 @@ impl<const J: usize> Plan<J> {
             });
         }
         let mut points = Vec::with_capacity(trajectory.len() + 1);
-        for (i, segment) in trajectory.segments().iter().enumerate() {
+        for i in 0..trajectory.len() {
             let what = if i == 0 {
                 "trajectory start".to_owned()
             } else {
                 format!("trajectory waypoint {i}")
             };
-            points.push(to_point(model, what, &segment.position(0.0)[..dof])?);
+            points.push(to_point(model, what, &trajectory.segment_start(i)[..dof])?);
         }
         points.push(to_point(
             model,

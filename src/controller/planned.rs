@@ -8,9 +8,17 @@
 //! when the run's [`StopFlag`] is raised (Ctrl-C). A start or goal in collision, or no path
 //! within the budget, is an error and nothing moves.
 //!
-//! The trajectory stops at every waypoint of the optimised path and follows the straight
-//! segments between them exactly (every joint on the same normalised profile), so the arm
-//! passes only through configurations the planner checked.
+//! By default ([`PathExecution::Blended`]) the trajectory does not stop at the optimised
+//! path's interior waypoints: rl-plan's blended execution ([`rl_plan::execute::blend`]) runs
+//! straight lines joined by jerk-continuous blends (and jerk-limited ramps from and to rest)
+//! within every joint's velocity,
+//! acceleration and jerk limits, samples the whole trajectory a tenth of the planner's
+//! collision resolution apart and checks every sample with the run's validity checker, and
+//! shrinks a blend that collides, or stops at that waypoint. [`PathExecution::StopAtWaypoints`]
+//! keeps the older execution: it stops at every waypoint and follows the straight segments
+//! between them exactly (every joint on the same normalised profile), so the arm passes only
+//! through configurations the planner checked. The description (the run's report) says which,
+//! how many waypoints were blended and both durations.
 //!
 //! ```no_run
 //! use std::path::Path;
@@ -45,13 +53,13 @@ use core::fmt;
 
 use rl_core::Model;
 use rl_plan::budget::Cancel;
-use rl_plan::execute::{Execution, ExecutionLimits};
+use rl_plan::execute::{BlendOptions, BlendReport, Execution, ExecutionLimits};
 use rl_plan::solve::plan_cancellable;
 use rl_plan::{JointSpace, PlanOptions, PlanResult, Validity};
 use rl_rt::StopFlag;
 
 use super::MAX_WAYPOINTS;
-use super::plan::{Motion, MotionLimits, PlanError, PlanTrajectory, joint_name};
+use super::plan::{BLENDED_SEGMENTS, Motion, MotionLimits, PlanError, PlanTrajectory, joint_name};
 
 /// Why no motion was planned. Nothing was opened or moved.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,6 +123,26 @@ impl From<rl_plan::PlanError> for PlannedMotionError {
     }
 }
 
+/// How a planned path is executed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathExecution {
+    /// Through the interior waypoints without stopping where blends are valid and faster
+    /// (rl-plan's [`blend`](rl_plan::execute::blend)); the default.
+    #[default]
+    Blended,
+    /// Stopping at every waypoint, on the path's straight segments exactly.
+    StopAtWaypoints,
+}
+
+impl fmt::Display for PathExecution {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Blended => "blended through the waypoints",
+            Self::StopAtWaypoints => "stopping at every waypoint",
+        })
+    }
+}
+
 /// A planned motion: what the planner found and the trajectory along its path.
 #[derive(Clone, Debug)]
 pub struct PlannedMotion<const J: usize> {
@@ -123,15 +151,22 @@ pub struct PlannedMotion<const J: usize> {
     pub motion: Motion<J>,
     /// The planner's report (times, iterations, collision checks, lengths, paths).
     pub result: PlanResult,
-    /// The optimised path's waypoints the trajectory stops at (start first, goal last; circle
-    /// joints unwrapped).
+    /// The optimised path's waypoints (start first, goal last; circle joints unwrapped).
     pub waypoints: Vec<Vec<f64>>,
     /// The trajectory's duration, s.
     pub duration_s: f64,
+    /// How the path is executed.
+    pub execution: PathExecution,
+    /// The duration when stopping at every waypoint, s (equal to `duration_s` for
+    /// [`PathExecution::StopAtWaypoints`]).
+    pub stop_duration_s: f64,
+    /// For [`PathExecution::Blended`]: waypoints blended and stopped at, the collision check.
+    pub blend: Option<BlendReport>,
 }
 
 /// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
-/// optimised path a trajectory within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
+/// optimised path a trajectory blended through its waypoints ([`PathExecution::Blended`],
+/// checked with `validity`) within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
 /// with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
 /// model: its joints must be the space's, in the same order. `stop` cancels planning.
 #[allow(clippy::too_many_arguments)]
@@ -144,6 +179,32 @@ pub fn plan_motion<const B: usize, const J: usize>(
     options: &PlanOptions,
     speed: f64,
     stop: Option<&StopFlag>,
+) -> Result<PlannedMotion<J>, PlannedMotionError> {
+    plan_motion_with(
+        model,
+        space,
+        validity,
+        start,
+        goal,
+        options,
+        speed,
+        stop,
+        PathExecution::Blended,
+    )
+}
+
+/// [`plan_motion`] with the choice of execution.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_motion_with<const B: usize, const J: usize>(
+    model: &Model<B>,
+    space: &JointSpace,
+    validity: &mut dyn Validity,
+    start: &[f64],
+    goal: &[f64],
+    options: &PlanOptions,
+    speed: f64,
+    stop: Option<&StopFlag>,
+    execution: PathExecution,
 ) -> Result<PlannedMotion<J>, PlannedMotionError> {
     let limits = MotionLimits::<J>::from_model(model, speed).map_err(PlannedMotionError::Limits)?;
     let names: Vec<String> = (0..model.dof()).map(|k| joint_name(model, k)).collect();
@@ -166,7 +227,7 @@ pub fn plan_motion<const B: usize, const J: usize>(
         });
     };
     let dof = model.dof();
-    let execution = Execution::new(
+    let execution_plan = Execution::new(
         space,
         path,
         ExecutionLimits {
@@ -175,23 +236,60 @@ pub fn plan_motion<const B: usize, const J: usize>(
             jerk: limits.jerk[..dof].to_vec(),
         },
     )?;
-    let trajectory: Box<PlanTrajectory<J>> =
-        Box::new(execution.trajectory::<J, { MAX_WAYPOINTS + 1 }>()?);
-    let duration_s = rl_core::traj::Trajectory::duration(&*trajectory);
+    let moves = Box::new(execution_plan.trajectory::<J, { MAX_WAYPOINTS + 1 }>()?);
+    let stop_duration_s = rl_core::traj::Trajectory::duration(&*moves);
+    let (trajectory, blend) = match execution {
+        PathExecution::StopAtWaypoints => (PlanTrajectory::Moves(moves), None),
+        PathExecution::Blended => {
+            // The planner's collision resolution (the finer of planning and optimising).
+            let resolution = options
+                .optimizer_verifier
+                .map_or(options.verifier.delta, |v| {
+                    v.delta.min(options.verifier.delta)
+                });
+            let blended = execution_plan.blended::<J, BLENDED_SEGMENTS>(
+                space,
+                validity,
+                &BlendOptions::for_resolution(resolution),
+            )?;
+            (
+                PlanTrajectory::Blended(Box::new(blended.trajectory)),
+                Some(blended.report),
+            )
+        }
+    };
+    let duration_s = rl_core::traj::Trajectory::duration(&trajectory);
+    let how = match &blend {
+        Some(r) => format!(
+            "blended through {} of {} interior waypoints ({} shrunk, stopped at {}), {:.2} s \
+             (stopping at every waypoint: {:.2} s), {} configurations checked",
+            r.blended(),
+            r.waypoints.len(),
+            r.shrunk(),
+            r.stopped(),
+            r.duration_s,
+            r.stop_duration_s,
+            r.checks
+        ),
+        None => format!("stopping at every waypoint, {duration_s:.2} s"),
+    };
     let description = format!(
         "planned path by {} (seed {}) in {:.1} ms: {} waypoints, {:.3} rad long, at {:.0} % of \
-         the speed limits",
+         the speed limits, {how}",
         result.planner,
         options.seed,
         (result.planning_time + result.optimization_time).as_secs_f64() * 1e3,
-        execution.waypoints().len(),
+        execution_plan.waypoints().len(),
         result.length_after,
         speed * 100.0
     );
     Ok(PlannedMotion {
         motion: Motion::trajectory(trajectory, "plan", description),
-        waypoints: execution.waypoints().to_vec(),
+        waypoints: execution_plan.waypoints().to_vec(),
         result,
         duration_s,
+        execution,
+        stop_duration_s,
+        blend,
     })
 }

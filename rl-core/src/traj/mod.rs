@@ -12,6 +12,8 @@
 //!   jerk-limited profile ([`JerkLimited`], Biagiotti & Melchiorri 2008, §3.4).
 //! - Rotations ([`RotationTrajectory`]): slerp, a jerk-limited rotation at rest and a cubic
 //!   quaternion spline, with world-frame angular velocity and acceleration.
+//! - [`Segment`]: a jerk-limited move or a polynomial, so one [`Piecewise`] can mix both
+//!   (stop at some waypoints, blend through others).
 //! - [`Circular`] arcs in 2-D and 3-D with derivatives of every order, and Cartesian
 //!   [`PoseTrajectory`] = position + rotation.
 //!
@@ -49,6 +51,7 @@ mod piecewise;
 mod polynomial;
 mod quaternion_spline;
 mod roots;
+mod segment;
 pub mod spline;
 
 pub use blend::{BlendShape, BlendTime};
@@ -61,6 +64,7 @@ pub use polynomial::{Extrema, Limits, Polynomial};
 pub use quaternion_spline::{
     CubicQuaternionSpline, RotationSample, RotationTrajectory, SlerpTrajectory,
 };
+pub use segment::Segment;
 
 /// Position, velocity, acceleration and jerk of every axis at one time.
 #[derive(Clone, Copy, Debug, PartialEq)]
