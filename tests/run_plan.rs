@@ -284,6 +284,16 @@ fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
     }
     let description = v["trajectory"].as_str().expect("trajectory description");
     assert!(description.contains("blended through"), "{description}");
+    // Certified on the meshes by conservative advancement, not only at samples.
+    assert!(
+        description.contains("certified on the exact geometry"),
+        "{description}"
+    );
+    assert!(plan["certified"]["steps"].as_u64().unwrap() > 0, "{v}");
+    assert!(
+        plan["certified"]["min_distance"].as_f64().unwrap() > 0.0,
+        "{v}"
+    );
     assert!(
         description.contains("stopping at every waypoint: "),
         "{description}"
@@ -318,6 +328,7 @@ fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
         .find(|l| l.contains("trajectory (plan): planned path by"))
         .unwrap_or_else(|| panic!("no trajectory line:\n{stdout}"));
     assert!(line.contains("stopping at every waypoint"), "{line}");
+    assert!(line.contains("certified on the exact geometry"), "{line}");
     assert!(!stdout.contains("blended through"), "{stdout}");
     let bound: Vec<f64> = stdout
         .lines()

@@ -502,7 +502,7 @@ fn drive<const B: usize, const J: usize>(
             plan_note = Some(format!(
                 "plan: solved by {} in {:.1} µs ({} iterations, {} collision checks), path {:.3} \
                  rad shortened to {:.3} rad in {:.1} µs, {} waypoints, trajectory {:.2} s {} \
-                 (stopping at every waypoint: {:.2} s)",
+                 (stopping at every waypoint: {:.2} s), {}",
                 r.planner,
                 r.planning_time.as_secs_f64() * 1e6,
                 r.iterations,
@@ -513,12 +513,25 @@ fn drive<const B: usize, const J: usize>(
                 planned.waypoints.len(),
                 planned.duration_s,
                 planned.execution,
-                planned.stop_duration_s
+                planned.stop_duration_s,
+                match &planned.certificate {
+                    Some(c) => format!(
+                        "certified on the meshes ({} steps{})",
+                        c.steps,
+                        match planned.refused.len() {
+                            0 => String::new(),
+                            n => format!(", after {n} seed(s) refused"),
+                        }
+                    ),
+                    None => "not certified (the checker has no exact geometry)".to_owned(),
+                }
             ));
             plan_json = Some(serde_json::json!({
                 "solved": r.solved,
                 "planner": r.planner,
-                "seed": p.common.seed,
+                // The seed of the path followed (seeds whose paths were not certified are
+                // skipped: "seeds_refused").
+                "seed": p.common.seed.wrapping_add(planned.refused.len() as u64),
                 "scene": p.scene.display().to_string(),
                 "request": p.request.display().to_string(),
                 "planning_time_us": r.planning_time.as_secs_f64() * 1e6,
@@ -546,6 +559,14 @@ fn drive<const B: usize, const J: usize>(
                     "collision_checks": b.checks,
                     "check_step": b.check_step,
                 })),
+                "certified": planned.certificate.as_ref().map(|c| serde_json::json!({
+                    "steps": c.steps,
+                    "min_distance": c.min_distance,
+                })),
+                "seeds_refused": planned.refused.iter().map(|(seed, why)| serde_json::json!({
+                    "seed": seed,
+                    "reason": why,
+                })).collect::<Vec<_>>(),
             }));
             (planned.motion, Some(start))
         }

@@ -20,6 +20,16 @@
 //! through configurations the planner checked. The description (the run's report) says which,
 //! how many waypoints were blended and both durations.
 //!
+//! Sampling, however fine, can step over an obstacle. So before it is handed to the controller
+//! the motion is certified on the checker's exact geometry by conservative advancement
+//! ([`rl_plan::scene`]'s `certify_*`: nothing comes within the margin anywhere along it, not
+//! only at samples): the blended trajectory over time within its speed limits, the
+//! stop-at-waypoints one along its straight edges. A blended trajectory that is not certified
+//! is replaced by the stop-at-waypoints one if that is; a path that is not certified is planned
+//! again with the next seed, up to [`CERTIFY_ATTEMPTS`] times, then refused
+//! ([`PlannedMotionError::Uncertified`]). A checker without exact geometry (the sphere checker)
+//! certifies nothing, and the description says so.
+//!
 //! ```no_run
 //! use std::path::Path;
 //! use rl::controller::{ControlRun, RunOptions, planned};
@@ -54,6 +64,7 @@ use core::fmt;
 use rl_core::Model;
 use rl_plan::budget::Cancel;
 use rl_plan::execute::{BlendOptions, BlendReport, Execution, ExecutionLimits};
+use rl_plan::scene::{Certificate, CertifyOptions, Uncertified};
 use rl_plan::solve::plan_cancellable;
 use rl_plan::{JointSpace, PlanOptions, PlanResult, Validity};
 use rl_rt::StopFlag;
@@ -87,6 +98,12 @@ pub enum PlannedMotionError {
     Limits(PlanError),
     /// A stop was requested while planning.
     Cancelled,
+    /// No planned path could be certified collision-free on the exact geometry (seeds tried,
+    /// and why each was refused).
+    Uncertified {
+        /// `(seed, the first edge or time not certified and why)` per attempt.
+        attempts: Vec<(u64, String)>,
+    },
 }
 
 impl fmt::Display for PlannedMotionError {
@@ -108,6 +125,19 @@ impl fmt::Display for PlannedMotionError {
             ),
             Self::Limits(e) => write!(f, "{e}"),
             Self::Cancelled => f.write_str("planning was cancelled by a stop request"),
+            Self::Uncertified { attempts } => {
+                write!(
+                    f,
+                    "no planned path could be certified collision-free on the exact geometry in \
+                     {} attempts (",
+                    attempts.len()
+                )?;
+                for (k, (seed, why)) in attempts.iter().enumerate() {
+                    let sep = if k == 0 { "" } else { "; " };
+                    write!(f, "{sep}seed {seed}: {why}")?;
+                }
+                f.write_str("): give the robot more room, or another seed or planner")
+            }
         }
     }
 }
@@ -162,6 +192,19 @@ pub struct PlannedMotion<const J: usize> {
     pub stop_duration_s: f64,
     /// For [`PathExecution::Blended`]: waypoints blended and stopped at, the collision check.
     pub blend: Option<BlendReport>,
+    /// The certificate of the motion followed (`None`: the checker has no exact geometry).
+    pub certificate: Option<Certificate>,
+    /// Earlier attempts refused as not certified: `(seed, why)`.
+    pub refused: Vec<(u64, String)>,
+}
+
+/// Seeds tried before a path that cannot be certified is refused.
+pub const CERTIFY_ATTEMPTS: u64 = 3;
+
+/// What one planning attempt gave.
+enum Attempt<const J: usize> {
+    Done(Box<PlannedMotion<J>>),
+    Uncertified(String),
 }
 
 /// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
@@ -218,7 +261,48 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
     let cancel = stop
         .cloned()
         .map(|s| Cancel::when(move || s.is_stop_requested()));
-    let result = plan_cancellable(space, validity, start, goal, options, cancel.as_ref())?;
+    let mut opts = options.clone();
+    let mut refused = Vec::new();
+    for _ in 0..CERTIFY_ATTEMPTS {
+        let attempt = plan_once(
+            model,
+            space,
+            validity,
+            (start, goal),
+            &opts,
+            speed,
+            cancel.as_ref(),
+            execution,
+            &limits,
+        )?;
+        match attempt {
+            Attempt::Done(mut m) => {
+                m.refused = refused;
+                return Ok(*m);
+            }
+            Attempt::Uncertified(why) => {
+                refused.push((opts.seed, why));
+                opts.seed = opts.seed.wrapping_add(1);
+            }
+        }
+    }
+    Err(PlannedMotionError::Uncertified { attempts: refused })
+}
+
+/// One planning attempt with `options`' seed: plan, make the trajectory, certify it.
+#[allow(clippy::too_many_arguments)]
+fn plan_once<const B: usize, const J: usize>(
+    model: &Model<B>,
+    space: &JointSpace,
+    validity: &mut dyn Validity,
+    (start, goal): (&[f64], &[f64]),
+    options: &PlanOptions,
+    speed: f64,
+    cancel: Option<&Cancel>,
+    execution: PathExecution,
+    limits: &MotionLimits<J>,
+) -> Result<Attempt<J>, PlannedMotionError> {
+    let result = plan_cancellable(space, validity, start, goal, options, cancel)?;
     let Some(path) = result.optimized.as_ref() else {
         return Err(PlannedMotionError::NotSolved {
             planner: result.planner.to_owned(),
@@ -238,8 +322,25 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
     )?;
     let moves = Box::new(execution_plan.trajectory::<J, { MAX_WAYPOINTS + 1 }>()?);
     let stop_duration_s = rl_core::traj::Trajectory::duration(&*moves);
-    let (trajectory, blend) = match execution {
-        PathExecution::StopAtWaypoints => (PlanTrajectory::Moves(moves), None),
+    let certify = CertifyOptions::default();
+    // The path's straight edges: what the stop-at-waypoints execution follows.
+    let path_certificate = match validity.exact_checker() {
+        None => None,
+        Some(exact) => {
+            let c = exact.certify_path(path, &certify)?;
+            if let Some((edge, why)) = &c.failure {
+                return Ok(Attempt::Uncertified(format!("edge {edge}: {why}")));
+            }
+            Some(Certificate {
+                steps: c.steps,
+                min_distance: c.min_distance,
+            })
+        }
+    };
+    let (trajectory, blend, certificate, fell_back) = match execution {
+        PathExecution::StopAtWaypoints => {
+            (PlanTrajectory::Moves(moves), None, path_certificate, None)
+        }
         PathExecution::Blended => {
             // The planner's collision resolution (the finer of planning and optimising).
             let resolution = options
@@ -252,10 +353,19 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
                 validity,
                 &BlendOptions::for_resolution(resolution),
             )?;
-            (
-                PlanTrajectory::Blended(Box::new(blended.trajectory)),
-                Some(blended.report),
-            )
+            let trajectory = PlanTrajectory::Blended(Box::new(blended.trajectory));
+            match certify_trajectory(validity, space, &trajectory, &limits.velocity[..dof])? {
+                // Certified, or nothing to certify it with.
+                Ok(c) => (trajectory, Some(blended.report), c, None),
+                // The blends leave the certified straight edges somewhere they should not:
+                // stop at every waypoint instead.
+                Err(why) => (
+                    PlanTrajectory::Moves(moves),
+                    Some(blended.report),
+                    path_certificate,
+                    Some(why.to_string()),
+                ),
+            }
         }
     };
     let duration_s = rl_core::traj::Trajectory::duration(&trajectory);
@@ -273,9 +383,24 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
         ),
         None => format!("stopping at every waypoint, {duration_s:.2} s"),
     };
+    let how = match &fell_back {
+        Some(why) => format!(
+            "stopping at every waypoint, {duration_s:.2} s (the blended trajectory was not \
+             certified: {why})"
+        ),
+        None => how,
+    };
+    let certified = match &certificate {
+        Some(c) => format!(
+            "certified on the exact geometry ({} steps: clear by at least {:.0} µm everywhere)",
+            c.steps,
+            certify.margin * 0.5e6
+        ),
+        None => "not certified (the checker has no exact geometry)".to_owned(),
+    };
     let description = format!(
         "planned path by {} (seed {}) in {:.1} ms: {} waypoints, {:.3} rad long, at {:.0} % of \
-         the speed limits, {how}",
+         the speed limits, {how}, {certified}",
         result.planner,
         options.seed,
         (result.planning_time + result.optimization_time).as_secs_f64() * 1e3,
@@ -283,7 +408,12 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
         result.length_after,
         speed * 100.0
     );
-    Ok(PlannedMotion {
+    let execution = if fell_back.is_some() {
+        PathExecution::StopAtWaypoints
+    } else {
+        execution
+    };
+    Ok(Attempt::Done(Box::new(PlannedMotion {
         motion: Motion::trajectory(trajectory, "plan", description),
         waypoints: execution_plan.waypoints().to_vec(),
         result,
@@ -291,5 +421,29 @@ pub fn plan_motion_with<const B: usize, const J: usize>(
         execution,
         stop_duration_s,
         blend,
-    })
+        certificate,
+        refused: Vec::new(),
+    })))
+}
+
+/// Certifies `trajectory` (within `speed`, rad/s or m/s per joint) on `validity`'s exact
+/// geometry: `Ok(Ok(None))` when there is none to certify with.
+fn certify_trajectory<const J: usize>(
+    validity: &mut dyn Validity,
+    space: &JointSpace,
+    trajectory: &PlanTrajectory<J>,
+    speed: &[f64],
+) -> Result<Result<Option<Certificate>, Uncertified>, PlannedMotionError> {
+    use rl_core::traj::Trajectory;
+    let Some(exact) = validity.exact_checker() else {
+        return Ok(Ok(None));
+    };
+    let n = space.nq();
+    let duration = trajectory.duration();
+    let c = exact.certify_motion(duration, speed, &CertifyOptions::default(), |t, q| {
+        q.copy_from_slice(&trajectory.position(t)[..n]);
+        // Circle joints are unwrapped along the trajectory.
+        space.normalize(q);
+    })?;
+    Ok(c.map(Some))
 }
