@@ -776,7 +776,10 @@ impl MitsubishiH7 {
             .map(|(c, _)| c);
         self.behind = false;
         let sent = held.unwrap_or(self.c_count);
-        if held.is_none() {
+        if held.is_some() {
+            // Counted here: its reply may already be waiting below.
+            self.counters.held += 1;
+        } else {
             let [t0, t1, t2, t3] = self.config.feedback;
             self.request.recv_type = t0;
             self.request.recv_type1 = t1;
@@ -816,9 +819,7 @@ impl MitsubishiH7 {
             }
         }
         let sent_at = Instant::now();
-        if held.is_some() {
-            self.counters.held += 1;
-        } else {
+        if held.is_none() {
             let tx = self.tx;
             self.udp(OP)?.send(&tx).map_err(|e| Error::io(OP, &e))?;
             self.counters.sent += 1;

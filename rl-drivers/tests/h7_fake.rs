@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use rl_core::model::ROOT;
 use rl_core::spatial::PlueckerTransform;
-use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, ForwardKinematics};
+use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, ForwardKinematics, Pacing};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::h7::{Command, DataView, Mode, MxtType, PACKET_LEN, Packet};
 use rl_drivers::{CartesianPositionSensor, CyclicDevice, Device, JointPositionActuator};
@@ -189,6 +189,10 @@ fn pose_replies_come_from_forward_kinematics() {
     config.kinematics = Some(ForwardKinematics::from_model(loaded.model, body, placement));
     // The arm follows its command at once (no servo lag): the pose after three cycles is exact.
     config.servo_time_constant_s = 0.0;
+    // The arm's model is under test, not the cycle: replies as packets come (back-to-back steps
+    // on the controller's cycle each wait almost a whole period, at the edge of the reply
+    // timeout on a slow or emulated machine).
+    config.pacing = Pacing::Immediate;
     let (fake, mut robot, _socket) = running_fake(config);
     let q = [0.4, -1.1];
     robot.set_joint_position(&q).unwrap();
