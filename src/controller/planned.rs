@@ -323,24 +323,11 @@ fn plan_once<const B: usize, const J: usize>(
     let moves = Box::new(execution_plan.trajectory::<J, { MAX_WAYPOINTS + 1 }>()?);
     let stop_duration_s = rl_core::traj::Trajectory::duration(&*moves);
     let certify = CertifyOptions::default();
-    // The path's straight edges: what the stop-at-waypoints execution follows.
-    let path_certificate = match validity.exact_checker() {
-        None => None,
-        Some(exact) => {
-            let c = exact.certify_path(path, &certify)?;
-            if let Some((edge, why)) = &c.failure {
-                return Ok(Attempt::Uncertified(format!("edge {edge}: {why}")));
-            }
-            Some(Certificate {
-                steps: c.steps,
-                min_distance: c.min_distance,
-            })
-        }
-    };
     let (trajectory, blend, certificate, fell_back) = match execution {
-        PathExecution::StopAtWaypoints => {
-            (PlanTrajectory::Moves(moves), None, path_certificate, None)
-        }
+        PathExecution::StopAtWaypoints => match certify_edges(validity, path, &certify)? {
+            Ok(c) => (PlanTrajectory::Moves(moves), None, c, None),
+            Err(why) => return Ok(Attempt::Uncertified(why)),
+        },
         PathExecution::Blended => {
             // The planner's collision resolution (the finer of planning and optimising).
             let resolution = options
@@ -357,14 +344,18 @@ fn plan_once<const B: usize, const J: usize>(
             match certify_trajectory(validity, space, &trajectory, &limits.velocity[..dof])? {
                 // Certified, or nothing to certify it with.
                 Ok(c) => (trajectory, Some(blended.report), c, None),
-                // The blends leave the certified straight edges somewhere they should not:
-                // stop at every waypoint instead.
-                Err(why) => (
-                    PlanTrajectory::Moves(moves),
-                    Some(blended.report),
-                    path_certificate,
-                    Some(why.to_string()),
-                ),
+                // The blends leave the straight edges somewhere they should not: stop at every
+                // waypoint instead, if the edges themselves are certified (only then are they
+                // measured: a certified blended trajectory needs nothing else).
+                Err(why) => match certify_edges(validity, path, &certify)? {
+                    Ok(c) => (
+                        PlanTrajectory::Moves(moves),
+                        Some(blended.report),
+                        c,
+                        Some(why.to_string()),
+                    ),
+                    Err(path_why) => return Ok(Attempt::Uncertified(path_why)),
+                },
             }
         }
     };
@@ -424,6 +415,27 @@ fn plan_once<const B: usize, const J: usize>(
         certificate,
         refused: Vec::new(),
     })))
+}
+
+/// Certifies the straight edges of `path` (what the stop-at-waypoints execution follows) on
+/// `validity`'s exact geometry: `Ok(Ok(None))` when there is none to certify with, `Ok(Err)`
+/// with the first edge not certified and why.
+fn certify_edges(
+    validity: &mut dyn Validity,
+    path: &rl_plan::Path,
+    options: &CertifyOptions,
+) -> Result<Result<Option<Certificate>, String>, PlannedMotionError> {
+    let Some(exact) = validity.exact_checker() else {
+        return Ok(Ok(None));
+    };
+    let c = exact.certify_path(path, options)?;
+    Ok(match &c.failure {
+        Some((edge, why)) => Err(format!("edge {edge}: {why}")),
+        None => Ok(Some(Certificate {
+            steps: c.steps,
+            min_distance: c.min_distance,
+        })),
+    })
 }
 
 /// Certifies `trajectory` (within `speed`, rad/s or m/s per joint) on `validity`'s exact
