@@ -1,7 +1,8 @@
 //! `rl plan` and `rl plan bench` end to end on the committed MotionBenchMaker fixtures and RL's
 //! scenarios: the JSON, the path CSV (header of joint names, rows within the joint limits, start
 //! and goal as the request says), the trajectory CSV (within the speed limits), OMPL's log
-//! format and RL's CSV, and errors that name the argument.
+//! format and RL's CSV (read back by OMPL's own `ompl_benchmark_statistics`), and errors that
+//! name the argument.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -248,6 +249,150 @@ fn bench_writes_ompl_logs_and_rl_csv() {
         rows.iter()
             .all(|r| r.len() == h.len() && r[2] == "true" && r[3] == "SPHERES")
     );
+    // "Free CD" counts the collision-free ones among "Total CD" (both while planning).
+    assert_eq!((&h[9][..], &h[10][..]), ("Total CD", "Free CD"));
+    for r in &rows {
+        let (total, free): (u64, u64) = (r[9].parse().unwrap(), r[10].parse().unwrap());
+        assert!(free <= total && total > 0, "{r:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// OMPL's own `ompl_benchmark_statistics` (PyPI `ompl`, installed by scripts/test into
+/// target/ompl-venv) turns our logs into the SQLite database Planner Arena reads; every run's
+/// values must come back as RL's CSV of the same bench has them.
+#[test]
+fn ompl_benchmark_statistics_reads_the_logs() {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/ompl-venv/bin");
+    let (tool, python) = (venv.join("ompl_benchmark_statistics"), venv.join("python"));
+    if !tool.exists() {
+        println!(
+            "SKIPPED: OMPL's ompl_benchmark_statistics not in {} (scripts/test installs it)",
+            venv.display()
+        );
+        return;
+    }
+    let dir = tmp("ompl");
+    let o = rl(&[
+        "plan",
+        "bench",
+        data("mbm/panda/problems").to_str().unwrap(),
+        "--checker",
+        "spheres",
+        "--raw-spheres",
+        "--runs",
+        "2",
+        "--fine-check",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "log"))
+        .collect();
+    logs.sort();
+    let db = dir.join("benchmark.db");
+    let o = Command::new(&tool)
+        .arg("-v")
+        .arg("-d")
+        .arg(&db)
+        .args(&logs)
+        .output()
+        .expect("run ompl_benchmark_statistics");
+    assert!(
+        o.status.success(),
+        "OMPL refused our logs:\n{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // The database as JSON, through the venv's Python (its sqlite3 module).
+    const DUMP: &str = r#"
+import json, sqlite3, sys
+c = sqlite3.connect(sys.argv[1])
+c.row_factory = sqlite3.Row
+# Reals as Python's shortest round-trip text (serde_json's float parsing is best effort).
+real = lambda v: repr(v) if isinstance(v, float) else v
+q = lambda s: [{k: real(r[k]) for k in r.keys()} for r in c.execute(s)]
+print(json.dumps({
+    "experiments": q("select * from experiments order by id"),
+    "runs": q("select runs.*, plannerConfigs.name as planner from runs "
+              "join plannerConfigs on runs.plannerid = plannerConfigs.id order by runs.id"),
+    "status": q("select * from enums where name = 'status' order by value"),
+}))
+"#;
+    let o = Command::new(&python)
+        .args(["-c", DUMP])
+        .arg(&db)
+        .output()
+        .expect("run python");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let db: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let experiments = db["experiments"].as_array().unwrap();
+    let runs = db["runs"].as_array().unwrap();
+    assert_eq!((experiments.len(), runs.len()), (7, 14));
+    let status: Vec<&str> = db["status"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["description"].as_str().unwrap())
+        .collect();
+    assert_eq!(status[6], "Exact solution", "{status:?}");
+
+    let text = std::fs::read_to_string(dir.join("benchmark.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| h.trim() == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 14);
+    for row in &rows {
+        let problem = row[col("Problem")];
+        let k: usize = row[col("Run")].parse().unwrap();
+        // OMPL numbers experiments from 1 in the order of the logs given; runs follow.
+        let e = experiments
+            .iter()
+            .position(|e| e["name"] == problem)
+            .unwrap_or_else(|| panic!("{problem} not in OMPL's experiments"));
+        assert_eq!(experiments[e]["runcount"], 2);
+        assert_eq!(experiments[e]["timelimit"], "1.0");
+        assert_eq!(
+            experiments[e]["version"],
+            concat!("rl-rs ", env!("CARGO_PKG_VERSION"))
+        );
+        let eid = experiments[e]["id"].as_i64().unwrap();
+        let mine: Vec<&Value> = runs.iter().filter(|r| r["experimentid"] == eid).collect();
+        let run = mine[k];
+        let num = |name: &str| row[col(name)].parse::<f64>().unwrap();
+        let at = |key: &str| match &run[key] {
+            Value::String(x) => x.parse::<f64>().unwrap(),
+            Value::Number(n) => n.as_f64().unwrap(),
+            v => panic!("{problem} run {k}: {key} is {v}"),
+        };
+        assert_eq!(run["planner"], row[col("Planner")].replace(' ', "_"));
+        assert_eq!(run["solved"], 1);
+        assert_eq!(run["status"], 6);
+        assert_eq!(run["approximate_solution"], 0);
+        // Times: the log's and the CSV's decimal renderings of the same duration.
+        assert!((at("time") - num("Duration (s)")).abs() < 1e-9, "{run}");
+        assert!((at("simplification_time") - num("Optimization Duration (s)")).abs() < 1e-9);
+        assert_eq!(at("solution_length"), num("Path Length"));
+        assert_eq!(
+            at("simplified_solution_length"),
+            num("Optimized Path Length")
+        );
+        assert_eq!(at("graph_states"), num("Vertices"));
+        assert_eq!(at("graph_motions"), num("Edges"));
+        assert_eq!(at("iterations"), num("Iterations"));
+        assert_eq!(at("collision_checks"), num("Total CD"));
+        let fine = row[col("Fine Check")];
+        assert_eq!(
+            fine == "valid",
+            run["simplified_correct_solution_strict"] == 1,
+            "{run}"
+        );
+        assert!(at("solution_segments") >= at("simplified_solution_segments"));
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -76,6 +76,8 @@ pub struct PlanResult {
     pub edges: usize,
     /// Configurations checked while planning.
     pub planning_checks: u64,
+    /// Of those, the ones found collision-free (RL's "Free CD").
+    pub planning_free_checks: u64,
     /// Configurations checked while optimising.
     pub optimization_checks: u64,
     /// Length of the planner's path (NaN when not solved).
@@ -98,6 +100,7 @@ impl PlanResult {
             vertices: 0,
             edges: 0,
             planning_checks: 0,
+            planning_free_checks: 0,
             optimization_checks: 0,
             length_before: f64::NAN,
             length_after: f64::NAN,
@@ -179,7 +182,7 @@ pub fn plan_cancellable(
     check_endpoint(space, validity, "goal", goal)?;
     let mut planner = options.planner.build(space)?;
     let sampler = options.sampler.build(space, options.seed);
-    let checks0 = validity.checks();
+    let (checks0, free0) = (validity.checks(), validity.free_checks());
     let t0 = Instant::now();
     let mut ctx = Context::new(
         space,
@@ -201,6 +204,7 @@ pub fn plan_cancellable(
     };
     let planning_time = t0.elapsed();
     let planning_checks = ctx.validity.checks() - checks0;
+    let planning_free_checks = ctx.validity.free_checks() - free0;
     let mut result = PlanResult {
         planner: planner.name(),
         solved: path.is_some(),
@@ -211,6 +215,7 @@ pub fn plan_cancellable(
         vertices: stats.vertices,
         edges: stats.edges,
         planning_checks,
+        planning_free_checks,
         optimization_checks: 0,
         length_before: f64::NAN,
         length_after: f64::NAN,

@@ -32,8 +32,6 @@ pub struct Run {
     pub valid: bool,
     /// What the planner did (for valid problems).
     pub result: Option<PlanResult>,
-    /// Configurations the checker passed while planning.
-    pub free_checks: u64,
     /// The independent check of the optimised path, if one ran: `Some(true)` when the exact
     /// geometry found no collision at the fine resolution.
     pub fine_valid: Option<bool>,
@@ -74,7 +72,7 @@ pub fn write_rl_csv(out: &mut dyn Write, runs: &[Run], engine: &str) -> std::io:
             res.vertices,
             res.edges,
             res.planning_checks,
-            r.free_checks,
+            res.planning_free_checks,
             res.planning_time.as_secs_f64(),
             len(res.length_before),
             r.problem,

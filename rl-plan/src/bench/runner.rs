@@ -79,7 +79,6 @@ pub fn run_mbm(
                 nn: format!("{nn:?}"),
                 valid,
                 result: None,
-                free_checks: 0,
                 fine_valid: None,
                 time_limit: options.plan.time,
             };
@@ -90,14 +89,12 @@ pub fn run_mbm(
                     Some(f) => f.as_mut(),
                     None => &mut exact,
                 };
-                let free0 = checker.free_checks();
                 let t0 = Instant::now();
                 let result = match plan(&robot.space, checker, &start, &goal, &opts) {
                     Ok(r) => r,
                     Err(PlanError::InvalidEndpoint { .. }) => PlanResult::unsolved(t0.elapsed()),
                     Err(e) => return Err(e),
                 };
-                run.free_checks = checker.free_checks() - free0;
                 if let (Some(factor), Some(path)) = (options.fine_check, &result.optimized) {
                     let fine = Verifier::sequential(opts.verifier.delta / factor);
                     run.fine_valid = Some(path_valid(&robot.space, &mut exact, path, &fine));
