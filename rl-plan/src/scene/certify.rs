@@ -32,8 +32,13 @@
 //!   speeds `|Δ|`.
 //!
 //! Dimensions: `Δ` rad or m, `v` rad/s or m/s, `λ` m/rad (1 for prismatic joints), `B` m (m/s
-//! in time), `d`, `η` m, `s` 1 (or s). Joints other than revolute and prismatic (and spaces with
-//! rotations) are refused.
+//! in time), `d`, `η` m, `s` 1 (or s).
+//! - Rotations (spherical and six-DOF joints, slerp in the space): a rotation by the angle `θ`
+//!   about the joint's origin moves a point at most `θ` times its distance to that origin, so
+//!   `λ = Rᵢ + Lⱼₖ` with `|Δⱼ| = θ = 2·acos |⟨a, b⟩|` (slerp turns at a constant rate about one
+//!   axis); a six-DOF joint's translation adds `|Δx| + |Δy| + |Δz|` (its origin moves on a
+//!   line) and, for the bodies below it, its largest reach to `L`. Other joints (helical,
+//!   cylindrical, planar) are refused.
 
 use std::fmt;
 
@@ -154,11 +159,6 @@ pub(super) struct MotionBounds {
 impl MotionBounds {
     /// The bounds of `v`'s robot: `Err` for a joint type the bound does not cover.
     pub(super) fn new(v: &SceneValidity) -> Result<Self, PlanError> {
-        if !v.space.is_vector() {
-            return Err(PlanError::Unsupported(
-                "certified edges need a space without rotations".into(),
-            ));
-        }
         let model = &v.kinematics;
         let sg = v
             .scene
@@ -183,6 +183,27 @@ impl MotionBounds {
                 model.joint_position(j, &q).map_or(f64::INFINITY, f64::abs)
             };
             at(lo).max(at(hi))
+        };
+        // Travel of a six-DOF joint's origin: the largest |(x, y, z)| within the space's bounds.
+        let reach = |j: usize| -> f64 {
+            let i = model.q_index(j);
+            (i..i + 3)
+                .map(|k| {
+                    v.space
+                        .coordinates()
+                        .iter()
+                        .find(|c| c.offset == k)
+                        .and_then(|c| match c.topology {
+                            crate::space::Topology::Interval { lower, upper } => {
+                                Some(lower.abs().max(upper.abs()))
+                            }
+                            _ => None,
+                        })
+                        .unwrap_or(f64::INFINITY)
+                        .powi(2)
+                })
+                .sum::<f64>()
+                .sqrt()
         };
         // |d joint / d coordinate|: the mimic multiplier (1 for a joint of its own).
         let rate = |j: usize| -> f64 {
@@ -227,9 +248,20 @@ impl MotionBounds {
                         chain.push((model.q_index(j), rate(j)));
                         length += travel(j);
                     }
+                    // A rotation about the joint's origin by the angle θ that the rotation
+                    // coordinate's slot holds (see `rotation_angles`).
+                    Joint::Spherical(_) => chain.push((model.q_index(j), radius + length)),
+                    // p = t + R·x: the origin's translation (|Δt| ≤ |Δx| + |Δy| + |Δz|), then a
+                    // rotation about it.
+                    Joint::SixDof(_) => {
+                        let i = model.q_index(j);
+                        chain.extend([(i, 1.0), (i + 1, 1.0), (i + 2, 1.0)]);
+                        chain.push((i + 3, radius + length));
+                        length += reach(j);
+                    }
                     other => {
                         return Err(PlanError::Unsupported(format!(
-                            "certified edges cover revolute and prismatic joints, not joint \"{}\" ({other:?})",
+                            "certified edges cover revolute, prismatic, spherical and six-DOF joints, not joint \"{}\" ({other:?})",
                             model.joint_name(j)
                         )));
                     }
@@ -260,6 +292,21 @@ impl MotionBounds {
     }
 }
 
+/// Writes into the first slot of each rotation coordinate of `speed` the angle `θ` (rad) of the
+/// rotation from `a`'s quaternion to `b`'s along the geodesic the space interpolates on (the
+/// shorter way: `θ = 2·acos |⟨a, b⟩|`), and zeroes the other three slots, which the bounds do
+/// not read.
+fn rotation_angles(space: &crate::space::JointSpace, a: &[f64], b: &[f64], speed: &mut [f64]) {
+    for c in space.coordinates() {
+        if c.topology == crate::space::Topology::Rotation {
+            let i = c.offset;
+            let dot: f64 = (i..i + 4).map(|k| a[k] * b[k]).sum();
+            speed[i] = 2.0 * dot.abs().min(1.0).acos();
+            speed[i + 1..i + 4].fill(0.0);
+        }
+    }
+}
+
 /// The gap between two axis-aligned boxes (0 when they overlap).
 fn box_gap(a: Option<(DVec3, DVec3)>, b: Option<(DVec3, DVec3)>) -> f64 {
     let (Some((alo, ahi)), Some((blo, bhi))) = (a, b) else {
@@ -287,6 +334,7 @@ impl SceneValidity {
         for v in &mut speed {
             *v = v.abs();
         }
+        rotation_angles(&self.space, a, b, &mut speed);
         let space = self.space.clone();
         self.certify_motion(1.0, &speed, options, |s, q| space.interpolate(a, b, s, q))
     }
@@ -323,7 +371,8 @@ impl SceneValidity {
 
     /// Certifies any motion `q(t)`, `t ∈ [0, duration]` (written by `position(t, q)`), along
     /// which coordinate `k` moves no faster than `speed[k]` (rad/s or m/s): a trajectory within
-    /// its velocity limits, a blend. The edge of [`SceneValidity::certify_edge`] is the motion of
+    /// its velocity limits, a blend. For a rotation (a quaternion over four slots) the first slot
+    /// bounds its angular speed (rad/s) and the other three are not read. The edge of [`SceneValidity::certify_edge`] is the motion of
     /// duration 1 at speeds `|b ⊖ a|`. `s` in the answer is the time `t`.
     pub fn certify_motion(
         &mut self,
