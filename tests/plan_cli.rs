@@ -143,6 +143,52 @@ fn plan_an_rl_scenario() {
 }
 
 #[test]
+fn plan_an_rl_scenario_with_a_free_flying_body() {
+    // RL's 6-D box in the maze: a six-DOF joint (translation and a quaternion). The path CSV has
+    // seven columns per waypoint, unit quaternions among them, and its edges (slerp) are
+    // certified on the exact geometry.
+    let scenario = data("rlplan/box-6d-300505_maze_prm.mdl.sixDof.xml");
+    let dir = tmp("box6d");
+    let out = dir.join("path.csv");
+    let o = rl(&[
+        "plan",
+        scenario.to_str().unwrap(),
+        "--seed",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], true, "{v}");
+    assert_eq!(v["planner"], "PRM");
+    let c = &v["certified"];
+    assert_eq!(c["certified"], true, "{c}");
+    assert!(
+        c["edges"].as_u64().unwrap() >= 1 && c["steps"].as_u64().unwrap() > 0,
+        "{c}"
+    );
+    let (header, rows) = csv(&out);
+    assert_eq!(header.len(), 7, "{header:?}");
+    assert_eq!(
+        &header[3..],
+        [
+            "joint0/rot/qx",
+            "joint0/rot/qy",
+            "joint0/rot/qz",
+            "joint0/rot/qw"
+        ]
+    );
+    // Unit quaternions (RL's file writes the start's to 8 digits: 0.70710678).
+    for r in &rows {
+        assert_eq!(r.len(), 7, "{r:?}");
+        let norm: f64 = r[3..7].iter().map(|x| x * x).sum();
+        assert!((norm - 1.0).abs() < 1e-7, "{r:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn plan_an_rl_scenario_with_rlkin_kinematics() {
     // RL's Mitsubishi RV-6SL among boxes names its Denavit–Hartenberg kinematics
     // (../rlkin/mitsubishi-rv6sl.xml), without a type attribute, as RL's own file does.

@@ -27,6 +27,33 @@ impl Path {
         p
     }
 
+    /// Writes the path as CSV: a header naming every number of a configuration
+    /// ([`JointSpace::number_names`]: joints, and a rotation's quaternion components), then
+    /// one row per waypoint (rad or m; quaternions `x, y, z, w`).
+    pub fn write_csv(
+        &self,
+        space: &JointSpace,
+        mut out: impl std::io::Write,
+    ) -> std::io::Result<()> {
+        let names = space.number_names();
+        if names.len() != self.nq {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "a path of {} numbers per waypoint for a space of {}",
+                    self.nq,
+                    names.len()
+                ),
+            ));
+        }
+        writeln!(out, "{}", names.join(","))?;
+        for q in self.points.chunks_exact(self.nq.max(1)) {
+            let row: Vec<String> = q.iter().map(|x| format!("{x}")).collect();
+            writeln!(out, "{}", row.join(","))?;
+        }
+        out.flush()
+    }
+
     /// Numbers per waypoint.
     pub fn nq(&self) -> usize {
         self.nq

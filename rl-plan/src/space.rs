@@ -266,6 +266,21 @@ impl JointSpace {
         &self.coordinates
     }
 
+    /// A name for each of the `nq` numbers of a configuration: the coordinate's name, and for a
+    /// rotation its quaternion's components (`NAME/qx`, `/qy`, `/qz`, `/qw`).
+    pub fn number_names(&self) -> Vec<String> {
+        let mut out = Vec::with_capacity(self.nq);
+        for c in &self.coordinates {
+            match c.topology {
+                Topology::Rotation => {
+                    out.extend(["qx", "qy", "qz", "qw"].map(|k| format!("{}/{k}", c.name)))
+                }
+                _ => out.push(c.name.clone()),
+            }
+        }
+        out
+    }
+
     /// The number of position numbers (`q.len()`).
     #[inline]
     pub fn nq(&self) -> usize {

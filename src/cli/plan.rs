@@ -278,7 +278,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     let is_scenario = std::fs::read_to_string(model)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
         .map_err(|e| usage(format!("{}: {e}", model.display())))?;
-    let (space, result, names, checker_name, certified) = if is_scenario {
+    let (space, result, checker_name, certified) = if is_scenario {
         let sc = Scenario::load(model).map_err(failed)?;
         let (mut space, mut checker) = sc.build().map_err(failed)?;
         override_limits(&mut space, &args.common)?;
@@ -289,8 +289,7 @@ pub fn run(args: PlanArgs) -> CliResult {
         }
         let r = plan(&space, &mut checker, &sc.start, &sc.goal, &opts).map_err(failed)?;
         let cert = certify(&args, &r, Some(&mut checker))?;
-        let names = names_of(&space);
-        (space, r, names, "exact", cert)
+        (space, r, "exact", cert)
     } else {
         let (scene, request) = match (&args.scene, &args.request) {
             (Some(s), Some(r)) => (s, r),
@@ -328,7 +327,6 @@ pub fn run(args: PlanArgs) -> CliResult {
                 (r, cert)
             }
         };
-        let names = names_of(&robot.space);
         let name = match args.common.checker {
             Checker::Hybrid => "hybrid",
             Checker::Spheres if args.common.raw_spheres => "spheres (raw)",
@@ -336,12 +334,13 @@ pub fn run(args: PlanArgs) -> CliResult {
             Checker::Exact => "exact",
         };
         if let (Some(t), Some(path)) = (&args.trajectory, &r.optimized) {
+            let names = robot.space.number_names();
             write_trajectory(t, &robot, path, args.speed, args.dt, &names)?;
         }
-        (robot.space, r, names, name, cert)
+        (robot.space, r, name, cert)
     };
     if let (Some(out), Some(path)) = (&args.out, &result.optimized) {
-        write_path(out, &names, path)?;
+        write_path(out, &space, path)?;
     }
     if args.trajectory.is_some() && is_scenario {
         eprintln!("rl plan: --trajectory is written for URDF robots only");
@@ -428,15 +427,9 @@ fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
         .map_err(|e| failed(format!("{}: {e}", path.display())))
 }
 
-fn write_path(out: &Path, names: &[String], path: &PlanPath) -> Result<(), CliError> {
-    let io = |e: std::io::Error| failed(format!("{}: {e}", out.display()));
-    let mut f = create(out)?;
-    writeln!(f, "{}", names.join(",")).map_err(io)?;
-    for i in 0..path.len() {
-        let row: Vec<String> = path.point(i).iter().map(|x| format!("{x}")).collect();
-        writeln!(f, "{}", row.join(",")).map_err(io)?;
-    }
-    f.flush().map_err(io)
+fn write_path(out: &Path, space: &JointSpace, path: &PlanPath) -> Result<(), CliError> {
+    path.write_csv(space, create(out)?)
+        .map_err(|e| failed(format!("{}: {e}", out.display())))
 }
 
 fn write_trajectory(
