@@ -10,8 +10,8 @@ use rl_core::Data;
 use rl_core::algo;
 use rl_core::joint::JointKind;
 use rl_core::loader::{
-    self, Format, InertiaCheck, JointOrder, LoadErrorKind, LoadOptions, LoadedModel, MimicJoints,
-    UrdfOptions,
+    self, Format, InertiaCheck, JointOrder, LoadError, LoadErrorKind, LoadOptions, LoadedModel,
+    MimicJoints, UrdfOptions,
 };
 use rl_core::model::ROOT;
 use rl_core::spatial::PlueckerTransform;
@@ -75,6 +75,20 @@ fn urdf_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
+/// The capacity for example-robot-data: its largest robots have over 64 bodies.
+const BIG: usize = 128;
+
+/// Hands what `load` returns to `check`, by reference. A `LoadedModel<BIG>` is about 100 KB and
+/// an unoptimised build gives every binding and temporary of it a stack slot of its own, so
+/// each load gets a frame of its own here instead of a slot in the caller's.
+fn inspect<T>(
+    load: impl FnOnce() -> Result<LoadedModel<BIG>, LoadError>,
+    check: impl FnOnce(Result<&LoadedModel<BIG>, &LoadError>) -> T,
+) -> T {
+    let r = load();
+    check(r.as_ref())
+}
+
 #[test]
 fn every_example_robot_data_urdf_with_supported_joints_loads() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -95,7 +109,6 @@ fn every_example_robot_data_urdf_with_supported_joints_loads() {
         files.len(),
         robots.display()
     );
-    const BIG: usize = 128;
     let (mut loaded, mut refused) = (0, 0);
     for f in &files {
         let rel = f
@@ -104,28 +117,41 @@ fn every_example_robot_data_urdf_with_supported_joints_loads() {
             .to_string_lossy()
             .into_owned();
         let expected = EXPECTED_FAILURES.iter().find(|(p, _)| *p == rel);
-        match (loader::load_file::<BIG>(f), expected) {
-            (Ok(m), None) => {
-                assert_eq!(m.format, Format::Urdf);
-                println!(
-                    "loads  {rel}: {} DOF, {} bodies, {} tools",
-                    m.model.dof(),
-                    m.model.body_count(),
-                    m.model.tools().len()
-                );
+        let outcome = inspect(
+            || loader::load_file::<BIG>(f),
+            |r| match r {
+                Ok(m) => {
+                    assert_eq!(m.format, Format::Urdf);
+                    println!(
+                        "loads  {rel}: {} DOF, {} bodies, {} tools",
+                        m.model.dof(),
+                        m.model.body_count(),
+                        m.model.tools().len()
+                    );
+                    Ok((m.model.dof(), m.model.nq()))
+                }
+                Err(e) => Err(e.to_string()),
+            },
+        );
+        match (outcome, expected) {
+            (Ok((dof, nq)), None) => {
                 // As a floating base too: six more DOF, seven more coordinates.
                 let opt = UrdfOptions {
                     floating_base: true,
                     ..UrdfOptions::default()
                 };
-                let fl = loader::load_file_with::<BIG>(f, &opt).unwrap();
-                assert_eq!(fl.model.dof(), m.model.dof() + 6, "{rel}");
-                assert_eq!(fl.model.nq(), m.model.nq() + 7, "{rel}");
-                assert_eq!(fl.model.joint_name(0), "root_joint");
+                inspect(
+                    || loader::load_file_with::<BIG>(f, &opt),
+                    |fl| {
+                        let fl = fl.unwrap();
+                        assert_eq!(fl.model.dof(), dof + 6, "{rel}");
+                        assert_eq!(fl.model.nq(), nq + 7, "{rel}");
+                        assert_eq!(fl.model.joint_name(0), "root_joint");
+                    },
+                );
                 loaded += 1;
             }
-            (Err(e), Some((_, why))) => {
-                let msg = e.to_string();
+            (Err(msg), Some((_, why))) => {
                 assert!(msg.contains(why), "{rel}: {msg}");
                 assert!(msg.contains(&*f.to_string_lossy()), "{msg}");
                 println!("refused {rel}: {msg}");
@@ -134,9 +160,13 @@ fn every_example_robot_data_urdf_with_supported_joints_loads() {
                         inertia: InertiaCheck::Lenient,
                         ..LoadOptions::default()
                     };
-                    let m =
-                        loader::load_file_options::<BIG>(f, &opt).unwrap_or_else(|e| panic!("{e}"));
-                    assert!(m.warnings.iter().any(|w| w.contains(why)));
+                    inspect(
+                        || loader::load_file_options::<BIG>(f, &opt),
+                        |m| {
+                            let m = m.unwrap_or_else(|e| panic!("{e}"));
+                            assert!(m.warnings.iter().any(|w| w.contains(why)));
+                        },
+                    );
                 }
                 if *why == "<mimic>" {
                     // Pinocchio's default: the coupled joint as an independent one.
@@ -144,14 +174,18 @@ fn every_example_robot_data_urdf_with_supported_joints_loads() {
                         mimic: MimicJoints::Independent,
                         ..Default::default()
                     };
-                    let m =
-                        loader::load_file_with::<BIG>(f, &opt).unwrap_or_else(|e| panic!("{e}"));
-                    assert!(m.warnings.iter().any(|w| w.contains("mimic")));
+                    inspect(
+                        || loader::load_file_with::<BIG>(f, &opt),
+                        |m| {
+                            let m = m.unwrap_or_else(|e| panic!("{e}"));
+                            assert!(m.warnings.iter().any(|w| w.contains("mimic")));
+                        },
+                    );
                 }
                 refused += 1;
             }
             (Ok(_), Some(_)) => panic!("{rel} loads now: take it off EXPECTED_FAILURES"),
-            (Err(e), None) => panic!("{rel} does not load: {e}"),
+            (Err(msg), None) => panic!("{rel} does not load: {msg}"),
         }
     }
     println!("{loaded} URDFs load, {refused} refused as expected");

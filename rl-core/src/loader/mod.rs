@@ -320,6 +320,11 @@ pub fn load_str_options<const N: usize>(
 
 /// Parses `text` and loads it as `format` (or by its root element), then adds the warnings
 /// about joints that move no mass.
+///
+/// The loaded value (a fixed-capacity [`Model`], about 0.8 KB per body of capacity) is written
+/// once into this function's result and amended in place: matching on it or passing it through
+/// `?` would copy it, and an unoptimised build keeps every such copy on the stack (over 1 MB
+/// at a capacity of 128, enough to overflow a 2 MiB thread).
 fn load_as<const N: usize>(
     text: &str,
     options: &LoadOptions,
@@ -336,11 +341,20 @@ fn load_as<const N: usize>(
             Format::Rlmdl
         }
     });
-    let mut loaded = match format {
-        Format::Urdf => urdf::from_document(root, options)?,
-        Format::Rlkin => rlkin::from_document(root, options)?,
-        Format::Rlmdl => rlmdl::from_document(root, options)?,
+    let mut result = match format {
+        Format::Urdf => urdf::from_document(root, options),
+        Format::Rlkin => rlkin::from_document(root, options),
+        Format::Rlmdl => rlmdl::from_document(root, options),
     };
+    if let Ok(loaded) = &mut result {
+        add_format_notes(loaded, format);
+    }
+    result
+}
+
+/// The warnings every load of `format` gets: rlkin's missing masses, or else the joints that
+/// move no mass.
+fn add_format_notes<const N: usize>(loaded: &mut LoadedModel<N>, format: Format) {
     if format == Format::Rlkin {
         // The format has no masses at all: one note instead of one per joint.
         loaded.warnings.push(
@@ -348,7 +362,7 @@ fn load_as<const N: usize>(
              (mass matrix, forward dynamics) are not defined for this model"
                 .into(),
         );
-        return Ok(loaded);
+        return;
     }
     for k in physical::massless_dofs(&loaded.model) {
         let b = loaded.model.dof_body(k);
@@ -359,7 +373,6 @@ fn load_as<const N: usize>(
             loaded.model.joint_name(b)
         ));
     }
-    Ok(loaded)
 }
 
 /// Loads RL's XML model format from `text`.

@@ -50,7 +50,6 @@
 //! number as 0, `<dh>` and its four parameters are required here, as RL's schema requires
 //! them.
 
-use std::collections::HashMap;
 use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
@@ -59,14 +58,14 @@ use glam::{DMat3, DVec3};
 use roxmltree::Node;
 
 use super::error::{LoadError, LoadErrorKind};
-use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Frame, assemble};
-use super::xml::{Lines, attr, child, child_xyz, children, elem, err, invalid, number, rot_zyx};
+use super::tree::{Edge, EdgeKind};
+use super::xml::rl::{self, DEG, Frames, Tree, limits, pose, position};
+use super::xml::{Lines, child, child_number, children, err, number};
 use super::{Format, LoadOptions, LoadedModel};
 use crate::joint::{Joint, MAX_JOINT_NV, Prismatic, Revolute};
-use crate::model::{JointLimits, ModelBuilder};
+use crate::model::JointLimits;
 use crate::spatial::PlueckerTransform;
 
-const DEG: f64 = core::f64::consts::PI / 180.0;
 /// The elements RL reads as a kinematic model, in the order of its XPath union.
 const INSTANCES: [&str; 3] = ["kinematics", "puma", "rhino"];
 const TRANSFORMS: [&str; 3] = ["transform", "revolute", "prismatic"];
@@ -83,19 +82,7 @@ pub(crate) fn is_rlkin(root: Node) -> bool {
 /// The model element (`<kinematics>`, `<puma>` or `<rhino>`) of an rlkin document, and whether
 /// it has more than one.
 pub(crate) fn instance<'a, 'i>(root: Node<'a, 'i>) -> Result<(Node<'a, 'i>, bool), LoadError> {
-    let container = match root.tag_name().name() {
-        "rlkin" => root,
-        "rl" => child(root, "kin")
-            .ok_or_else(|| err(root, LoadErrorKind::MissingElement { child: "kin" }))?,
-        tag => {
-            return Err(err(
-                root,
-                LoadErrorKind::UnknownFormat {
-                    root: tag.to_string(),
-                },
-            ));
-        }
-    };
+    let container = rl::container(root, "rlkin", "kin")?;
     let mut found = container
         .children()
         .filter(|n| n.is_element() && INSTANCES.contains(&n.tag_name().name()));
@@ -125,60 +112,19 @@ pub(crate) fn from_document<const N: usize>(
     let lines = Lines::new(root.document().input_text());
 
     // Frames: world, links and frames, by id.
-    let mut nodes: Vec<Frame> = Vec::new();
-    let mut index: HashMap<&str, usize> = HashMap::new();
     let mut links: Vec<Node> = Vec::new();
-    let mut world: Option<(usize, Node)> = None;
-    for n in kin.children().filter(|n| n.is_element()) {
-        let t = n.tag_name().name();
-        if t != "world" && t != "link" && t != "frame" {
-            continue;
-        }
-        let id = attr(n, "id")?;
-        if index.insert(id, nodes.len()).is_some() {
-            return Err(err(
-                n,
-                LoadErrorKind::DuplicateName {
-                    name: id.to_string(),
-                },
+    let frames = rl::frames(kin, ["link", "frame"], &lines, |n, id| {
+        if n.tag_name().name() == "link" {
+            links.push(n);
+        } else if pose(n)? != PlueckerTransform::IDENTITY {
+            warnings.push(format!(
+                "{}: the rotation and translation of <frame \"{id}\"> are ignored \
+                 (RL overwrites them with the transform into the frame)",
+                position(n)
             ));
         }
-        match t {
-            "world" => {
-                if let Some((_, first)) = world {
-                    return Err(err(
-                        n,
-                        LoadErrorKind::NoSingleRoot {
-                            roots: std::vec![
-                                first.attribute("id").unwrap_or("").to_string(),
-                                id.to_string()
-                            ],
-                        },
-                    ));
-                }
-                world = Some((nodes.len(), n));
-            }
-            "link" => links.push(n),
-            _ => {
-                if pose(n)? != PlueckerTransform::IDENTITY {
-                    let p = n.document().text_pos_at(n.range().start);
-                    warnings.push(format!(
-                        "{}:{}: the rotation and translation of <frame \"{id}\"> are ignored \
-                         (RL overwrites them with the transform into the frame)",
-                        p.row, p.col
-                    ));
-                }
-            }
-        }
-        nodes.push(Frame {
-            name: id.to_string(),
-            inertia: None,
-            elem: lines.elem(n),
-        });
-    }
-    let Some((world_index, world_node)) = world else {
-        return Err(err(kin, LoadErrorKind::MissingElement { child: "world" }));
-    };
+        Ok(None)
+    })?;
     // `<ignore idref>` must name a link (RL throws on an unknown one).
     for l in &links {
         for ig in children(*l, "ignore") {
@@ -200,72 +146,21 @@ pub(crate) fn from_document<const N: usize>(
     for n in kin.children().filter(|n| n.is_element()) {
         let t = n.tag_name().name();
         if TRANSFORMS.contains(&t) {
-            edges.push(transform(n, &index, &lines, &mut warnings)?);
-        } else if matches!(t, "world" | "link" | "frame" | "manufacturer" | "name") {
-        } else if child(n, "frame").is_some_and(|f| child(f, "a").is_some())
-            || child(n, "dh").is_some()
-        {
-            return Err(err(
-                n,
-                LoadErrorKind::UnknownJointType {
-                    joint_type: t.to_string(),
-                },
-            ));
-        } else {
-            let p = n.document().text_pos_at(n.range().start);
-            warnings.push(format!(
-                "{}:{}: <{t}> ignored (RL's rlkin reader does not read it)",
-                p.row, p.col
-            ));
+            edges.push(transform(n, &frames, &lines, &mut warnings)?);
+        } else if !matches!(t, "world" | "link" | "frame" | "manufacturer" | "name") {
+            let dh = child(n, "dh").is_some();
+            rl::unread(n, dh, "RL's rlkin reader", &mut warnings)?;
         }
     }
 
-    let mut builder = ModelBuilder::<N>::new();
-    let name = child(kin, "name")
-        .and_then(|n| n.text())
-        .unwrap_or("")
-        .trim();
-    builder
-        .name(super::display_name(name))
-        .map_err(|e| err(kin, LoadErrorKind::Model(e)))?;
-    let how = Assembly {
-        root: world_index,
-        base: pose(world_node)?,
-        floating: None,
-        order: ChildOrder::File,
-        leaf_tools: true,
-        extra_tools: &[],
-        doc_elem: elem(kin),
-        inertia: options.inertia,
+    let tree = Tree {
+        nodes: &frames.nodes,
+        world: frames.world,
+        edges: &edges,
+        base: pose(frames.world_node)?,
+        gravity: None,
     };
-    let assembled = assemble(&nodes, &edges, &how, &mut builder)?;
-    warnings.extend(assembled.warnings.iter().cloned());
-    for f in &assembled.unconnected {
-        warnings.push(format!(
-            "frame \"{f}\" is not connected to the world and is skipped, as RL does"
-        ));
-    }
-    Ok(LoadedModel {
-        model: builder.build(),
-        format: Format::Rlkin,
-        home: None,
-        frames: assembled.frames,
-        transforms: assembled.transforms,
-        warnings,
-    })
-}
-
-/// `rotation` (deg, `Rz·Ry·Rx`) and `translation` (m) children of `n`, identity if absent.
-fn pose(n: Node) -> Result<PlueckerTransform, LoadError> {
-    let rot = match child(n, "rotation") {
-        Some(r) => child_xyz(r, DVec3::ZERO)? * DEG,
-        None => DVec3::ZERO,
-    };
-    let tr = match child(n, "translation") {
-        Some(t) => child_xyz(t, DVec3::ZERO)?,
-        None => DVec3::ZERO,
-    };
-    Ok(PlueckerTransform::new(rot_zyx(rot.x, rot.y, rot.z), tr))
+    rl::assemble_model(kin, &tree, Format::Rlkin, options, warnings)
 }
 
 /// Paul's Denavit–Hartenberg transform `Tz(d)·Rz(θ)·Tx(a)·Rx(α)` (m, rad).
@@ -275,70 +170,24 @@ pub(crate) fn dh_transform(d: f64, theta: f64, a: f64, alpha: f64) -> PlueckerTr
     PlueckerTransform::new(rotation, DVec3::new(a * c, a * s, d))
 }
 
-/// The first child `tag` of `n` as a number, or `default`.
-fn first_number(n: Node, tag: &'static str, default: f64) -> Result<f64, LoadError> {
-    match child(n, tag) {
-        Some(c) => number(c, tag, c.text().unwrap_or("")),
-        None => Ok(default),
-    }
-}
-
 /// A required child `tag` of `dh` as a number.
 fn dh_number(dh: Node, tag: &'static str) -> Result<f64, LoadError> {
     let c = child(dh, tag).ok_or_else(|| err(dh, LoadErrorKind::MissingElement { child: tag }))?;
     number(c, tag, c.text().unwrap_or(""))
 }
 
-/// The limits of a joint element, positions and speed scaled by `scale`.
-fn limits(n: Node, scale: f64) -> Result<JointLimits, LoadError> {
-    let lower = first_number(n, "min", f64::NEG_INFINITY)?;
-    let upper = first_number(n, "max", f64::INFINITY)?;
-    if lower > upper {
-        let c = child(n, "min").unwrap_or(n);
-        return Err(invalid(c, "min", &lower.to_string(), "greater than max"));
-    }
-    let speed = super::rate_limit(first_number(n, "speed", 0.0)?);
-    if speed < 0.0 {
-        let c = child(n, "speed").unwrap_or(n);
-        return Err(invalid(c, "speed", &speed.to_string(), "negative"));
-    }
-    Ok(JointLimits {
-        lower: lower * scale,
-        upper: upper * scale,
-        velocity: speed * scale,
-        effort: f64::INFINITY,
-        wraparound: child(n, "wraparound").is_some(),
-    })
-}
-
 /// One transform element: `transform`, `revolute` or `prismatic`.
 fn transform(
     n: Node,
-    nodes: &HashMap<&str, usize>,
+    frames: &Frames,
     lines: &Lines,
     warnings: &mut Vec<String>,
 ) -> Result<Edge, LoadError> {
     let t = n.tag_name().name();
-    let name = attr(n, "id")?.to_string();
-    let f = child(n, "frame")
-        .ok_or_else(|| err(n, LoadErrorKind::MissingElement { child: "frame" }))?;
-    let find = |tag: &'static str| -> Result<usize, LoadError> {
-        let e =
-            child(f, tag).ok_or_else(|| err(f, LoadErrorKind::MissingElement { child: tag }))?;
-        let id = attr(e, "idref")?;
-        nodes.get(id).copied().ok_or_else(|| {
-            err(
-                n,
-                LoadErrorKind::UnresolvedReference {
-                    target: id.to_string(),
-                },
-            )
-        })
-    };
-    let (parent, child_frame) = (find("a")?, find("b")?);
-    let (kind, origin) = if t == "transform" {
-        (EdgeKind::Fixed, pose(n)?)
-    } else {
+    rl::edge(n, &frames.index, lines, |name| {
+        if t == "transform" {
+            return Ok((EdgeKind::Fixed, pose(n)?));
+        }
         let dh =
             child(n, "dh").ok_or_else(|| err(n, LoadErrorKind::MissingElement { child: "dh" }))?;
         let d = dh_number(dh, "d")?;
@@ -346,23 +195,22 @@ fn transform(
         let a = dh_number(dh, "a")?;
         let alpha = dh_number(dh, "alpha")? * DEG;
         if child(n, "center").is_some() {
-            let p = n.document().text_pos_at(n.range().start);
             warnings.push(format!(
-                "{}:{}: <center> of <{t} \"{name}\"> ignored (RL's reader does not read it)",
-                p.row, p.col
+                "{}: <center> of <{t} \"{name}\"> ignored (RL's reader does not read it)",
+                position(n)
             ));
         }
         let mut lim = [JointLimits::UNLIMITED; MAX_JOINT_NV];
         let (joint, child_offset) = if t == "revolute" {
-            lim[0] = limits(n, DEG)?;
-            let offset = first_number(n, "offset", 0.0)? * DEG;
+            lim[0] = limits(n, 1, DEG)?;
+            let offset = child_number(n, "offset", 0.0)? * DEG;
             (
                 Joint::Revolute(Revolute::new(DVec3::Z)),
                 dh_transform(d, theta + offset, a, alpha),
             )
         } else {
-            lim[0] = limits(n, 1.0)?;
-            let offset = first_number(n, "offset", 0.0)?;
+            lim[0] = limits(n, 1, 1.0)?;
+            let offset = child_number(n, "offset", 0.0)?;
             (
                 Joint::Prismatic(Prismatic::new(DVec3::Z)),
                 dh_transform(d + offset, theta, a, alpha),
@@ -376,16 +224,7 @@ fn transform(
             child_offset,
             limits: lim,
         };
-        (kind, PlueckerTransform::IDENTITY)
-    };
-    Ok(Edge {
-        parent,
-        child: child_frame,
-        name,
-        source_type: t.to_string(),
-        origin,
-        kind,
-        elem: lines.elem(n),
+        Ok((kind, PlueckerTransform::IDENTITY))
     })
 }
 

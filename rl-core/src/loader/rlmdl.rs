@@ -5,7 +5,6 @@
 //! fictitious base acceleration (physical gravity is its negative). Only the first `<model>` is
 //! loaded. Joint offsets are folded into the placement, so `q` here is RL's `q`.
 
-use std::collections::HashMap;
 use std::format;
 use std::string::ToString;
 use std::vec::Vec;
@@ -14,19 +13,18 @@ use glam::{DMat3, DVec3};
 use roxmltree::Node;
 
 use super::error::{LoadError, LoadErrorKind};
-use super::tree::{Assembly, ChildOrder, Edge, EdgeKind, Node as Frame, assemble};
+use super::tree::{Edge, EdgeKind};
+use super::xml::rl::{self, DEG, Frames, Tree, indexed, limits, pose};
 use super::xml::{
-    Lines, attr, child, child_number, child_xyz, children, elem, err, invalid, number, rot_zyx,
-    unit_axis,
+    Lines, child, child_number, child_xyz, children, err, invalid, number, unit_axis,
 };
 use super::{Format, LoadOptions, LoadedModel};
 use crate::joint::{
     Cylindrical, Helical, Joint, MAX_JOINT_NV, Prismatic, Revolute, SixDof, Spherical,
 };
-use crate::model::{JointLimits, ModelBuilder};
+use crate::model::JointLimits;
 use crate::spatial::{PlueckerTransform, RigidBodyInertia};
 
-const DEG: f64 = core::f64::consts::PI / 180.0;
 const TRANSFORMS: [&str; 7] = [
     "fixed",
     "revolute",
@@ -65,19 +63,7 @@ pub(crate) fn from_document<const N: usize>(
             },
         ));
     }
-    let container = match tag {
-        "rlmdl" => root,
-        "rl" => child(root, "mdl")
-            .ok_or_else(|| err(root, LoadErrorKind::MissingElement { child: "mdl" }))?,
-        _ => {
-            return Err(err(
-                root,
-                LoadErrorKind::UnknownFormat {
-                    root: tag.to_string(),
-                },
-            ));
-        }
-    };
+    let container = rl::container(root, "rlmdl", "mdl")?;
     let model = child(container, "model")
         .ok_or_else(|| err(container, LoadErrorKind::MissingElement { child: "model" }))?;
     let mut warnings = Vec::new();
@@ -87,61 +73,15 @@ pub(crate) fn from_document<const N: usize>(
 
     let lines = Lines::new(root.document().input_text());
     // Frames: world, bodies and plain frames, by id.
-    let mut nodes: Vec<Frame> = Vec::new();
-    let mut index: HashMap<&str, usize> = HashMap::new();
-    let mut world: Option<(usize, Node)> = None;
-    for n in model.children().filter(|n| n.is_element()) {
-        let t = n.tag_name().name();
-        if t != "world" && t != "body" && t != "frame" {
-            continue;
-        }
-        let id = attr(n, "id")?;
-        if index.insert(id, nodes.len()).is_some() {
-            return Err(err(
-                n,
-                LoadErrorKind::DuplicateName {
-                    name: id.to_string(),
-                },
-            ));
-        }
-        let inertia = if t == "body" {
+    let frames = rl::frames(model, ["body", "frame"], &lines, |n, _| {
+        Ok(if n.tag_name().name() == "body" {
             Some(body_inertia(n)?)
         } else {
             None
-        };
-        if t == "world" {
-            if let Some((_, first)) = world {
-                return Err(err(
-                    n,
-                    LoadErrorKind::NoSingleRoot {
-                        roots: std::vec![
-                            first.attribute("id").unwrap_or("").to_string(),
-                            id.to_string()
-                        ],
-                    },
-                ));
-            }
-            world = Some((nodes.len(), n));
-        }
-        nodes.push(Frame {
-            name: id.to_string(),
-            inertia,
-            elem: lines.elem(n),
-        });
-    }
-    let Some((world_index, world_node)) = world else {
-        return Err(err(model, LoadErrorKind::MissingElement { child: "world" }));
-    };
-    let rot = match child(world_node, "rotation") {
-        Some(r) => child_xyz(r, DVec3::ZERO)? * DEG,
-        None => DVec3::ZERO,
-    };
-    let world_rotation = rot_zyx(rot.x, rot.y, rot.z);
-    let world_translation = match child(world_node, "translation") {
-        Some(t) => child_xyz(t, DVec3::ZERO)?,
-        None => DVec3::ZERO,
-    };
-    let g = match child(world_node, "g") {
+        })
+    })?;
+    let base = pose(frames.world_node)?;
+    let g = match child(frames.world_node, "g") {
         Some(g) => child_xyz(g, DVec3::ZERO)?,
         None => DVec3::ZERO,
     };
@@ -151,70 +91,32 @@ pub(crate) fn from_document<const N: usize>(
     for n in model.children().filter(|n| n.is_element()) {
         let t = n.tag_name().name();
         if TRANSFORMS.contains(&t) {
-            edges.push(transform(n, &index, &lines)?);
+            edges.push(transform(n, &frames, &lines)?);
         } else if matches!(
             t,
             "world" | "body" | "frame" | "manufacturer" | "name" | "home"
         ) {
         } else if matches!(t, "gammaPosition" | "gammaVelocity") {
             check_identity_gamma(n)?;
-        } else if child(n, "frame").is_some_and(|f| child(f, "a").is_some()) {
-            return Err(err(
-                n,
-                LoadErrorKind::UnknownJointType {
-                    joint_type: t.to_string(),
-                },
-            ));
         } else {
-            let p = n.document().text_pos_at(n.range().start);
-            warnings.push(format!(
-                "{}:{}: <{t}> ignored (RL's XmlFactory does not read it)",
-                p.row, p.col
-            ));
+            rl::unread(n, false, "RL's XmlFactory", &mut warnings)?;
         }
     }
 
-    let mut builder = ModelBuilder::<N>::new();
-    let name = child(model, "name")
-        .and_then(|n| n.text())
-        .unwrap_or("")
-        .trim();
-    builder
-        .name(super::display_name(name))
-        .map_err(|e| err(model, LoadErrorKind::Model(e)))?;
-    // `<g>` is the acceleration of the base that stands in for gravity, in world-frame axes.
-    builder.gravity(DVec3::ZERO - world_rotation * g); // not -(..): no -0.0
-    let how = Assembly {
-        root: world_index,
-        base: PlueckerTransform::new(world_rotation, world_translation),
-        floating: None,
-        order: ChildOrder::File,
-        leaf_tools: true,
-        extra_tools: &[],
-        doc_elem: elem(model),
-        inertia: options.inertia,
+    let tree = Tree {
+        nodes: &frames.nodes,
+        world: frames.world,
+        edges: &edges,
+        base,
+        // `<g>` is the acceleration of the base that stands in for gravity, in world-frame axes.
+        gravity: Some(DVec3::ZERO - base.rotation * g), // not -(..): no -0.0
     };
-    let assembled = assemble(&nodes, &edges, &how, &mut builder)?;
-    warnings.extend(assembled.warnings.iter().cloned());
-    for f in &assembled.unconnected {
-        warnings.push(format!(
-            "frame \"{f}\" is not connected to the world and is skipped, as RL does"
-        ));
+    // Amended in place: a fixed-capacity model is large, so it is not copied through `?`.
+    let mut loaded = rl::assemble_model(model, &tree, Format::Rlmdl, options, warnings);
+    if let (Ok(l), Some(h)) = (&mut loaded, child(model, "home")) {
+        l.home = Some(home(h, l.model.nq())?);
     }
-    let built = builder.build();
-
-    let home = match child(model, "home") {
-        Some(h) => Some(home(h, built.nq())?),
-        None => None,
-    };
-    Ok(LoadedModel {
-        model: built,
-        format: Format::Rlmdl,
-        home,
-        frames: assembled.frames,
-        transforms: assembled.transforms,
-        warnings,
-    })
+    loaded
 }
 
 /// A body's inertia from `cm`, `i` (about the COM, body axes) and `m`, with RL's defaults.
@@ -247,43 +149,12 @@ fn body_inertia(n: Node) -> Result<RigidBodyInertia, LoadError> {
     Ok(RigidBodyInertia::from_com(m, cm, ic))
 }
 
-/// The `k`-th (from 1) child `tag` as a number, or `default`.
-fn indexed(n: Node, tag: &str, k: usize, default: f64) -> Result<f64, LoadError> {
-    match children(n, tag).nth(k - 1) {
-        Some(c) => number(c, tag, c.text().unwrap_or("")),
-        None => Ok(default),
-    }
-}
-
 /// The `k`-th (from 1) `axis` child, or `default` if absent. Missing components are 0.
 fn axis(n: Node, k: usize, default: DVec3) -> Result<DVec3, LoadError> {
     match children(n, "axis").nth(k - 1) {
         Some(a) => unit_axis(a, "axis", child_xyz(a, DVec3::ZERO)?),
         None => Ok(default),
     }
-}
-
-/// Limits of DOF `k` (from 1), positions and speed scaled by `scale`.
-fn limits(n: Node, k: usize, scale: f64) -> Result<JointLimits, LoadError> {
-    let lower = indexed(n, "min", k, f64::NEG_INFINITY)?;
-    let upper = indexed(n, "max", k, f64::INFINITY)?;
-    if lower > upper {
-        let c = children(n, "min").nth(k - 1).unwrap_or(n);
-        return Err(invalid(c, "min", &lower.to_string(), "greater than max"));
-    }
-    let speed = super::rate_limit(indexed(n, "speed", k, f64::INFINITY)?);
-    if speed < 0.0 {
-        let c = children(n, "speed").nth(k - 1).unwrap_or(n);
-        return Err(invalid(c, "speed", &speed.to_string(), "negative"));
-    }
-    Ok(JointLimits {
-        lower: lower * scale,
-        upper: upper * scale,
-        velocity: speed * scale,
-        effort: f64::INFINITY,
-        wraparound: children(n, "wraparound").nth(k - 1).is_some()
-            || (k == 1 && child(n, "wraparound").is_some()),
-    })
 }
 
 fn no_offset(n: Node, kind: &str) -> Result<(), LoadError> {
@@ -313,25 +184,13 @@ fn same_axis(n: Node, a: DVec3, b: DVec3, kind: &str) -> Result<(), LoadError> {
 }
 
 /// One transform element.
-fn transform(n: Node, nodes: &HashMap<&str, usize>, lines: &Lines) -> Result<Edge, LoadError> {
+fn transform(n: Node, frames: &Frames, lines: &Lines) -> Result<Edge, LoadError> {
+    rl::edge(n, &frames.index, lines, |_| moving_or_fixed(n))
+}
+
+/// The kind and origin of transform element `n`.
+fn moving_or_fixed(n: Node) -> Result<(EdgeKind, PlueckerTransform), LoadError> {
     let t = n.tag_name().name();
-    let name = attr(n, "id")?.to_string();
-    let f = child(n, "frame")
-        .ok_or_else(|| err(n, LoadErrorKind::MissingElement { child: "frame" }))?;
-    let find = |tag: &'static str| -> Result<usize, LoadError> {
-        let e =
-            child(f, tag).ok_or_else(|| err(f, LoadErrorKind::MissingElement { child: tag }))?;
-        let id = attr(e, "idref")?;
-        nodes.get(id).copied().ok_or_else(|| {
-            err(
-                n,
-                LoadErrorKind::UnresolvedReference {
-                    target: id.to_string(),
-                },
-            )
-        })
-    };
-    let (parent, child_frame) = (find("a")?, find("b")?);
     let mut lim = [JointLimits::UNLIMITED; MAX_JOINT_NV];
     let id = PlueckerTransform::IDENTITY;
     // A moving joint sits at the frame it is attached to; `post` is its offset.
@@ -344,21 +203,8 @@ fn transform(n: Node, nodes: &HashMap<&str, usize>, lines: &Lines) -> Result<Edg
         };
         (kind, id)
     };
-    let (kind, origin) = match t {
-        "fixed" => {
-            let rot = match child(n, "rotation") {
-                Some(r) => child_xyz(r, DVec3::ZERO)? * DEG,
-                None => DVec3::ZERO,
-            };
-            let tr = match child(n, "translation") {
-                Some(r) => child_xyz(r, DVec3::ZERO)?,
-                None => DVec3::ZERO,
-            };
-            (
-                EdgeKind::Fixed,
-                PlueckerTransform::new(rot_zyx(rot.x, rot.y, rot.z), tr),
-            )
-        }
+    Ok(match t {
+        "fixed" => (EdgeKind::Fixed, pose(n)?),
         "revolute" => {
             let j = Revolute::new(axis(n, 1, DVec3::Z)?);
             lim[0] = limits(n, 1, DEG)?;
@@ -426,15 +272,6 @@ fn transform(n: Node, nodes: &HashMap<&str, usize>, lines: &Lines) -> Result<Edg
                 },
             ));
         }
-    };
-    Ok(Edge {
-        parent,
-        child: child_frame,
-        name,
-        source_type: t.to_string(),
-        origin,
-        kind,
-        elem: lines.elem(n),
     })
 }
 

@@ -1,6 +1,10 @@
 //! Small helpers over roxmltree shared by both formats: element references for errors,
-//! child lookup and number parsing that reports the element at fault.
+//! child lookup and number parsing that reports the element at fault. [`rl`] holds what RL's
+//! two formats (rlmdl, rlkin) share.
 
+pub(crate) mod rl;
+
+use std::collections::HashMap;
 use std::string::{String, ToString};
 
 use glam::{DMat3, DVec3};
@@ -210,6 +214,28 @@ pub(crate) fn children<'a, 'i: 'a>(
 pub(crate) fn attr<'a>(node: Node<'a, '_>, name: &'static str) -> Result<&'a str, LoadError> {
     node.attribute(name)
         .ok_or_else(|| err(node, LoadErrorKind::MissingAttribute { attribute: name }))
+}
+
+/// The index in `index` of what attribute `by` of `node`'s first child `tag` names (an idref,
+/// a link name): a missing child is an error at `node`, an unknown name one at `at`.
+pub(crate) fn reference(
+    node: Node,
+    tag: &'static str,
+    by: &'static str,
+    index: &HashMap<&str, usize>,
+    at: Node,
+) -> Result<usize, LoadError> {
+    let e =
+        child(node, tag).ok_or_else(|| err(node, LoadErrorKind::MissingElement { child: tag }))?;
+    let name = attr(e, by)?;
+    index.get(name).copied().ok_or_else(|| {
+        err(
+            at,
+            LoadErrorKind::UnresolvedReference {
+                target: name.to_string(),
+            },
+        )
+    })
 }
 
 /// A finite number; `node` and `what` name it in the error.

@@ -482,8 +482,7 @@ impl<const D: usize> Polynomial<D, 4> {
         x1: [f64; D],
         limits: &Limits<D>,
     ) -> Result<Self, TrajectoryError> {
-        let t = at_rest_duration(&x0, &x1, limits, CUBIC_PEAKS)?;
-        Ok(Self::from_shape(x0, x1, &CUBIC_SHAPE, t))
+        at_rest_shape(x0, x1, limits)
     }
 }
 
@@ -541,8 +540,7 @@ impl<const D: usize> Polynomial<D, 6> {
         x1: [f64; D],
         limits: &Limits<D>,
     ) -> Result<Self, TrajectoryError> {
-        let t = at_rest_duration(&x0, &x1, limits, QUINTIC_PEAKS)?;
-        Ok(Self::from_shape(x0, x1, &QUINTIC_SHAPE, t))
+        at_rest_shape(x0, x1, limits)
     }
 }
 
@@ -610,12 +608,13 @@ impl<const D: usize> Polynomial<D, 8> {
         x1: [f64; D],
         limits: &Limits<D>,
     ) -> Result<Self, TrajectoryError> {
-        let t = at_rest_duration(&x0, &x1, limits, SEPTIC_PEAKS)?;
-        Ok(Self::from_shape(x0, x1, &SEPTIC_SHAPE, t))
+        at_rest_shape(x0, x1, limits)
     }
 }
 
-/// The at-rest shapes for [`crate::traj::spline::at_rest_through`].
+/// The shortest polynomial with `C` coefficients from rest to rest within the limits, all axes
+/// synchronised: the cubic, quintic and septic at-rest constructors, and the segments of
+/// [`crate::traj::spline::at_rest_through`]. Other degrees are [`TrajectoryError::Degenerate`].
 pub(crate) fn at_rest_shape<const D: usize, const C: usize>(
     x0: [f64; D],
     x1: [f64; D],
@@ -663,39 +662,27 @@ impl<const D: usize, const C: usize> Trajectory<D> for Polynomial<D, C> {
         for k in 1..C {
             pow[k] = pow[k - 1] * t;
         }
-        let mut p = [0.0; D];
-        let mut v = [0.0; D];
-        let mut a = [0.0; D];
-        let mut j = [0.0; D];
-        for k in 0..C {
-            let w = pow[k];
-            for axis in 0..D {
-                p[axis] += self.coefficients[k][axis] * w;
-            }
-        }
-        for k in 1..C {
-            let w = k as f64 * pow[k - 1];
-            for axis in 0..D {
-                v[axis] += self.coefficients[k][axis] * w;
-            }
-        }
-        for k in 2..C {
-            let w = (k * (k - 1)) as f64 * pow[k - 2];
-            for axis in 0..D {
-                a[axis] += self.coefficients[k][axis] * w;
-            }
-        }
-        for k in 3..C {
-            let w = (k * (k - 1) * (k - 2)) as f64 * pow[k - 3];
-            for axis in 0..D {
-                j[axis] += self.coefficients[k][axis] * w;
-            }
-        }
         Sample {
-            position: p,
-            velocity: v,
-            acceleration: a,
-            jerk: j,
+            position: self.derivative_from_powers::<0>(&pow),
+            velocity: self.derivative_from_powers::<1>(&pow),
+            acceleration: self.derivative_from_powers::<2>(&pow),
+            jerk: self.derivative_from_powers::<3>(&pow),
         }
+    }
+}
+
+impl<const D: usize, const C: usize> Polynomial<D, C> {
+    /// The `M`-th derivative of each axis, `Σ_{k ≥ M} k!/(k-M)! c_k t^(k-M)`, from the powers
+    /// `pow[k] = t^k`: one dot product per axis (`M` is a constant, so the weights fold).
+    #[inline(always)]
+    fn derivative_from_powers<const M: usize>(&self, pow: &[f64; C]) -> [f64; D] {
+        let mut out = [0.0; D];
+        for k in M..C {
+            let w = falling(k, M) * pow[k - M];
+            for axis in 0..D {
+                out[axis] += self.coefficients[k][axis] * w;
+            }
+        }
+        out
     }
 }
