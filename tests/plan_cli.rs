@@ -189,6 +189,44 @@ fn plan_an_rl_scenario_with_a_free_flying_body() {
 }
 
 #[test]
+fn a_joint_certification_does_not_cover_leaves_the_plan_uncertified_and_says_why() {
+    // RL's Puma among boxes, its first joint made helical (pitch 0, so the same motion): the
+    // motion bound covers revolute, prismatic, spherical and six-DOF joints only. The plan
+    // stands and the JSON says why it is not certified.
+    let dir = tmp("helical");
+    let src = data("rlplan");
+    let mdl = std::fs::read_to_string(data("rlmdl/unimation-puma560.xml")).unwrap();
+    let first = mdl.find("<revolute id=\"joint0\">").unwrap();
+    let end = first + mdl[first..].find("</revolute>").unwrap();
+    let joint = mdl[first..end]
+        .replace("<revolute id=", "<helical id=")
+        .replace("<max>160</max>", "<max>2.79</max>")
+        .replace("<min>-160</min>", "<min>-2.79</min>")
+        + "<pitch>0</pitch></helical>";
+    let mdl = format!(
+        "{}{joint}{}",
+        &mdl[..first],
+        &mdl[end + "</revolute>".len()..]
+    );
+    std::fs::write(dir.join("puma-helical.xml"), mdl).unwrap();
+    let scenario = std::fs::read_to_string(src.join("unimation-puma560_boxes_prm.mdl.xml"))
+        .unwrap()
+        .replace("../rlmdl/unimation-puma560.xml", "puma-helical.xml")
+        .replace("../rlsg/", &format!("{}/", src.join("../rlsg").display()));
+    let file = dir.join("scenario.xml");
+    std::fs::write(&file, scenario).unwrap();
+    let o = rl(&["plan", file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], true, "{v}");
+    let c = &v["certified"];
+    assert_eq!(c["certified"], false, "{c}");
+    let why = c["unsupported"].as_str().unwrap();
+    assert!(why.contains("joint0") && why.contains("Helical"), "{why}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn plan_an_rl_scenario_with_rlkin_kinematics() {
     // RL's Mitsubishi RV-6SL among boxes names its Denavit–Hartenberg kinematics
     // (../rlkin/mitsubishi-rv6sl.xml), without a type attribute, as RL's own file does.

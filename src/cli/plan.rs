@@ -28,7 +28,7 @@ use rl_plan::sampler::SamplerKind;
 use rl_plan::scene::CertifyOptions;
 use rl_plan::space::parse_bounds;
 use rl_plan::verifier::Verifier;
-use rl_plan::{JointSpace, Path as PlanPath, PlanOptions, PlanResult, Validity, plan};
+use rl_plan::{JointSpace, Path as PlanPath, PlanError, PlanOptions, PlanResult, Validity, plan};
 use serde_json::json;
 
 use super::{CliError, CliResult, parse_duration};
@@ -379,7 +379,15 @@ fn certify(
         ..Default::default()
     };
     let started = std::time::Instant::now();
-    let c = exact.certify_path(path, &options).map_err(failed)?;
+    let c = match exact.certify_path(path, &options) {
+        Ok(c) => c,
+        // A model the motion bound does not cover (a helical joint, say): the plan stands,
+        // uncertified, and the JSON says why.
+        Err(PlanError::Unsupported(why)) => {
+            return Ok(json!({ "certified": false, "margin": options.margin, "unsupported": why }));
+        }
+        Err(e) => return Err(failed(e)),
+    };
     let finite = |x: f64| if x.is_finite() { json!(x) } else { json!(null) };
     Ok(json!({
         "certified": c.is_certified(),
