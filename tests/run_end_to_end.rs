@@ -9,6 +9,9 @@ use std::time::{Duration, Instant};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 
+mod cli;
+use cli::{exit_by, run_bounded, watch_stderr};
+
 /// The H7's cycle.
 const PERIOD_S: f64 = 0.00711;
 /// The fake's filter time constant in cycles (`FakeH7Config::loopback`).
@@ -30,30 +33,6 @@ fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("rl-run-test-{}-{name}", std::process::id()))
-}
-
-/// Runs to completion, at most `limit`; kills the child and fails beyond it.
-fn run_bounded(mut cmd: Command, limit: Duration) -> Output {
-    let mut child = cmd
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn rl");
-    let start = Instant::now();
-    loop {
-        if child.try_wait().expect("wait").is_some() {
-            return child.wait_with_output().expect("output");
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let out = child.wait_with_output().expect("output");
-            panic!(
-                "rl did not finish within {limit:?}; stderr:\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
 }
 
 fn json(out: &Output) -> serde_json::Value {
@@ -153,37 +132,13 @@ fn sigint_mid_run_stops_the_device_and_prints_the_report() {
         .spawn()
         .expect("spawn rl");
     // Wait for the loop to run (its first progress line), then interrupt it.
-    let stderr = child.stderr.take().expect("stderr");
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let mut lines = BufReader::new(stderr).lines();
-        let mut all = String::new();
-        let mut told = false;
-        while let Some(Ok(line)) = lines.next() {
-            if !told && line.contains("cycle") {
-                let _ = tx.send(());
-                told = true;
-            }
-            all.push_str(&line);
-            all.push('\n');
-        }
-        all
-    });
+    let (rx, _) = watch_stderr(&mut child, "cycle");
     rx.recv_timeout(Duration::from_secs(30))
         .expect("progress line within 30 s");
     std::thread::sleep(Duration::from_millis(1000));
     kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).expect("send SIGINT");
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().expect("wait") {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(10) {
-            let _ = child.kill();
-            panic!("rl did not stop within 10 s of SIGINT");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let status = exit_by(&mut child, Instant::now() + Duration::from_secs(10))
+        .expect("rl did not stop within 10 s of SIGINT");
     let mut stdout = String::new();
     child
         .stdout

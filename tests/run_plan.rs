@@ -4,12 +4,14 @@
 //! fake was sent is collision-free for the exact meshes (rl-sg, not the planner's spheres), and
 //! problems that cannot be run fail before the servo goes on.
 
+use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use rl::controller::planned::{PlannedMotionError, plan_motion};
+use rl::controller::planned::{PlannedMotion, PlannedMotionError, plan_motion};
 use rl::controller::{ControlRun, RunError, RunOptions};
+use rl::core::loader::LoadedModel;
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl::rt::StopFlag;
@@ -17,6 +19,9 @@ use rl_plan::PlanOptions;
 use rl_plan::Validity;
 use rl_plan::problem::Robot;
 use rl_plan::problem::moveit::MotionRequest;
+
+mod cli;
+use cli::{exit_by, rl_within as rl, watch_stderr};
 
 fn data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -49,29 +54,26 @@ fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
     RUNS.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// `rl ARGS`, killed and failed beyond `limit`.
-fn rl(args: &[&str], limit: Duration) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn rl");
-    let start = Instant::now();
-    loop {
-        if child.try_wait().expect("wait").is_some() {
-            return child.wait_with_output().expect("output");
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let out = child.wait_with_output().expect("output");
-            panic!(
-                "rl did not finish within {limit:?}; stderr:\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+/// `rl run --model PANDA --plan --scene SCENE --request REQUEST`, then `extra`.
+fn run_plan_args(scene: &Path, request: &Path, extra: &[&str]) -> Vec<OsString> {
+    let mut args: Vec<OsString> = vec!["run".into(), "--model".into(), panda().into()];
+    args.extend(["--plan".into(), "--scene".into(), scene.into()]);
+    args.extend(["--request".into(), request.into()]);
+    args.extend(extra.iter().map(OsString::from));
+    args
+}
+
+/// `rl plan PANDA --scene SCENE --request REQUEST`, then `extra`.
+fn plan_args(scene: &Path, request: &Path, extra: &[&str]) -> Vec<OsString> {
+    let mut args: Vec<OsString> = vec!["plan".into(), panda().into()];
+    args.extend([
+        "--scene".into(),
+        scene.into(),
+        "--request".into(),
+        request.into(),
+    ]);
+    args.extend(extra.iter().map(OsString::from));
+    args
 }
 
 fn text(b: &[u8]) -> String {
@@ -159,32 +161,7 @@ fn check_motion(problem_name: &str, tel: &Telemetry, tolerance: &[f64]) {
 #[test]
 fn run_plan_follows_the_path_to_the_goal_and_says_so() {
     let _run = one_run_at_a_time();
-    let (scene, request) = problem("box_panda");
-    let tel = temp("box.csv");
-    let out = rl(
-        &[
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-            "--speed",
-            SPEED,
-            "--no-mlock",
-            "--telemetry",
-            tel.to_str().unwrap(),
-        ],
-        Duration::from_secs(120),
-    );
-    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
-    assert!(
-        out.status.success(),
-        "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}",
-        out.status
-    );
+    let (stdout, tel) = run_problem("box_panda", &[], false, "box.csv");
     assert!(stdout.contains("result: ok"), "{stdout}");
     assert!(
         stdout.contains("trajectory (plan): planned path by RRT Extend Connect (seed 0)"),
@@ -196,53 +173,28 @@ fn run_plan_follows_the_path_to_the_goal_and_says_so() {
         stdout.contains("fake H7 saw 1 end packet, servo off"),
         "{stdout}"
     );
-    // The bound the run supervised: its report row, in mrad.
-    let bound: Vec<f64> = stdout
-        .lines()
-        .find(|l| l.trim_start().starts_with("tracking bound mrad"))
-        .expect("tracking bound row")
-        .split_whitespace()
-        .skip(3)
-        .map(|x| x.parse::<f64>().expect("number") * 1e-3)
-        .collect();
+    let bound = tracking_bound(&stdout);
     assert_eq!(bound.len(), 7, "{stdout}");
     check_motion("box_panda", &telemetry(&tel, 7), &bound);
     std::fs::remove_file(&tel).ok();
 }
 
-/// `rl run --plan` (blended by default, or `--stop-at-waypoints`) on box_panda, whose
-/// optimised path has interior waypoints: the run completes at the goal, every commanded
-/// position is free for the exact meshes, and the report (text and JSON) says how the path was
-/// executed, with both durations.
-fn run_box(extra: &[&str], json: bool, name: &str) -> (String, PathBuf) {
-    let (scene, request) = problem("box_panda");
+/// `rl run --plan` on `problem_name` at [`SPEED`] with telemetry to the temporary file
+/// `name` (and `--json` when `json`), then `extra`; it must succeed. Its stdout and the
+/// telemetry file.
+fn run_problem(problem_name: &str, extra: &[&str], json: bool, name: &str) -> (String, PathBuf) {
+    let (scene, request) = problem(problem_name);
     let tel = temp(name);
-    let (model, scene, request, telemetry) = (
-        panda().display().to_string(),
-        scene.display().to_string(),
-        request.display().to_string(),
-        tel.display().to_string(),
-    );
-    let mut args = vec![
-        "run",
-        "--model",
-        &model,
-        "--plan",
-        "--scene",
-        &scene,
-        "--request",
-        &request,
-        "--speed",
-        SPEED,
-        "--no-mlock",
-        "--telemetry",
-        &telemetry,
-    ];
+    let telemetry = tel.display().to_string();
+    let mut args = vec!["--speed", SPEED, "--no-mlock", "--telemetry", &telemetry];
     if json {
         args.push("--json");
     }
     args.extend_from_slice(extra);
-    let out = rl(&args, Duration::from_secs(120));
+    let out = rl(
+        &run_plan_args(&scene, &request, &args),
+        Duration::from_secs(120),
+    );
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
     assert!(
         out.status.success(),
@@ -252,10 +204,26 @@ fn run_box(extra: &[&str], json: bool, name: &str) -> (String, PathBuf) {
     (stdout, tel)
 }
 
+/// The bound a run supervised: its text report's row, in mrad, in rad.
+fn tracking_bound(stdout: &str) -> Vec<f64> {
+    stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("tracking bound mrad"))
+        .expect("tracking bound row")
+        .split_whitespace()
+        .skip(3)
+        .map(|x| x.parse::<f64>().expect("number") * 1e-3)
+        .collect()
+}
+
+/// `rl run --plan` (blended by default; `--stop-at-waypoints` in the next test) on box_panda,
+/// whose optimised path has interior waypoints: the run completes at the goal, every commanded
+/// position is free for the exact meshes, and the report (text and JSON) says how the path was
+/// executed, with both durations.
 #[test]
 fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
     let _run = one_run_at_a_time();
-    let (stdout, tel) = run_box(&[], true, "blended.csv");
+    let (stdout, tel) = run_problem("box_panda", &[], true, "blended.csv");
     let v: serde_json::Value = serde_json::from_str(&stdout).expect("JSON report");
     assert_eq!(v["end"], "completed", "{v}");
     assert_eq!(v["limit_violations"], 0, "{v}");
@@ -320,7 +288,7 @@ fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
         "{}",
         text(&out.stderr)
     );
-    let (stdout, tel) = run_box(&["--stop-at-waypoints"], false, "stops.csv");
+    let (stdout, tel) = run_problem("box_panda", &["--stop-at-waypoints"], false, "stops.csv");
     assert!(stdout.contains("result: ok"), "{stdout}");
     assert!(stdout.contains("end: completed"), "{stdout}");
     let line = stdout
@@ -330,14 +298,7 @@ fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
     assert!(line.contains("stopping at every waypoint"), "{line}");
     assert!(line.contains("certified on the exact geometry"), "{line}");
     assert!(!stdout.contains("blended through"), "{stdout}");
-    let bound: Vec<f64> = stdout
-        .lines()
-        .find(|l| l.trim_start().starts_with("tracking bound mrad"))
-        .expect("tracking bound row")
-        .split_whitespace()
-        .skip(3)
-        .map(|x| x.parse::<f64>().expect("number") * 1e-3)
-        .collect();
+    let bound = tracking_bound(&stdout);
     check_motion("box_panda", &telemetry(&tel, 7), &bound);
     std::fs::remove_file(&tel).ok();
 }
@@ -345,39 +306,14 @@ fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
 #[test]
 fn run_plan_json_has_the_plan_and_ends_at_its_goal() {
     let _run = one_run_at_a_time();
-    let (scene, request) = problem("bookshelf_thin_panda");
-    let tel = temp("bookshelf.csv");
-    let out = rl(
-        &[
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-            "--seed",
-            "2",
-            "--plan-time",
-            "2s",
-            "--speed",
-            SPEED,
-            "--no-mlock",
-            "--json",
-            "--telemetry",
-            tel.to_str().unwrap(),
-        ],
-        Duration::from_secs(120),
+    let (_, request) = problem("bookshelf_thin_panda");
+    let (stdout, tel) = run_problem(
+        "bookshelf_thin_panda",
+        &["--seed", "2", "--plan-time", "2s"],
+        true,
+        "bookshelf.csv",
     );
-    assert!(
-        out.status.success(),
-        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
-        out.status,
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("JSON report");
     assert_eq!(v["failed"], false, "{v}");
     assert_eq!(v["trajectory_source"], "plan", "{v}");
     assert_eq!(v["end"], "completed", "{v}");
@@ -409,30 +345,31 @@ fn run_plan_json_has_the_plan_and_ends_at_its_goal() {
     std::fs::remove_file(&tel).ok();
 }
 
+/// A MoveIt scene of one box `id` at `position` with edge lengths `dimensions` (m), written
+/// to the temporary file `name`.
+fn one_box_scene(name: &str, id: &str, position: [f64; 3], dimensions: [f64; 3]) -> PathBuf {
+    let scene = temp(name);
+    let ([x, y, z], [a, b, c]) = (position, dimensions);
+    std::fs::write(
+        &scene,
+        format!(
+            "world:\n  collision_objects:\n    - id: {id}\n      primitive_poses:\n        \
+             - position: [{x:?}, {y:?}, {z:?}]\n          orientation: [0, 0, 0, 1]\n      \
+             primitives:\n        - type: box\n          dimensions: [{a:?}, {b:?}, {c:?}]\n"
+        ),
+    )
+    .unwrap();
+    scene
+}
+
 #[test]
 fn a_start_in_collision_fails_before_anything_starts() {
     let _run = one_run_at_a_time();
     // A block around the Panda's base: the request's start (and every configuration) collides.
-    let scene = temp("block.yaml");
-    std::fs::write(
-        &scene,
-        "world:\n  collision_objects:\n    - id: block\n      primitive_poses:\n        \
-         - position: [0.0, 0.0, 0.3]\n          orientation: [0, 0, 0, 1]\n      primitives:\n        \
-         - type: box\n          dimensions: [0.4, 0.4, 0.4]\n",
-    )
-    .unwrap();
+    let scene = one_box_scene("block.yaml", "block", [0.0, 0.0, 0.3], [0.4, 0.4, 0.4]);
     let (_, request) = problem("box_panda");
     let out = rl(
-        &[
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-        ],
+        &run_plan_args(&scene, &request, &[]),
         Duration::from_secs(60),
     );
     let stderr = text(&out.stderr);
@@ -452,18 +389,23 @@ fn a_start_in_collision_fails_before_anything_starts() {
     std::fs::remove_file(&scene).ok();
 }
 
+/// `out`, of `rl run --plan`, found no path: exit code 1, says so and that nothing was started,
+/// and prints no report.
+fn no_path_and_nothing_started(out: &Output) {
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
+        "{stderr}"
+    );
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+}
+
 /// A request with no solution: every joint but the first pinned by `--limits` (the space is
 /// one-dimensional), and a post in the way of the arm as joint 1 turns from 0 to 1.5 rad
 /// (start and goal are free: the post stands between them).
 fn unsolvable() -> (PathBuf, PathBuf, &'static str) {
-    let scene = temp("post.yaml");
-    std::fs::write(
-        &scene,
-        "world:\n  collision_objects:\n    - id: post\n      primitive_poses:\n        \
-         - position: [0.22, 0.20, 0.45]\n          orientation: [0, 0, 0, 1]\n      primitives:\n        \
-         - type: box\n          dimensions: [0.08, 0.08, 0.5]\n",
-    )
-    .unwrap();
+    let scene = one_box_scene("post.yaml", "post", [0.22, 0.20, 0.45], [0.08, 0.08, 0.5]);
     let request = temp("turn.yaml");
     let mut text = String::from(
         "group_name: panda_arm\nstart_state:\n  joint_state:\n    name: [panda_joint1, \
@@ -490,29 +432,14 @@ fn an_unsolvable_request_fails_before_anything_starts() {
     let _run = one_run_at_a_time();
     let (scene, request, pinned) = unsolvable();
     let out = rl(
-        &[
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-            "--limits",
-            pinned,
-            "--plan-time",
-            "300ms",
-        ],
+        &run_plan_args(
+            &scene,
+            &request,
+            &["--limits", pinned, "--plan-time", "300ms"],
+        ),
         Duration::from_secs(60),
     );
-    let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
-        "{stderr}"
-    );
-    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    no_path_and_nothing_started(&out);
     std::fs::remove_file(&scene).ok();
     std::fs::remove_file(&request).ok();
 }
@@ -521,60 +448,29 @@ fn an_unsolvable_request_fails_before_anything_starts() {
 /// ends the planning at once: exit code 130, nothing started, no report.
 #[test]
 fn ctrl_c_while_planning_stops_before_anything_starts() {
-    use std::io::{BufRead, BufReader};
     let _run = one_run_at_a_time();
     let (scene, request, pinned) = unsolvable();
     let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-            "--limits",
-            pinned,
-            "--plan-time",
-            "120s",
-        ])
+        .args(run_plan_args(
+            &scene,
+            &request,
+            &["--limits", pinned, "--plan-time", "120s"],
+        ))
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn rl");
-    let stderr = child.stderr.take().expect("stderr");
-    let (tx, rx) = std::sync::mpsc::channel();
-    let reader = std::thread::spawn(move || {
-        let mut all = String::new();
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if line.contains("planning a collision-free path") {
-                let _ = tx.send(());
-            }
-            all.push_str(&line);
-            all.push('\n');
-        }
-        all
-    });
+    let (rx, reader) = watch_stderr(&mut child, "planning a collision-free path");
     rx.recv_timeout(Duration::from_secs(60))
         .expect("the planning line within 60 s");
     std::thread::sleep(Duration::from_millis(300));
-    let interrupted = Instant::now();
+    let deadline = Instant::now() + Duration::from_secs(20);
     nix::sys::signal::kill(
         nix::unistd::Pid::from_raw(child.id() as i32),
         nix::sys::signal::Signal::SIGINT,
     )
     .expect("SIGINT");
-    let status = loop {
-        if let Some(s) = child.try_wait().expect("wait") {
-            break s;
-        }
-        if interrupted.elapsed() > Duration::from_secs(20) {
-            let _ = child.kill();
-            panic!("rl went on planning for 20 s after SIGINT");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    };
+    let status = exit_by(&mut child, deadline).expect("rl went on planning for 20 s after SIGINT");
     let stderr = reader.join().expect("stderr");
     let mut stdout = String::new();
     std::io::Read::read_to_string(&mut child.stdout.take().expect("stdout"), &mut stdout)
@@ -595,62 +491,33 @@ fn no_path_within_the_budget_fails_before_anything_starts() {
     // The straight motion collides (the planner must search), and a microsecond is not enough.
     let (scene, request) = problem("box_panda");
     let out = rl(
-        &[
-            "run",
-            "--model",
-            panda().to_str().unwrap(),
-            "--plan",
-            "--scene",
-            scene.to_str().unwrap(),
-            "--request",
-            request.to_str().unwrap(),
-            "--plan-time",
-            "1us",
-        ],
+        &run_plan_args(&scene, &request, &["--plan-time", "1us"]),
         Duration::from_secs(60),
     );
-    let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(
-        stderr.contains("no collision-free path found") && stderr.contains("nothing was started"),
-        "{stderr}"
-    );
-    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    no_path_and_nothing_started(&out);
 }
 
 #[test]
 fn plan_flags_are_checked_before_anything_starts() {
     let _run = one_run_at_a_time();
     let (scene, request) = problem("box_panda");
-    let (scene, request) = (scene.to_str().unwrap(), request.to_str().unwrap());
-    let panda = panda();
-    let model = panda.to_str().unwrap();
+    let (s, r) = (scene.to_str().unwrap(), request.to_str().unwrap());
+    let strings = |args: &[&str]| args.iter().map(OsString::from).collect::<Vec<_>>();
     for (args, says) in [
         (
-            vec!["run", "--scene", scene],
+            strings(&["run", "--scene", s]),
             "--scene describes a planned motion: add --plan",
         ),
         (
-            vec!["run", "--plan", "--scene", scene],
+            strings(&["run", "--plan", "--scene", s]),
             "--plan needs --scene",
         ),
         (
-            vec!["run", "--plan", "--scene", scene, "--request", request],
+            strings(&["run", "--plan", "--scene", s, "--request", r]),
             "--plan needs --model",
         ),
         (
-            vec![
-                "run",
-                "--model",
-                model,
-                "--plan",
-                "--scene",
-                scene,
-                "--request",
-                request,
-                "--planner",
-                "astar",
-            ],
+            run_plan_args(&scene, &request, &["--planner", "astar"]),
             "unknown planner \"astar\"",
         ),
     ] {
@@ -661,11 +528,16 @@ fn plan_flags_are_checked_before_anything_starts() {
     }
 }
 
-/// Library: a robot that does not stand at the trajectory's start is refused before the device
-/// is started (the check `rl run --plan` makes for a real robot).
-#[test]
-fn a_robot_away_from_the_start_is_refused_before_servo_on() {
-    let _run = one_run_at_a_time();
+/// Library: box_panda's request planned as `rl run --plan` plans it (the hybrid checker, default
+/// options, half the speed limits), stopped by `stop`; with the request's start and the model
+/// as the controller loads it.
+fn plan_box(
+    stop: Option<&StopFlag>,
+) -> (
+    Result<PlannedMotion<8>, PlannedMotionError>,
+    Vec<f64>,
+    LoadedModel<16>,
+) {
     let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
     let (scene, request) = problem("box_panda");
     let (start, goal) = start_and_goal(&robot, &request);
@@ -680,9 +552,18 @@ fn a_robot_away_from_the_start_is_refused_before_servo_on() {
         &goal,
         &PlanOptions::default(),
         0.5,
-        None,
-    )
-    .expect("planned");
+        stop,
+    );
+    (planned, start, loaded)
+}
+
+/// Library: a robot that does not stand at the trajectory's start is refused before the device
+/// is started (the check `rl run --plan` makes for a real robot).
+#[test]
+fn a_robot_away_from_the_start_is_refused_before_servo_on() {
+    let _run = one_run_at_a_time();
+    let (planned, start, loaded) = plan_box(None);
+    let planned = planned.expect("planned");
     assert!(planned.result.solved);
     assert_eq!(planned.waypoints.first().unwrap(), &start);
     // The fake stands 0.2 rad away from the start on joint 1.
@@ -724,25 +605,9 @@ fn a_robot_away_from_the_start_is_refused_before_servo_on() {
 #[test]
 fn a_stop_request_cancels_planning() {
     let _run = one_run_at_a_time();
-    let robot = Robot::load_urdf(&panda(), None, None).expect("panda");
-    let (scene, request) = problem("box_panda");
-    let (start, goal) = start_and_goal(&robot, &request);
-    let env = rl::sg::load::moveit::load_environment(&scene).expect("scene");
-    let mut checker = robot.hybrid_checker(&env).expect("checker");
-    let loaded = rl::core::loader::load_file::<16>(panda()).expect("model");
     let stop = StopFlag::new();
     stop.request_stop();
-    let e = plan_motion::<16, 8>(
-        &loaded.model,
-        &robot.space,
-        &mut checker,
-        &start,
-        &goal,
-        &PlanOptions::default(),
-        0.5,
-        Some(&stop),
-    )
-    .expect_err("cancelled");
+    let e = plan_box(Some(&stop)).0.expect_err("cancelled");
     assert_eq!(e, PlannedMotionError::Cancelled);
 }
 
@@ -752,26 +617,16 @@ fn a_stop_request_cancels_planning() {
 fn joint_limit_overrides_bound_the_path_and_name_unknown_joints() {
     let _run = one_run_at_a_time();
     let (scene, request) = problem("box_panda");
-    let (scene, request) = (scene.to_str().unwrap(), request.to_str().unwrap());
-    let panda = panda();
-    let model = panda.to_str().unwrap();
     let path = temp("limited-path.csv");
     // The request goes from panda_joint1 = 0 to 0.4534; the override keeps joint 1 within
     // [-0.1, 0.6] and joint 3 within [-0.3, 0.3] (the model allows ±2.9671 for both).
     let limits = "panda_joint1=-0.1:0.6,panda_joint3=-0.3:0.3";
     let out = rl(
-        &[
-            "plan",
-            model,
-            "--scene",
-            scene,
-            "--request",
-            request,
-            "--limits",
-            limits,
-            "--out",
-            path.to_str().unwrap(),
-        ],
+        &plan_args(
+            &scene,
+            &request,
+            &["--limits", limits, "--out", path.to_str().unwrap()],
+        ),
         Duration::from_secs(60),
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -792,16 +647,7 @@ fn joint_limit_overrides_bound_the_path_and_name_unknown_joints() {
 
     // A goal outside the override is refused, naming the joint.
     let out = rl(
-        &[
-            "plan",
-            model,
-            "--scene",
-            scene,
-            "--request",
-            request,
-            "--limits",
-            "panda_joint1=-0.1:0.4",
-        ],
+        &plan_args(&scene, &request, &["--limits", "panda_joint1=-0.1:0.4"]),
         Duration::from_secs(60),
     );
     let stderr = text(&out.stderr);
@@ -813,29 +659,10 @@ fn joint_limit_overrides_bound_the_path_and_name_unknown_joints() {
 
     // Unknown joints and malformed entries are usage errors, in both commands, before
     // anything starts.
+    let unknown = ["--limits", "panda_joint9=0:1"];
     for args in [
-        vec![
-            "plan",
-            model,
-            "--scene",
-            scene,
-            "--request",
-            request,
-            "--limits",
-            "panda_joint9=0:1",
-        ],
-        vec![
-            "run",
-            "--model",
-            model,
-            "--plan",
-            "--scene",
-            scene,
-            "--request",
-            request,
-            "--limits",
-            "panda_joint9=0:1",
-        ],
+        plan_args(&scene, &request, &unknown),
+        run_plan_args(&scene, &request, &unknown),
     ] {
         let out = rl(&args, Duration::from_secs(60));
         let stderr = text(&out.stderr);
@@ -848,18 +675,7 @@ fn joint_limit_overrides_bound_the_path_and_name_unknown_joints() {
         assert!(out.stdout.is_empty(), "{args:?}: nothing ran");
     }
     let out = rl(
-        &[
-            "run",
-            "--model",
-            model,
-            "--plan",
-            "--scene",
-            scene,
-            "--request",
-            request,
-            "--limits",
-            "panda_joint1=1:0",
-        ],
+        &run_plan_args(&scene, &request, &["--limits", "panda_joint1=1:0"]),
         Duration::from_secs(60),
     );
     assert_eq!(out.status.code(), Some(2));

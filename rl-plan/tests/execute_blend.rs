@@ -351,16 +351,15 @@ fn an_obstacle_at_a_blended_corner_shrinks_or_stops_the_blend() {
         centre: q_out.clone(),
         radius: 0.5 * off,
     };
+    // Every configuration of `tr` a tenth of the resolution apart is free of the meshes and
+    // the ball.
+    let free_of_ball = |tr: &Piecewise<Segment<D>, MAX>| {
+        all_valid(&robot.space, &mut blocked(), tr, speed_bound(&limits), step)
+    };
     // The path itself (stopping at every waypoint) is free of the ball.
     let stop = ex.stop_at_waypoints::<D, MAX>().unwrap();
-    all_valid(
-        &robot.space,
-        &mut blocked(),
-        &stop,
-        speed_bound(&limits),
-        step,
-    )
-    .unwrap_or_else(|(t, q)| panic!("the path touches the ball at t={t}: {q:?}"));
+    free_of_ball(&stop)
+        .unwrap_or_else(|(t, q)| panic!("the path touches the ball at t={t}: {q:?}"));
 
     let b = ex
         .blended::<D, MAX>(&robot.space, &mut blocked(), &opts)
@@ -372,14 +371,7 @@ fn an_obstacle_at_a_blended_corner_shrinks_or_stops_the_blend() {
         "the blend at the ball was kept whole"
     );
     check_limits("box_panda, ball", &b.trajectory, ex.waypoints(), &limits);
-    all_valid(
-        &robot.space,
-        &mut blocked(),
-        &b.trajectory,
-        speed_bound(&limits),
-        step,
-    )
-    .unwrap_or_else(|(t, q)| panic!("in collision at t={t}: {q:?}"));
+    free_of_ball(&b.trajectory).unwrap_or_else(|(t, q)| panic!("in collision at t={t}: {q:?}"));
     assert!(b.report.duration_s <= b.report.stop_duration_s);
 
     // No shrinks allowed: the trajectory stops there, and is still free.
@@ -393,14 +385,7 @@ fn an_obstacle_at_a_blended_corner_shrinks_or_stops_the_blend() {
         WaypointOutcome::Stopped(StopReason::Collision)
     );
     check_limits("box_panda, stopped", &b.trajectory, ex.waypoints(), &limits);
-    all_valid(
-        &robot.space,
-        &mut blocked(),
-        &b.trajectory,
-        speed_bound(&limits),
-        step,
-    )
-    .unwrap_or_else(|(t, q)| panic!("in collision at t={t}: {q:?}"));
+    free_of_ball(&b.trajectory).unwrap_or_else(|(t, q)| panic!("in collision at t={t}: {q:?}"));
 }
 
 /// A disc in a plane of two joints, just inside a right-angle corner of the path: the path

@@ -729,6 +729,18 @@ mod tests {
         }
     }
 
+    /// `path` in `space` under [`limits`], blended with nothing in the way (resolution 0.1).
+    fn blend_in_plane(space: &JointSpace, path: &Path) -> Blended<2, 16> {
+        Execution::new(space, path, limits())
+            .unwrap()
+            .blended::<2, 16>(
+                space,
+                &mut AlwaysValid::new(space.clone()),
+                &BlendOptions::for_resolution(0.1),
+            )
+            .unwrap()
+    }
+
     /// A right-angle corner with long legs: the blend at the corner lasts `1.875 · 1 / 2` s
     /// (acceleration-bound: the velocity of each joint changes by 1), the ramps from and to
     /// rest `1/A + A/J = 0.52` s, the lines run at the speed limit, and the run lasts
@@ -738,14 +750,7 @@ mod tests {
     fn a_right_angle_corner_by_hand() {
         let space = plane();
         let path = Path::from_points(2, &[vec![0.0, 0.0], vec![2.0, 0.0], vec![2.0, 2.0]]);
-        let ex = Execution::new(&space, &path, limits()).unwrap();
-        let b = ex
-            .blended::<2, 16>(
-                &space,
-                &mut AlwaysValid::new(space.clone()),
-                &BlendOptions::for_resolution(0.1),
-            )
-            .unwrap();
+        let b = blend_in_plane(&space, &path);
         let tb = 1.875 * 1.0 / 2.0;
         assert!(
             (b.report.duration_s - (2.0 + 2.0 + 0.52)).abs() < 1e-12,
@@ -788,14 +793,7 @@ mod tests {
                 vec![3.2, 1.6],
             ],
         );
-        let ex = Execution::new(&space, &path, limits()).unwrap();
-        let b = ex
-            .blended::<2, 16>(
-                &space,
-                &mut AlwaysValid::new(space.clone()),
-                &BlendOptions::for_resolution(0.1),
-            )
-            .unwrap();
+        let b = blend_in_plane(&space, &path);
         assert_eq!(b.report.blended(), 2, "{}", b.report);
         assert!(b.report.duration_s < b.report.stop_duration_s);
         let mut t = 0.0;

@@ -11,6 +11,7 @@
 //! resolution (VAMP's setting: steps of 1 rad checked every 1/32 rad) is safe too. With `delta`
 //! at or below the resolution the verifier checks exactly the new vertex, as RL does.
 
+mod bidirectional;
 pub mod graph;
 mod prm;
 mod rrt;

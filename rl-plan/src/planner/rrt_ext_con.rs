@@ -1,54 +1,13 @@
 //! RRT-Connect as Kuffner and LaValle published it (ICRA 2000), RL's `RrtExtCon`, OMPL's
-//! `RRTConnect` and VAMP's `RRTC`: the growing tree *extends* one step towards a sample, the
-//! other tree *connects* towards the new vertex; the trees swap roles (or, with `balance`, the
-//! smaller one grows).
+//! `RRTConnect` and VAMP's `RRTC`: the growing tree *extends* one step towards a sample
+//! (within the settings' dynamic domain when they have one), the other tree *connects*
+//! towards the new vertex; the trees swap roles (or, with `balance`, the smaller one grows).
+//! The search is the one in [`super::bidirectional`].
 
-use super::rrt::{RrtSettings, extend_with};
-use super::rrt_con_con::bidirectional;
-use super::tree::Pair;
-use super::{Context, Planner, Stats};
-use crate::error::PlanError;
-use crate::path::Path;
-use crate::space::JointSpace;
+use super::bidirectional::two_tree_planner;
 
-/// RL's `RrtExtCon`.
-pub struct RrtExtCon {
-    settings: RrtSettings,
-    pair: Pair,
-    stats: Stats,
-}
-
-impl RrtExtCon {
-    /// A planner for `space`.
-    pub fn new(space: &JointSpace, settings: RrtSettings) -> Result<Self, PlanError> {
-        settings.validate()?;
-        Ok(Self {
-            settings,
-            pair: Pair::new(space, settings.nn)?,
-            stats: Stats::default(),
-        })
-    }
-}
-
-impl Planner for RrtExtCon {
-    fn name(&self) -> &'static str {
-        "RRT Extend Connect"
-    }
-
-    fn solve(&mut self, ctx: &mut Context, start: &[f64], goal: &[f64]) -> Option<Path> {
-        let s = self.settings;
-        bidirectional(
-            ctx,
-            &mut self.pair,
-            &mut self.stats,
-            &s,
-            start,
-            goal,
-            extend_with,
-        )
-    }
-
-    fn stats(&self) -> Stats {
-        self.stats
-    }
+two_tree_planner! {
+    /// RL's `RrtExtCon`.
+    RrtExtCon, "RRT Extend Connect",
+    towards_sample: ExtendInDomain, towards_tree: Connect,
 }

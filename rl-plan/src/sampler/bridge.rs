@@ -1,12 +1,10 @@
 //! Bridge sampling in narrow passages (RL's `BridgeSampler`; Hsu, Jiang, Reif and Sun, ICRA
 //! 2003): two invalid points a Gaussian step apart whose midpoint is valid. With probability
 //! `1 − ratio` (RL's default ratio 5/6) a plain uniform valid point is returned instead.
+//! Its [`super::Sampler`] implementation is the Gaussian sampler's ([`super::gaussian`]).
 
 use super::Sampler;
-use crate::budget::Budget;
-use crate::rng::Rng;
-use crate::space::JointSpace;
-use crate::validity::Validity;
+use super::gaussian::{Search, near_obstacles};
 
 /// The bridge sampler.
 #[derive(Clone, Debug)]
@@ -29,46 +27,33 @@ impl Bridge {
             b: Vec::new(),
         }
     }
-}
 
-impl Sampler for Bridge {
-    fn name(&self) -> &'static str {
-        "bridge"
-    }
-
-    fn generate(&mut self, space: &JointSpace, rng: &mut Rng, out: &mut [f64]) {
-        space.sample_uniform(rng, out);
-    }
-
-    fn generate_valid(
-        &mut self,
-        space: &JointSpace,
-        validity: &mut dyn Validity,
-        rng: &mut Rng,
-        budget: &Budget,
-        out: &mut [f64],
-    ) -> bool {
-        if rng.uniform() > self.ratio {
-            return super::Uniform.generate_valid(space, validity, rng, budget, out);
+    /// The search of [`Sampler::generate_valid`].
+    fn search(&mut self, s: Search<'_>, out: &mut [f64]) -> bool {
+        if s.rng.uniform() > self.ratio {
+            return super::Uniform.generate_valid(s.space, s.validity, s.rng, s.budget, out);
         }
-        self.a.resize(space.nq(), 0.0);
-        self.b.resize(space.nq(), 0.0);
+        self.a.resize(s.space.nq(), 0.0);
+        self.b.resize(s.space.nq(), 0.0);
         loop {
-            if budget.expired() {
+            if s.budget.expired() {
                 return false;
             }
-            space.sample_uniform(rng, &mut self.a);
-            if validity.is_valid(&self.a) {
+            s.space.sample_uniform(s.rng, &mut self.a);
+            if s.validity.is_valid(&self.a) {
                 continue;
             }
-            space.sample_gaussian(rng, &self.a, &self.sigma, &mut self.b);
-            if validity.is_valid(&self.b) {
+            s.space
+                .sample_gaussian(s.rng, &self.a, &self.sigma, &mut self.b);
+            if s.validity.is_valid(&self.b) {
                 continue;
             }
-            space.interpolate(&self.a, &self.b, 0.5, out);
-            if validity.is_valid(out) {
+            s.space.interpolate(&self.a, &self.b, 0.5, out);
+            if s.validity.is_valid(out) {
                 return true;
             }
         }
     }
 }
+
+near_obstacles!(Bridge, "bridge");
