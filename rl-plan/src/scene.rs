@@ -16,7 +16,7 @@ use crate::error::PlanError;
 use crate::space::JointSpace;
 use crate::validity::Validity;
 
-mod certify;
+pub mod certify;
 
 pub use certify::{Certificate, CertifyOptions, PathCertificate, Uncertified};
 
