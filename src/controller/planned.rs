@@ -340,7 +340,7 @@ fn plan_once<const B: usize, const J: usize>(
                 validity,
                 &BlendOptions::for_resolution(resolution),
             )?;
-            let trajectory = PlanTrajectory::Blended(Box::new(blended.trajectory));
+            let trajectory = PlanTrajectory::Blended(blended.trajectory);
             match certify_trajectory(validity, space, &trajectory, &limits.velocity[..dof])? {
                 // Certified, or nothing to certify it with.
                 Ok(c) => (trajectory, Some(blended.report), c, None),

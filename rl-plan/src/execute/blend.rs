@@ -212,8 +212,9 @@ impl core::fmt::Display for BlendReport {
 /// A blended trajectory and what was done to make it.
 #[derive(Clone, Debug)]
 pub struct Blended<const D: usize, const MAX: usize> {
-    /// The trajectory (axes beyond the space's coordinates stay at 0).
-    pub trajectory: Piecewise<Segment<D>, MAX>,
+    /// The trajectory (axes beyond the space's coordinates stay at 0), on the heap: at 8 axes
+    /// and 165 segments it is about 233 KB, too big to pass around on a thread's stack.
+    pub trajectory: Box<Piecewise<Segment<D>, MAX>>,
     /// Blended and stopped waypoints, durations, checks.
     pub report: BlendReport,
 }
@@ -362,7 +363,7 @@ impl Execution {
             }
         }
         done.sort_by_key(|(first, _)| *first);
-        let mut trajectory = Piecewise::new();
+        let mut trajectory = Box::new(Piecewise::new());
         for piece in done.into_iter().flat_map(|(_, p)| p) {
             trajectory.push(piece).map_err(|_| {
                 PlanError::Unsupported(format!(
