@@ -373,10 +373,6 @@ fn flat(p: &Pose) -> [f64; 6] {
 impl Driver for Coach {
     const STOP_DESCRIPTION: &'static str = "nothing to switch off: a visualiser";
 
-    fn period(&self) -> Duration {
-        self.config.update_period
-    }
-
     fn open_sequence(&mut self) -> Result<(), Error> {
         self.counters.outstanding = 0;
         const OP: Operation = Operation::Open;
@@ -407,6 +403,10 @@ impl Driver for Coach {
         self.link = None;
         self.have_joints = false;
         Ok(())
+    }
+
+    fn period(&self) -> Duration {
+        self.config.update_period
     }
 
     /// Sends the buffered lines (and `6 <i>`) and waits at most `reply_timeout` (or the step's

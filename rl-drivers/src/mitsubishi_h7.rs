@@ -41,7 +41,7 @@ use crate::capability::{
     CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
     JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
@@ -727,10 +727,6 @@ impl Driver for MitsubishiH7 {
     /// The controller answers at its own 7.11 ms ticks.
     const RUNS_OWN_CYCLE: bool = true;
 
-    fn period(&self) -> Duration {
-        UPDATE_PERIOD
-    }
-
     fn open_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Open;
         let timeout = self.config.r3_timeout;
@@ -818,12 +814,7 @@ impl Driver for MitsubishiH7 {
     /// failed (each is bounded by `r3_timeout` or `servo_timeout`); the first error is returned.
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut note = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
+        let mut steps = FirstError::default();
         let end = Packet {
             command: Command::End,
             c_count: self.c_count,
@@ -837,21 +828,21 @@ impl Driver for MitsubishiH7 {
         if sent.is_ok() {
             self.counters.sent += 1;
         }
-        note(sent);
-        note(self.r3_command(OP, 1, "STOP"));
+        steps.keep(sent);
+        steps.keep(self.r3_command(OP, 1, "STOP"));
         // If the state cannot be read, switch the servo off anyway.
         let servo_on = match self.dstate(OP) {
             Ok(state) => state.servo_on(),
             Err(e) => {
-                note(Err(e));
+                steps.keep(Err(e));
                 true
             }
         };
         if servo_on {
-            note(self.r3_command(OP, 1, "SRVOFF"));
-            note(self.wait_servo(OP, false));
+            steps.keep(self.r3_command(OP, 1, "SRVOFF"));
+            steps.keep(self.wait_servo(OP, false));
         }
-        first.map_or(Ok(()), Err)
+        steps.into_result()
     }
 
     fn close_sequence(&mut self) -> Result<(), Error> {
@@ -861,6 +852,10 @@ impl Driver for MitsubishiH7 {
         self.r3 = None;
         self.measured_from = Measured::None;
         Ok(())
+    }
+
+    fn period(&self) -> Duration {
+        UPDATE_PERIOD
     }
 
     fn exchange(&mut self) -> Result<(), Error> {

@@ -38,7 +38,7 @@ use crate::capability::{
 };
 use crate::cia402::state::Goal;
 use crate::cia402::{Command, Controlword, Mode, PowerState, Statusword, object as obj};
-use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::can::Frame;
 use crate::proto::canopen::emcy::Emergency;
 use crate::proto::canopen::pdo::{self, Direction, Field, Mapping};
@@ -340,14 +340,7 @@ impl Cia402 {
     pub fn transport_counters(&self) -> TransportCounters {
         let mut c = self.transport_before;
         if let Some(l) = &self.link {
-            let n = l.counters();
-            c.frames_sent += n.frames_sent;
-            c.frames_received += n.frames_received;
-            c.rejected += n.rejected;
-            c.corrupt += n.corrupt;
-            c.sequence_gaps += n.sequence_gaps;
-            c.overruns += n.overruns;
-            c.error_frames += n.error_frames;
+            c += l.counters();
         }
         c
     }
@@ -1010,10 +1003,6 @@ impl Driver for Cia402 {
     const STOP_DESCRIPTION: &'static str =
         "quick stop, power stage off (switch on disabled), NMT pre-operational";
 
-    fn period(&self) -> Duration {
-        self.config.period
-    }
-
     fn open_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Open;
         if self.link.is_none() {
@@ -1102,12 +1091,7 @@ impl Driver for Cia402 {
 
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut keep = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
+        let mut steps = FirstError::default();
         // Decelerate with the drives' quick stop ramp; a drive already off or in fault is safe.
         let r = self.drive_power(
             OP,
@@ -1115,7 +1099,7 @@ impl Driver for Cia402 {
             |s| !matches!(s, Some(PowerState::OperationEnabled)),
             "quick stop",
         );
-        keep(r);
+        steps.keep(r);
         let r = self.drive_power(
             OP,
             Goal::SwitchOnDisabled,
@@ -1131,28 +1115,21 @@ impl Driver for Cia402 {
             },
             "switch on disabled",
         );
-        keep(r);
+        steps.keep(r);
         let r = self.nmt(OP, nmt::Command::EnterPreOperational);
-        keep(r);
-        match first {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        steps.keep(r);
+        steps.into_result()
     }
 
     fn close_sequence(&mut self) -> Result<(), Error> {
         if let Some(l) = self.link.take() {
-            let n = l.counters();
-            let c = &mut self.transport_before;
-            c.frames_sent += n.frames_sent;
-            c.frames_received += n.frames_received;
-            c.rejected += n.rejected;
-            c.corrupt += n.corrupt;
-            c.sequence_gaps += n.sequence_gaps;
-            c.overruns += n.overruns;
-            c.error_frames += n.error_frames;
+            self.transport_before += l.counters();
         }
         Ok(())
+    }
+
+    fn period(&self) -> Duration {
+        self.config.period
     }
 
     /// One control cycle with the error policy.

@@ -26,10 +26,6 @@ pub(crate) trait Driver {
     /// ([`CyclicDevice::runs_own_cycle`](super::CyclicDevice::runs_own_cycle)).
     const RUNS_OWN_CYCLE: bool = false;
 
-    /// The control period
-    /// ([`CyclicDevice::update_period`](super::CyclicDevice::update_period)).
-    fn period(&self) -> Duration;
-
     /// Connects (`Closed -> Open`); an error leaves the device closed.
     fn open_sequence(&mut self) -> Result<(), Error>;
 
@@ -42,9 +38,32 @@ pub(crate) trait Driver {
     /// Disconnects (`Open | Faulted -> Closed`, even when it fails).
     fn close_sequence(&mut self) -> Result<(), Error>;
 
+    /// The control period
+    /// ([`CyclicDevice::update_period`](super::CyclicDevice::update_period)).
+    fn period(&self) -> Duration;
+
     /// One cycle's exchange; the caller's bound on its wait, if any, is the lifecycle's
     /// [`step_budget`](super::Lifecycle::step_budget). Does not allocate.
     fn exchange(&mut self) -> Result<(), Error>;
+}
+
+/// The outcome of a sequence that tries every step even after one failed (a stop still switches
+/// the power off when its first step failed): the first error, or success.
+#[derive(Debug, Default)]
+pub(crate) struct FirstError(Option<Error>);
+
+impl FirstError {
+    /// Records one step's result; only the first error is kept.
+    pub(crate) fn keep(&mut self, result: Result<(), Error>) {
+        if let Err(e) = result {
+            self.0.get_or_insert(e);
+        }
+    }
+
+    /// `Ok`, or the first error kept.
+    pub(crate) fn into_result(self) -> Result<(), Error> {
+        self.0.map_or(Ok(()), Err)
+    }
 }
 
 /// Implements [`Device`](crate::device::Device) and
@@ -55,41 +74,13 @@ macro_rules! impl_cyclic_device {
         impl $crate::device::Device for $driver {
             type Error = $crate::device::Error;
 
-            fn open(&mut self) -> Result<(), Self::Error> {
-                $crate::device::Lifecycle::transition(
-                    self,
-                    $crate::device::Operation::Open,
-                    |d| &mut d.$lifecycle,
-                    <Self as $crate::device::Driver>::open_sequence,
-                )
-            }
-
-            fn start(&mut self) -> Result<(), Self::Error> {
-                $crate::device::Lifecycle::transition(
-                    self,
-                    $crate::device::Operation::Start,
-                    |d| &mut d.$lifecycle,
-                    <Self as $crate::device::Driver>::start_sequence,
-                )
-            }
-
-            fn stop(&mut self) -> Result<(), Self::Error> {
-                $crate::device::Lifecycle::transition(
-                    self,
-                    $crate::device::Operation::Stop,
-                    |d| &mut d.$lifecycle,
-                    <Self as $crate::device::Driver>::stop_sequence,
-                )
-            }
-
-            fn close(&mut self) -> Result<(), Self::Error> {
-                $crate::device::Lifecycle::transition(
-                    self,
-                    $crate::device::Operation::Close,
-                    |d| &mut d.$lifecycle,
-                    <Self as $crate::device::Driver>::close_sequence,
-                )
-            }
+            $crate::device::impl_cyclic_device!(
+                @transitions $lifecycle;
+                open Open open_sequence,
+                start Start start_sequence,
+                stop Stop stop_sequence,
+                close Close close_sequence
+            );
 
             fn state(&self) -> $crate::device::State {
                 self.$lifecycle.state()
@@ -131,6 +122,19 @@ macro_rules! impl_cyclic_device {
             }
         }
     };
+    // Each transition: the `Device` method, its `Operation` and the `Driver` sequence it runs.
+    (@transitions $lifecycle:ident; $($method:ident $operation:ident $sequence:ident),+) => {
+        $(
+            fn $method(&mut self) -> Result<(), Self::Error> {
+                $crate::device::Lifecycle::transition(
+                    self,
+                    $crate::device::Operation::$operation,
+                    |d| &mut d.$lifecycle,
+                    <Self as $crate::device::Driver>::$sequence,
+                )
+            }
+        )+
+    };
 }
 
 pub(crate) use impl_cyclic_device;
@@ -152,9 +156,6 @@ mod tests {
         const STOP_DESCRIPTION: &'static str = "toy stopped";
         const RUNS_OWN_CYCLE: bool = true;
 
-        fn period(&self) -> Duration {
-            Duration::from_millis(4)
-        }
         fn open_sequence(&mut self) -> Result<(), Error> {
             Ok(())
         }
@@ -172,6 +173,9 @@ mod tests {
         }
         fn close_sequence(&mut self) -> Result<(), Error> {
             Ok(())
+        }
+        fn period(&self) -> Duration {
+            Duration::from_millis(4)
         }
         fn exchange(&mut self) -> Result<(), Error> {
             self.budgets[self.steps % 2] = self.life.step_budget();

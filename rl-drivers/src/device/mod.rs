@@ -19,7 +19,7 @@ mod lifecycle;
 use core::time::Duration;
 
 #[cfg_attr(not(feature = "std"), allow(unused_imports))]
-pub(crate) use driver::{Driver, impl_cyclic_device};
+pub(crate) use driver::{Driver, FirstError, impl_cyclic_device};
 pub use error::{DESCRIPTION_CAPACITY, Description, DeviceError, Error, ErrorKind, ProtocolError};
 pub use lifecycle::{DEFAULT_MAX_CONSECUTIVE_FAILURES, Lifecycle, Operation, State};
 

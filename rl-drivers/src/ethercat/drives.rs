@@ -35,7 +35,7 @@ use crate::cia402::state::Goal;
 use crate::cia402::{
     AxisUnits, Command as DriveCommand, Controlword, Mode, PowerState, Statusword,
 };
-use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::canopen::pdo::Entry;
 use crate::proto::canopen::sdo::Address;
 use crate::proto::ecat::al::AlState;
@@ -594,10 +594,6 @@ impl Driver for EthercatDrives {
     const STOP_DESCRIPTION: &'static str =
         "drives disabled (disable operation, shutdown, disable voltage), segment in PRE-OP";
 
-    fn period(&self) -> Duration {
-        self.config.period
-    }
-
     // ---- open -------------------------------------------------------------------------------
 
     fn open_sequence(&mut self) -> Result<(), Error> {
@@ -815,6 +811,10 @@ impl Driver for EthercatDrives {
 
     // ---- step -------------------------------------------------------------------------------
 
+    fn period(&self) -> Duration {
+        self.config.period
+    }
+
     fn exchange(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Step;
         let timeout = self.config.frame_timeout.min(self.config.period);
@@ -851,12 +851,7 @@ impl Driver for EthercatDrives {
 
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut keep = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
+        let mut steps = FirstError::default();
         if self.process.is_some() && self.master.is_some() {
             // Drives to rest: disable operation, shutdown, disable voltage; each bounded.
             let mut next = Instant::now();
@@ -903,7 +898,7 @@ impl Driver for EthercatDrives {
                         let k = (0..self.drives.len())
                             .find(|&k| self.statusword(k).and_then(|s| s.state()) != Some(done))
                             .unwrap_or(0);
-                        keep(Err(match last_error {
+                        steps.keep(Err(match last_error {
                             Some(e) => to_error(OP, e),
                             None => Error::device(OP, "CiA 402 statusword", &self.drive_fault(k)),
                         }));
@@ -915,7 +910,7 @@ impl Driver for EthercatDrives {
         if let Some(m) = self.master.as_mut() {
             let all: Vec<usize> = (0..m.devices.len()).collect();
             for target in [AlState::SafeOp, AlState::PreOp] {
-                keep(
+                steps.keep(
                     m.request_state(&all, target, |_| Ok(()))
                         .map_err(|e| to_error(OP, e)),
                 );
@@ -924,10 +919,7 @@ impl Driver for EthercatDrives {
         if let Some(p) = self.process.as_mut() {
             p.target = AlState::PreOp;
         }
-        match first {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
+        steps.into_result()
     }
 
     // ---- close ------------------------------------------------------------------------------
