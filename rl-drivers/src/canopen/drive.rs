@@ -369,6 +369,15 @@ impl Cia402 {
         self.axes[..self.dof].iter().position(|a| a.node == node)
     }
 
+    /// The axis of `node`; `None` for a node not on our list, whose frame is counted rejected.
+    fn axis_or_reject(&mut self, node: NodeId) -> Option<usize> {
+        let i = self.axis_of(node);
+        if i.is_none() {
+            self.counters.rejected += 1;
+        }
+        i
+    }
+
     fn note(&mut self, source: &'static str, e: CanopenError) {
         if self.pending.is_none() {
             self.pending = Some((source, e));
@@ -390,10 +399,7 @@ impl Cia402 {
         let data = frame.bytes();
         match Function::from_cob_id(id) {
             Some(Function::Tpdo(k @ (1 | 2), node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 let mapping = if k == 1 {
                     Some(self.layout.tpdo1)
                 } else {
@@ -444,10 +450,7 @@ impl Cia402 {
                 }
             }
             Some(Function::Emcy(node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 match Emergency::decode(data) {
                     Ok(e) => {
                         self.axes[i].emcy = Some(e);
@@ -466,10 +469,7 @@ impl Cia402 {
                 }
             }
             Some(Function::Heartbeat(node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 match heartbeat::decode(data) {
                     Some(state) => {
                         let a = &mut self.axes[i];
@@ -952,6 +952,18 @@ impl Cia402 {
         Error::check_len("joint vector length", self.dof, len)
     }
 
+    /// Buffers one torque per axis (in thousandths of its rated torque) into `slot`, counting
+    /// the values beyond what the command holds (they are clamped).
+    fn set_torques(&mut self, tau: &[f64], slot: fn(&mut Axis) -> &mut i16) {
+        for (k, v) in tau.iter().enumerate() {
+            let u = &self.config.axes[k].units;
+            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
+                self.counters.commands_clamped += 1;
+            }
+            *slot(&mut self.axes[k]) = u.torque_permille(*v);
+        }
+    }
+
     fn read_each(
         &self,
         out: &mut [f64],
@@ -1315,13 +1327,7 @@ impl JointTorqueSensor for Cia402 {
 impl JointTorqueActuator for Cia402 {
     fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Error> {
         self.check_mode(Mode::CyclicTorque, tau.len())?;
-        for (k, v) in tau.iter().enumerate() {
-            let u = &self.config.axes[k].units;
-            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
-                self.counters.commands_clamped += 1;
-            }
-            self.axes[k].target_torque = u.torque_permille(*v);
-        }
+        self.set_torques(tau, |a| &mut a.target_torque);
         Ok(())
     }
 }
@@ -1337,13 +1343,7 @@ impl JointTorqueFeedForward for Cia402 {
                 0,
             ));
         }
-        for (k, v) in tau.iter().enumerate() {
-            let u = &self.config.axes[k].units;
-            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
-                self.counters.commands_clamped += 1;
-            }
-            self.axes[k].torque_offset = u.torque_permille(*v);
-        }
+        self.set_torques(tau, |a| &mut a.torque_offset);
         Ok(())
     }
 }
