@@ -459,6 +459,14 @@ impl MitsubishiH7 {
         }
     }
 
+    /// Drops the R3 and UDP links (the socket's count of foreign datagrams is kept).
+    fn drop_links(&mut self) {
+        if let Some(udp) = self.udp.take() {
+            self.foreign_before += udp.counters().foreign;
+        }
+        self.r3 = None;
+    }
+
     fn udp(&mut self, operation: Operation) -> Result<&mut UdpLink, Error> {
         self.udp.as_mut().ok_or(Error::State {
             operation,
@@ -750,15 +758,11 @@ impl Driver for MitsubishiH7 {
         self.r3 = Some(r3);
         self.udp = Some(udp);
         self.reply = None;
-        self.read_joint_report().inspect_err(|_| {
-            if let Some(udp) = self.udp.take() {
-                self.foreign_before += udp.counters().foreign;
-            }
-            self.r3 = None;
-        })
+        self.read_joint_report().inspect_err(|_| self.drop_links())
     }
 
     fn start_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Start;
         self.request = Packet::default();
         self.reply = None;
         self.c_count = 0;
@@ -768,7 +772,6 @@ impl Driver for MitsubishiH7 {
         self.commanded = None;
         self.limit = [false; MAX_AXES];
         self.last_latency = None;
-        const OP: Operation = Operation::Start;
         let client = match self.config.client_ip {
             Some(ip) => ip,
             None => {
@@ -846,10 +849,7 @@ impl Driver for MitsubishiH7 {
     }
 
     fn close_sequence(&mut self) -> Result<(), Error> {
-        if let Some(udp) = self.udp.take() {
-            self.foreign_before += udp.counters().foreign;
-        }
-        self.r3 = None;
+        self.drop_links();
         self.measured_from = Measured::None;
         Ok(())
     }
