@@ -22,7 +22,7 @@ use crate::capability::{
     JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
     JointTorqueFeedForward, JointVelocityActuator, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
+use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::coach::{CoachError, LineBuffer, MAX_VALUES, Message, Values};
 use crate::transport::TcpLink;
 use rl_core::rotation::euler;
@@ -109,8 +109,6 @@ const MAX_OUTSTANDING: u32 = 1024;
 pub struct Coach {
     config: CoachConfig,
     lifecycle: Lifecycle,
-    /// The reply wait of the step in progress, when the caller bounded it.
-    step_budget: Option<Duration>,
     link: Option<TcpLink>,
     out: [u8; OUTPUT_CAPACITY],
     out_len: usize,
@@ -137,7 +135,6 @@ impl Coach {
         Ok(Self {
             config,
             lifecycle: Lifecycle::with_failure_limit(config.max_consecutive_failures),
-            step_budget: None,
             link: None,
             out: [0; OUTPUT_CAPACITY],
             out_len: 0,
@@ -299,60 +296,6 @@ impl Coach {
         }
     }
 
-    fn exchange(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Step;
-        let timeout = self.step_budget.map_or(self.config.reply_timeout, |b| {
-            b.min(self.config.reply_timeout)
-        });
-        let deadline = Instant::now() + timeout;
-        // What piled up answers requests of earlier steps: drain it (within the deadline).
-        while Instant::now() < deadline {
-            match self.read_lines(deadline, false) {
-                Ok(None) => break,
-                // Late replies are counted in `take_lines`; a bad line here is only counted.
-                Ok(Some(_)) | Err(Error::Protocol { .. }) => {}
-                Err(e) => return Err(e),
-            }
-        }
-        if self.config.request_joints {
-            self.push(&Message::Request {
-                model: self.config.model,
-            })?;
-        }
-        let link = self.link.as_mut().ok_or(Error::State {
-            operation: OP,
-            state: State::Closed,
-        })?;
-        let sent = link.send_all(&self.out[..self.out_len], deadline);
-        self.out_len = 0;
-        if let Err(e) = sent {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                self.counters.timeouts += 1;
-            }
-            return Err(link_error(OP, &e, timeout));
-        }
-        self.counters.sent += 1;
-        if !self.config.request_joints {
-            return Ok(());
-        }
-        self.counters.outstanding += 1;
-        if self.counters.outstanding > MAX_OUTSTANDING {
-            self.counters.outstanding = 1;
-        }
-        self.waiting = true;
-        self.skipped_suspect = false;
-        let result = self.wait_reply(deadline);
-        self.waiting = false;
-        if result.is_err() && self.skipped_suspect {
-            // A reply came during the wait and then nothing until the deadline: the server
-            // skipped requests, and the reply taken as late was this step's. Start counting
-            // again (a reply that still comes moves from `unanswered` to `late`).
-            self.counters.unanswered += u64::from(self.counters.outstanding);
-            self.counters.outstanding = 0;
-        }
-        result
-    }
-
     /// At open: sends `6 <i>` and waits (at most `connect_timeout`: a server thread may take a
     /// moment to serve a new connection) for the reply, so the joint positions can be read
     /// before the device starts.
@@ -427,83 +370,106 @@ fn flat(p: &Pose) -> [f64; 6] {
     [x, y, z, a, b, c]
 }
 
-fn lifecycle(coach: &mut Coach) -> &mut Lifecycle {
-    &mut coach.lifecycle
-}
+impl Driver for Coach {
+    const STOP_DESCRIPTION: &'static str = "nothing to switch off: a visualiser";
 
-impl Device for Coach {
-    type Error = Error;
-
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, |coach| {
-            coach.counters.outstanding = 0;
-            const OP: Operation = Operation::Open;
-            let timeout = coach.config.connect_timeout;
-            let link = TcpLink::connect(coach.config.server, timeout)
-                .map_err(|e| link_error(OP, &e, timeout))?;
-            coach.link = Some(link);
-            coach.lines.clear();
-            coach.have_joints = false;
-            if coach.config.request_joints {
-                // Where the viewer shows the robot now: the pose a controller starts from.
-                coach.query_joints()?;
-            }
-            Ok(())
-        })
+    fn open_sequence(&mut self) -> Result<(), Error> {
+        self.counters.outstanding = 0;
+        const OP: Operation = Operation::Open;
+        let timeout = self.config.connect_timeout;
+        let link = TcpLink::connect(self.config.server, timeout)
+            .map_err(|e| link_error(OP, &e, timeout))?;
+        self.link = Some(link);
+        self.lines.clear();
+        self.have_joints = false;
+        if self.config.request_joints {
+            // Where the viewer shows the robot now: the pose a controller starts from.
+            self.query_joints()?;
+        }
+        Ok(())
     }
 
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, |coach| {
-            coach.out_len = 0;
-            Ok(())
-        })
+    fn start_sequence(&mut self) -> Result<(), Error> {
+        self.out_len = 0;
+        Ok(())
     }
 
-    fn stop(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Stop, lifecycle, |coach| {
-            coach.out_len = 0;
-            Ok(())
-        })
+    fn stop_sequence(&mut self) -> Result<(), Error> {
+        self.out_len = 0;
+        Ok(())
     }
 
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |coach| {
-            coach.link = None;
-            coach.have_joints = false;
-            Ok(())
-        })
+    fn close_sequence(&mut self) -> Result<(), Error> {
+        self.link = None;
+        self.have_joints = false;
+        Ok(())
     }
 
-    fn state(&self) -> State {
-        self.lifecycle.state()
-    }
-
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
-
-    fn stop_description(&self) -> &'static str {
-        "nothing to switch off: a visualiser"
-    }
-}
-
-impl CyclicDevice for Coach {
-    /// Sends the buffered lines (and `6 <i>`) and waits at most `reply_timeout` for the reply.
-    fn step(&mut self) -> Result<(), Error> {
-        Lifecycle::step(self, lifecycle, Self::exchange)
-    }
-
-    fn step_within(&mut self, budget: Duration) -> Result<(), Error> {
-        self.step_budget = Some(budget);
-        let result = self.step();
-        self.step_budget = None;
-        result
-    }
-
-    fn update_period(&self) -> Duration {
+    fn period(&self) -> Duration {
         self.config.update_period
     }
+
+    /// Sends the buffered lines (and `6 <i>`) and waits at most `reply_timeout` (or the step's
+    /// budget, if shorter) for the reply.
+    fn exchange(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Step;
+        let timeout = self
+            .lifecycle
+            .step_budget()
+            .map_or(self.config.reply_timeout, |b| {
+                b.min(self.config.reply_timeout)
+            });
+        let deadline = Instant::now() + timeout;
+        // What piled up answers requests of earlier steps: drain it (within the deadline).
+        while Instant::now() < deadline {
+            match self.read_lines(deadline, false) {
+                Ok(None) => break,
+                // Late replies are counted in `take_lines`; a bad line here is only counted.
+                Ok(Some(_)) | Err(Error::Protocol { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        if self.config.request_joints {
+            self.push(&Message::Request {
+                model: self.config.model,
+            })?;
+        }
+        let link = self.link.as_mut().ok_or(Error::State {
+            operation: OP,
+            state: State::Closed,
+        })?;
+        let sent = link.send_all(&self.out[..self.out_len], deadline);
+        self.out_len = 0;
+        if let Err(e) = sent {
+            if e.kind() == std::io::ErrorKind::TimedOut {
+                self.counters.timeouts += 1;
+            }
+            return Err(link_error(OP, &e, timeout));
+        }
+        self.counters.sent += 1;
+        if !self.config.request_joints {
+            return Ok(());
+        }
+        self.counters.outstanding += 1;
+        if self.counters.outstanding > MAX_OUTSTANDING {
+            self.counters.outstanding = 1;
+        }
+        self.waiting = true;
+        self.skipped_suspect = false;
+        let result = self.wait_reply(deadline);
+        self.waiting = false;
+        if result.is_err() && self.skipped_suspect {
+            // A reply came during the wait and then nothing until the deadline: the server
+            // skipped requests, and the reply taken as late was this step's. Start counting
+            // again (a reply that still comes moves from `unanswered` to `late`).
+            self.counters.unanswered += u64::from(self.counters.outstanding);
+            self.counters.outstanding = 0;
+        }
+        result
+    }
 }
+
+impl_cyclic_device!(Coach, lifecycle);
 
 impl LinkStatisticsSensor for Coach {
     /// `rejected` counts well-formed lines that were not ours; `corrupt` lines that did not

@@ -41,7 +41,7 @@ use crate::capability::{
     CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
     JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
@@ -253,8 +253,6 @@ enum Measured {
 pub struct MitsubishiH7 {
     config: MitsubishiH7Config,
     lifecycle: Lifecycle,
-    /// The reply wait of the step in progress, when the caller bounded it.
-    step_budget: Option<Duration>,
     udp: Option<UdpLink>,
     r3: Option<TcpLink>,
     axes: usize,
@@ -305,7 +303,6 @@ impl MitsubishiH7 {
         Ok(Self {
             config,
             lifecycle: Lifecycle::with_failure_limit(config.max_consecutive_failures),
-            step_budget: None,
             udp: None,
             r3: None,
             axes: config.axes.unwrap_or(0),
@@ -462,6 +459,14 @@ impl MitsubishiH7 {
         }
     }
 
+    /// Drops the R3 and UDP links (the socket's count of foreign datagrams is kept).
+    fn drop_links(&mut self) {
+        if let Some(udp) = self.udp.take() {
+            self.foreign_before += udp.counters().foreign;
+        }
+        self.r3 = None;
+    }
+
     fn udp(&mut self, operation: Operation) -> Result<&mut UdpLink, Error> {
         self.udp.as_mut().ok_or(Error::State {
             operation,
@@ -615,89 +620,6 @@ impl MitsubishiH7 {
         Ok(())
     }
 
-    fn start_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Start;
-        let client = match self.config.client_ip {
-            Some(ip) => ip,
-            None => {
-                let ip = self
-                    .udp(OP)?
-                    .local_addr()
-                    .map_err(|e| Error::io(OP, &e))?
-                    .ip();
-                if ip.is_unspecified() {
-                    route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?
-                } else {
-                    ip
-                }
-            }
-        };
-        let mut program = [0u8; 256];
-        let n = r3::write_program(&mut program, client, self.config.mode, self.config.filter)
-            .map_err(|e| Error::protocol(OP, "R3 program", &e))?;
-        let program = core::str::from_utf8(&program[..n])
-            .unwrap_or_default()
-            .to_owned();
-        self.r3_command(OP, 1, "STOP")?;
-        self.r3_command(OP, 1, "NEW")?;
-        self.r3_command(OP, 1, &format!("LOAD={}", r3::PROGRAM_NAME))?;
-        self.r3_command(OP, 9, "ECLR")?;
-        for chunk in EmdatChunks::new(&program) {
-            let chunk = chunk.map_err(|e| Error::protocol(OP, "R3 program", &e))?;
-            self.r3_command(OP, 9, &format!("EMDAT{chunk}"))?;
-        }
-        self.r3_command(OP, 1, "SAVE")?;
-        self.r3_command(OP, 1, "CNTLON")?;
-        self.r3_command(OP, 1, "SRVON")?;
-        self.r3_command(OP, 1, "CNTLOFF")?;
-        self.wait_servo(OP, true)?;
-        self.r3_command(OP, 1, "CNTLON")?;
-        self.r3_command(OP, 1, "SLOTINIT")?;
-        self.r3_command(OP, 1, &format!("RUN{};1", r3::PROGRAM_NAME))?;
-        self.r3_command(OP, 1, "CNTLOFF")?;
-        Ok(())
-    }
-
-    /// End packet, program stop, servo off: every step is attempted even if an earlier one
-    /// failed (each is bounded by `r3_timeout` or `servo_timeout`); the first error is returned.
-    fn stop_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut note = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
-        let end = Packet {
-            command: Command::End,
-            c_count: self.c_count,
-            ..Packet::default()
-        };
-        end.encode(&mut self.tx);
-        let tx = self.tx;
-        let sent = self
-            .udp(OP)
-            .and_then(|udp| udp.send(&tx).map_err(|e| Error::io(OP, &e)));
-        if sent.is_ok() {
-            self.counters.sent += 1;
-        }
-        note(sent);
-        note(self.r3_command(OP, 1, "STOP"));
-        // If the state cannot be read, switch the servo off anyway.
-        let servo_on = match self.dstate(OP) {
-            Ok(state) => state.servo_on(),
-            Err(e) => {
-                note(Err(e));
-                true
-            }
-        };
-        if servo_on {
-            note(self.r3_command(OP, 1, "SRVOFF"));
-            note(self.wait_servo(OP, false));
-        }
-        first.map_or(Ok(()), Err)
-    }
-
     /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
     fn verdict(&mut self, n: usize, sent: u32) -> Verdict {
         const OP: Operation = Operation::Step;
@@ -756,12 +678,195 @@ impl MitsubishiH7 {
         Verdict::Current(reply)
     }
 
+    /// Uses the reply to a request of an earlier step: it came a cycle late (counted late),
+    /// and the controller's queue is empty again.
+    fn accept_held(&mut self, reply: Packet) {
+        self.counters.late += 1;
+        self.outstanding = None;
+        self.accept(reply);
+    }
+
+    /// Uses a checked reply: measured joints, and the joints whose command the controller
+    /// changed (clamped at a position or speed limit).
+    fn accept(&mut self, reply: Packet) {
+        self.last_used = Some(reply.c_count);
+        self.counters.replies += 1;
+        let joints = [
+            MxtType::JointFeedback,
+            MxtType::JointFiltered,
+            MxtType::Joint,
+        ]
+        .into_iter()
+        .find_map(|t| reply.find(t));
+        if let Some(DataView::Joint(j)) = joints {
+            for (m, v) in self.measured.iter_mut().zip(j) {
+                *m = f64::from(v);
+            }
+            self.measured_from = Measured::Reply;
+        }
+        self.limit = [false; MAX_AXES];
+        if let (Some(DataView::Joint(taken)), Some(sent)) =
+            (reply.find(MxtType::Joint), self.commanded)
+        {
+            for i in 0..self.axes {
+                let (t, s) = (taken[i], sent[i]);
+                self.limit[i] = !(t == s || (t - s).abs() <= f32_ulp(s));
+            }
+        }
+        self.reply = Some(reply);
+    }
+}
+
+/// The local address the system would use to reach `server` (a connected UDP socket sends
+/// nothing; connecting only picks the route).
+fn route_ip(server: SocketAddr) -> std::io::Result<IpAddr> {
+    let any: SocketAddr = if server.is_ipv6() {
+        SocketAddr::new(IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED), 0)
+    } else {
+        SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0)
+    };
+    let probe = std::net::UdpSocket::bind(any)?;
+    probe.connect(server)?;
+    Ok(probe.local_addr()?.ip())
+}
+
+impl Driver for MitsubishiH7 {
+    const STOP_DESCRIPTION: &'static str = "end packet sent, program stopped, servo off";
+    /// The controller answers at its own 7.11 ms ticks.
+    const RUNS_OWN_CYCLE: bool = true;
+
+    fn open_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Open;
+        let timeout = self.config.r3_timeout;
+        let r3 = TcpLink::connect(self.config.r3, timeout).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::TimedOut {
+                Error::Timeout {
+                    operation: OP,
+                    waited: timeout,
+                }
+            } else {
+                Error::io(OP, &e)
+            }
+        })?;
+        // A wildcard address would hear every interface: bind to the one that routes to
+        // the controller.
+        let mut local = self.config.local;
+        if local.ip().is_unspecified() {
+            local.set_ip(route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?);
+        }
+        let udp = UdpLink::bind(local, self.config.server).map_err(|e| Error::io(OP, &e))?;
+        self.r3 = Some(r3);
+        self.udp = Some(udp);
+        self.reply = None;
+        self.read_joint_report().inspect_err(|_| self.drop_links())
+    }
+
+    fn start_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Start;
+        self.request = Packet::default();
+        self.reply = None;
+        self.c_count = 0;
+        self.last_used = None;
+        self.outstanding = None;
+        self.behind = false;
+        self.commanded = None;
+        self.limit = [false; MAX_AXES];
+        self.last_latency = None;
+        let client = match self.config.client_ip {
+            Some(ip) => ip,
+            None => {
+                let ip = self
+                    .udp(OP)?
+                    .local_addr()
+                    .map_err(|e| Error::io(OP, &e))?
+                    .ip();
+                if ip.is_unspecified() {
+                    route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?
+                } else {
+                    ip
+                }
+            }
+        };
+        let mut program = [0u8; 256];
+        let n = r3::write_program(&mut program, client, self.config.mode, self.config.filter)
+            .map_err(|e| Error::protocol(OP, "R3 program", &e))?;
+        let program = core::str::from_utf8(&program[..n])
+            .unwrap_or_default()
+            .to_owned();
+        self.r3_command(OP, 1, "STOP")?;
+        self.r3_command(OP, 1, "NEW")?;
+        self.r3_command(OP, 1, &format!("LOAD={}", r3::PROGRAM_NAME))?;
+        self.r3_command(OP, 9, "ECLR")?;
+        for chunk in EmdatChunks::new(&program) {
+            let chunk = chunk.map_err(|e| Error::protocol(OP, "R3 program", &e))?;
+            self.r3_command(OP, 9, &format!("EMDAT{chunk}"))?;
+        }
+        self.r3_command(OP, 1, "SAVE")?;
+        self.r3_command(OP, 1, "CNTLON")?;
+        self.r3_command(OP, 1, "SRVON")?;
+        self.r3_command(OP, 1, "CNTLOFF")?;
+        self.wait_servo(OP, true)?;
+        self.r3_command(OP, 1, "CNTLON")?;
+        self.r3_command(OP, 1, "SLOTINIT")?;
+        self.r3_command(OP, 1, &format!("RUN{};1", r3::PROGRAM_NAME))?;
+        self.r3_command(OP, 1, "CNTLOFF")?;
+        Ok(())
+    }
+
+    /// End packet, program stop, servo off: every step is attempted even if an earlier one
+    /// failed (each is bounded by `r3_timeout` or `servo_timeout`); the first error is returned.
+    fn stop_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Stop;
+        let mut steps = FirstError::default();
+        let end = Packet {
+            command: Command::End,
+            c_count: self.c_count,
+            ..Packet::default()
+        };
+        end.encode(&mut self.tx);
+        let tx = self.tx;
+        let sent = self
+            .udp(OP)
+            .and_then(|udp| udp.send(&tx).map_err(|e| Error::io(OP, &e)));
+        if sent.is_ok() {
+            self.counters.sent += 1;
+        }
+        steps.keep(sent);
+        steps.keep(self.r3_command(OP, 1, "STOP"));
+        // If the state cannot be read, switch the servo off anyway.
+        let servo_on = match self.dstate(OP) {
+            Ok(state) => state.servo_on(),
+            Err(e) => {
+                steps.keep(Err(e));
+                true
+            }
+        };
+        if servo_on {
+            steps.keep(self.r3_command(OP, 1, "SRVOFF"));
+            steps.keep(self.wait_servo(OP, false));
+        }
+        steps.into_result()
+    }
+
+    fn close_sequence(&mut self) -> Result<(), Error> {
+        self.drop_links();
+        self.measured_from = Measured::None;
+        Ok(())
+    }
+
+    fn period(&self) -> Duration {
+        UPDATE_PERIOD
+    }
+
     fn exchange(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Step;
         let begin = Instant::now();
-        let timeout = self.step_budget.map_or(self.config.reply_timeout, |b| {
-            b.min(self.config.reply_timeout)
-        });
+        let timeout = self
+            .lifecycle
+            .step_budget()
+            .map_or(self.config.reply_timeout, |b| {
+                b.min(self.config.reply_timeout)
+            });
         let deadline = begin + timeout;
         // A controller a cycle behind (two requests reached it within one of its cycles, and it
         // answers one per cycle: the last step saw the reply to the packet before its own)
@@ -873,163 +978,9 @@ impl MitsubishiH7 {
             }
         }
     }
-
-    /// Uses the reply to a request of an earlier step: it came a cycle late (counted late),
-    /// and the controller's queue is empty again.
-    fn accept_held(&mut self, reply: Packet) {
-        self.counters.late += 1;
-        self.outstanding = None;
-        self.accept(reply);
-    }
-
-    /// Uses a checked reply: measured joints, and the joints whose command the controller
-    /// changed (clamped at a position or speed limit).
-    fn accept(&mut self, reply: Packet) {
-        self.last_used = Some(reply.c_count);
-        self.counters.replies += 1;
-        let joints = [
-            MxtType::JointFeedback,
-            MxtType::JointFiltered,
-            MxtType::Joint,
-        ]
-        .into_iter()
-        .find_map(|t| reply.find(t));
-        if let Some(DataView::Joint(j)) = joints {
-            for (m, v) in self.measured.iter_mut().zip(j) {
-                *m = f64::from(v);
-            }
-            self.measured_from = Measured::Reply;
-        }
-        self.limit = [false; MAX_AXES];
-        if let (Some(DataView::Joint(taken)), Some(sent)) =
-            (reply.find(MxtType::Joint), self.commanded)
-        {
-            for i in 0..self.axes {
-                let (t, s) = (taken[i], sent[i]);
-                self.limit[i] = !(t == s || (t - s).abs() <= f32_ulp(s));
-            }
-        }
-        self.reply = Some(reply);
-    }
 }
 
-/// The local address the system would use to reach `server` (a connected UDP socket sends
-/// nothing; connecting only picks the route).
-fn route_ip(server: SocketAddr) -> std::io::Result<IpAddr> {
-    let any: SocketAddr = if server.is_ipv6() {
-        SocketAddr::new(IpAddr::V6(std::net::Ipv6Addr::UNSPECIFIED), 0)
-    } else {
-        SocketAddr::new(IpAddr::V4(Ipv4Addr::UNSPECIFIED), 0)
-    };
-    let probe = std::net::UdpSocket::bind(any)?;
-    probe.connect(server)?;
-    Ok(probe.local_addr()?.ip())
-}
-
-fn lifecycle(h7: &mut MitsubishiH7) -> &mut Lifecycle {
-    &mut h7.lifecycle
-}
-
-impl Device for MitsubishiH7 {
-    type Error = Error;
-
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, |h7| {
-            const OP: Operation = Operation::Open;
-            let timeout = h7.config.r3_timeout;
-            let r3 = TcpLink::connect(h7.config.r3, timeout).map_err(|e| {
-                if e.kind() == std::io::ErrorKind::TimedOut {
-                    Error::Timeout {
-                        operation: OP,
-                        waited: timeout,
-                    }
-                } else {
-                    Error::io(OP, &e)
-                }
-            })?;
-            // A wildcard address would hear every interface: bind to the one that routes to
-            // the controller.
-            let mut local = h7.config.local;
-            if local.ip().is_unspecified() {
-                local.set_ip(route_ip(h7.config.server).map_err(|e| Error::io(OP, &e))?);
-            }
-            let udp = UdpLink::bind(local, h7.config.server).map_err(|e| Error::io(OP, &e))?;
-            h7.r3 = Some(r3);
-            h7.udp = Some(udp);
-            h7.reply = None;
-            h7.read_joint_report().inspect_err(|_| {
-                if let Some(udp) = h7.udp.take() {
-                    h7.foreign_before += udp.counters().foreign;
-                }
-                h7.r3 = None;
-            })
-        })
-    }
-
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, |h7| {
-            h7.request = Packet::default();
-            h7.reply = None;
-            h7.c_count = 0;
-            h7.last_used = None;
-            h7.outstanding = None;
-            h7.behind = false;
-            h7.commanded = None;
-            h7.limit = [false; MAX_AXES];
-            h7.last_latency = None;
-            h7.start_sequence()
-        })
-    }
-
-    fn stop(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Stop, lifecycle, Self::stop_sequence)
-    }
-
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |h7| {
-            if let Some(udp) = h7.udp.take() {
-                h7.foreign_before += udp.counters().foreign;
-            }
-            h7.r3 = None;
-            h7.measured_from = Measured::None;
-            Ok(())
-        })
-    }
-
-    fn state(&self) -> State {
-        self.lifecycle.state()
-    }
-
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
-
-    fn stop_description(&self) -> &'static str {
-        "end packet sent, program stopped, servo off"
-    }
-}
-
-impl CyclicDevice for MitsubishiH7 {
-    fn step(&mut self) -> Result<(), Error> {
-        Lifecycle::step(self, lifecycle, Self::exchange)
-    }
-
-    fn step_within(&mut self, budget: Duration) -> Result<(), Error> {
-        self.step_budget = Some(budget);
-        let result = self.step();
-        self.step_budget = None;
-        result
-    }
-
-    fn update_period(&self) -> Duration {
-        UPDATE_PERIOD
-    }
-
-    /// The controller answers at its own 7.11 ms ticks.
-    fn runs_own_cycle(&self) -> bool {
-        true
-    }
-}
+impl_cyclic_device!(MitsubishiH7, lifecycle);
 
 impl LinkStatisticsSensor for MitsubishiH7 {
     fn link_statistics(&self) -> LinkStatistics {

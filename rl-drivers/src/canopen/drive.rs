@@ -38,7 +38,7 @@ use crate::capability::{
 };
 use crate::cia402::state::Goal;
 use crate::cia402::{Command, Controlword, Mode, PowerState, Statusword, object as obj};
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::can::Frame;
 use crate::proto::canopen::emcy::Emergency;
 use crate::proto::canopen::pdo::{self, Direction, Field, Mapping};
@@ -200,8 +200,6 @@ pub struct Cia402 {
     transport_before: TransportCounters,
     /// The first problem the frames of this cycle reported.
     pending: Option<(&'static str, CanopenError)>,
-    /// The caller's bound on this step's wait for TPDOs ([`CyclicDevice::step_within`]).
-    budget: Option<Duration>,
     sync_sent: Instant,
 }
 
@@ -213,10 +211,6 @@ impl std::fmt::Debug for Cia402 {
             .field("state", &self.lifecycle.state())
             .finish_non_exhaustive()
     }
-}
-
-fn lifecycle(d: &mut Cia402) -> &mut Lifecycle {
-    &mut d.lifecycle
 }
 
 fn invalid(what: &'static str, expected: usize, got: usize) -> Error {
@@ -285,7 +279,6 @@ impl Cia402 {
             counters: Cia402Counters::default(),
             transport_before: TransportCounters::default(),
             pending: None,
-            budget: None,
             sync_sent: Instant::now(),
         })
     }
@@ -347,14 +340,7 @@ impl Cia402 {
     pub fn transport_counters(&self) -> TransportCounters {
         let mut c = self.transport_before;
         if let Some(l) = &self.link {
-            let n = l.counters();
-            c.frames_sent += n.frames_sent;
-            c.frames_received += n.frames_received;
-            c.rejected += n.rejected;
-            c.corrupt += n.corrupt;
-            c.sequence_gaps += n.sequence_gaps;
-            c.overruns += n.overruns;
-            c.error_frames += n.error_frames;
+            c += l.counters();
         }
         c
     }
@@ -383,6 +369,15 @@ impl Cia402 {
         self.axes[..self.dof].iter().position(|a| a.node == node)
     }
 
+    /// The axis of `node`; `None` for a node not on our list, whose frame is counted rejected.
+    fn axis_or_reject(&mut self, node: NodeId) -> Option<usize> {
+        let i = self.axis_of(node);
+        if i.is_none() {
+            self.counters.rejected += 1;
+        }
+        i
+    }
+
     fn note(&mut self, source: &'static str, e: CanopenError) {
         if self.pending.is_none() {
             self.pending = Some((source, e));
@@ -404,10 +399,7 @@ impl Cia402 {
         let data = frame.bytes();
         match Function::from_cob_id(id) {
             Some(Function::Tpdo(k @ (1 | 2), node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 let mapping = if k == 1 {
                     Some(self.layout.tpdo1)
                 } else {
@@ -458,10 +450,7 @@ impl Cia402 {
                 }
             }
             Some(Function::Emcy(node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 match Emergency::decode(data) {
                     Ok(e) => {
                         self.axes[i].emcy = Some(e);
@@ -480,10 +469,7 @@ impl Cia402 {
                 }
             }
             Some(Function::Heartbeat(node)) => {
-                let Some(i) = self.axis_of(node) else {
-                    self.counters.rejected += 1;
-                    return None;
-                };
+                let i = self.axis_or_reject(node)?;
                 match heartbeat::decode(data) {
                     Some(state) => {
                         let a = &mut self.axes[i];
@@ -770,66 +756,6 @@ impl Cia402 {
         self.flush(op)
     }
 
-    fn open_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Open;
-        if self.link.is_none() {
-            let link = self
-                .config
-                .bus
-                .open(self.config.connect_timeout)
-                .map_err(|e| Error::io(OP, &e))?;
-            self.link = Some(link);
-        }
-        self.pending = None;
-        self.nmt(OP, nmt::Command::EnterPreOperational)?;
-        let mode = self.config.mode;
-        for k in 0..self.dof {
-            let node = self.axes[k].node.get();
-            let device_type = self.sdo_read(OP, k, 0x1000, 0)? as u32;
-            if device_type & 0xFFFF != 402 {
-                return Err(Error::device(
-                    OP,
-                    "CiA 402",
-                    &CanopenError::NotADrive { node, device_type },
-                ));
-            }
-            let mut identity = [0u32; 4];
-            for (s, v) in identity.iter_mut().enumerate() {
-                // The vendor id is mandatory; the rest may be absent.
-                match self.sdo_read(OP, k, 0x1018, s as u8 + 1) {
-                    Ok(x) => *v = x as u32,
-                    Err(e) if s == 0 => return Err(e),
-                    Err(_) => {}
-                }
-            }
-            let supported = self.sdo_read(OP, k, obj::SUPPORTED_DRIVE_MODES.index, 0)? as u32;
-            if !mode.is_supported_by(supported) {
-                return Err(Error::device(
-                    OP,
-                    "CiA 402",
-                    &CanopenError::ModeUnsupported {
-                        node,
-                        mode,
-                        supported,
-                    },
-                ));
-            }
-            let position = self.sdo_read(OP, k, obj::POSITION_ACTUAL.index, 0)? as u32 as i32;
-            let sw = self.sdo_read(OP, k, obj::STATUSWORD.index, 0)? as u16;
-            let a = &mut self.axes[k];
-            a.report.device_type = device_type;
-            a.report.identity = identity;
-            a.report.supported_modes = supported;
-            a.position = position;
-            a.target_position = position;
-            a.statusword = sw;
-            a.state = PowerState::from_statusword(sw);
-            a.velocity = 0;
-            a.torque = 0;
-        }
-        Ok(())
-    }
-
     fn configure_pdo(
         &mut self,
         op: Operation,
@@ -1005,6 +931,150 @@ impl Cia402 {
         }
     }
 
+    /// How long this step waits for its TPDOs: `tpdo_timeout`, or less if the caller said so.
+    fn tpdo_wait(&self) -> Duration {
+        self.lifecycle
+            .step_budget()
+            .map_or(self.config.tpdo_timeout, |b| {
+                b.min(self.config.tpdo_timeout)
+            })
+    }
+
+    fn check_mode(&self, mode: Mode, len: usize) -> Result<(), Error> {
+        self.lifecycle.check(Operation::Set)?;
+        if self.config.mode != mode {
+            return Err(invalid(
+                "command kind does not match the configured mode (code)",
+                self.config.mode.code() as usize,
+                mode.code() as usize,
+            ));
+        }
+        Error::check_len("joint vector length", self.dof, len)
+    }
+
+    /// Buffers one torque per axis (in thousandths of its rated torque) into `slot`, counting
+    /// the values beyond what the command holds (they are clamped).
+    fn set_torques(&mut self, tau: &[f64], slot: fn(&mut Axis) -> &mut i16) {
+        for (k, v) in tau.iter().enumerate() {
+            let u = &self.config.axes[k].units;
+            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
+                self.counters.commands_clamped += 1;
+            }
+            *slot(&mut self.axes[k]) = u.torque_permille(*v);
+        }
+    }
+
+    fn read_each(
+        &self,
+        out: &mut [f64],
+        f: impl Fn(&Axis, &crate::cia402::AxisUnits) -> f64,
+    ) -> Result<(), Error> {
+        self.lifecycle.check(Operation::Get)?;
+        Error::check_len("joint vector length", self.dof, out.len())?;
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = f(&self.axes[k], &self.config.axes[k].units);
+        }
+        Ok(())
+    }
+}
+
+fn sdo_frame(cob: u16, message: [u8; 8]) -> Frame {
+    // A COB-ID below 0x800 with 8 bytes is always a valid frame; the fallback is never taken.
+    Frame::standard(cob, &message).unwrap_or_else(|| sync::frame(None))
+}
+
+const NODE_1: NodeId = match NodeId::new(1) {
+    Some(n) => n,
+    None => panic!("1 is a node id"),
+};
+
+/// The refusal of a cycle the bus cannot carry, with the arithmetic.
+#[derive(Clone, Copy, Debug)]
+struct BudgetError {
+    load: super::BusLoad,
+    period: Duration,
+}
+
+impl std::fmt::Display for BudgetError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // Compact (the generic error keeps a few dozen bytes); `BusLoad`'s own text says it in
+        // full, with the bits.
+        let l = &self.load;
+        write!(
+            f,
+            "{} µs cycle < {:.0} µs: {} frames at {} kbit/s",
+            self.period.as_micros(),
+            l.min_period().as_secs_f64() * 1e6,
+            l.frames,
+            l.bitrate / 1000
+        )
+    }
+}
+
+impl Driver for Cia402 {
+    const STOP_DESCRIPTION: &'static str =
+        "quick stop, power stage off (switch on disabled), NMT pre-operational";
+
+    fn open_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Open;
+        if self.link.is_none() {
+            let link = self
+                .config
+                .bus
+                .open(self.config.connect_timeout)
+                .map_err(|e| Error::io(OP, &e))?;
+            self.link = Some(link);
+        }
+        self.pending = None;
+        self.nmt(OP, nmt::Command::EnterPreOperational)?;
+        let mode = self.config.mode;
+        for k in 0..self.dof {
+            let node = self.axes[k].node.get();
+            let device_type = self.sdo_read(OP, k, 0x1000, 0)? as u32;
+            if device_type & 0xFFFF != 402 {
+                return Err(Error::device(
+                    OP,
+                    "CiA 402",
+                    &CanopenError::NotADrive { node, device_type },
+                ));
+            }
+            let mut identity = [0u32; 4];
+            for (s, v) in identity.iter_mut().enumerate() {
+                // The vendor id is mandatory; the rest may be absent.
+                match self.sdo_read(OP, k, 0x1018, s as u8 + 1) {
+                    Ok(x) => *v = x as u32,
+                    Err(e) if s == 0 => return Err(e),
+                    Err(_) => {}
+                }
+            }
+            let supported = self.sdo_read(OP, k, obj::SUPPORTED_DRIVE_MODES.index, 0)? as u32;
+            if !mode.is_supported_by(supported) {
+                return Err(Error::device(
+                    OP,
+                    "CiA 402",
+                    &CanopenError::ModeUnsupported {
+                        node,
+                        mode,
+                        supported,
+                    },
+                ));
+            }
+            let position = self.sdo_read(OP, k, obj::POSITION_ACTUAL.index, 0)? as u32 as i32;
+            let sw = self.sdo_read(OP, k, obj::STATUSWORD.index, 0)? as u16;
+            let a = &mut self.axes[k];
+            a.report.device_type = device_type;
+            a.report.identity = identity;
+            a.report.supported_modes = supported;
+            a.position = position;
+            a.target_position = position;
+            a.statusword = sw;
+            a.state = PowerState::from_statusword(sw);
+            a.velocity = 0;
+            a.torque = 0;
+        }
+        Ok(())
+    }
+
     fn start_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Start;
         self.pending = None;
@@ -1033,12 +1103,7 @@ impl Cia402 {
 
     fn stop_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut keep = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
+        let mut steps = FirstError::default();
         // Decelerate with the drives' quick stop ramp; a drive already off or in fault is safe.
         let r = self.drive_power(
             OP,
@@ -1046,7 +1111,7 @@ impl Cia402 {
             |s| !matches!(s, Some(PowerState::OperationEnabled)),
             "quick stop",
         );
-        keep(r);
+        steps.keep(r);
         let r = self.drive_power(
             OP,
             Goal::SwitchOnDisabled,
@@ -1062,13 +1127,21 @@ impl Cia402 {
             },
             "switch on disabled",
         );
-        keep(r);
+        steps.keep(r);
         let r = self.nmt(OP, nmt::Command::EnterPreOperational);
-        keep(r);
-        match first {
-            Some(e) => Err(e),
-            None => Ok(()),
+        steps.keep(r);
+        steps.into_result()
+    }
+
+    fn close_sequence(&mut self) -> Result<(), Error> {
+        if let Some(l) = self.link.take() {
+            self.transport_before += l.counters();
         }
+        Ok(())
+    }
+
+    fn period(&self) -> Duration {
+        self.config.period
     }
 
     /// One control cycle with the error policy.
@@ -1155,135 +1228,9 @@ impl Cia402 {
             Some((source, e)) => Err(Error::device(OP, source, &e)),
         }
     }
-
-    /// How long this step waits for its TPDOs: `tpdo_timeout`, or less if the caller said so.
-    fn tpdo_wait(&self) -> Duration {
-        self.budget.map_or(self.config.tpdo_timeout, |b| {
-            b.min(self.config.tpdo_timeout)
-        })
-    }
-
-    fn check_mode(&self, mode: Mode, len: usize) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Set)?;
-        if self.config.mode != mode {
-            return Err(invalid(
-                "command kind does not match the configured mode (code)",
-                self.config.mode.code() as usize,
-                mode.code() as usize,
-            ));
-        }
-        Error::check_len("joint vector length", self.dof, len)
-    }
-
-    fn read_each(
-        &self,
-        out: &mut [f64],
-        f: impl Fn(&Axis, &crate::cia402::AxisUnits) -> f64,
-    ) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Get)?;
-        Error::check_len("joint vector length", self.dof, out.len())?;
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = f(&self.axes[k], &self.config.axes[k].units);
-        }
-        Ok(())
-    }
 }
 
-fn sdo_frame(cob: u16, message: [u8; 8]) -> Frame {
-    // A COB-ID below 0x800 with 8 bytes is always a valid frame; the fallback is never taken.
-    Frame::standard(cob, &message).unwrap_or_else(|| sync::frame(None))
-}
-
-const NODE_1: NodeId = match NodeId::new(1) {
-    Some(n) => n,
-    None => panic!("1 is a node id"),
-};
-
-/// The refusal of a cycle the bus cannot carry, with the arithmetic.
-#[derive(Clone, Copy, Debug)]
-struct BudgetError {
-    load: super::BusLoad,
-    period: Duration,
-}
-
-impl std::fmt::Display for BudgetError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        // Compact (the generic error keeps a few dozen bytes); `BusLoad`'s own text says it in
-        // full, with the bits.
-        let l = &self.load;
-        write!(
-            f,
-            "{} µs cycle < {:.0} µs: {} frames at {} kbit/s",
-            self.period.as_micros(),
-            l.min_period().as_secs_f64() * 1e6,
-            l.frames,
-            l.bitrate / 1000
-        )
-    }
-}
-
-impl Device for Cia402 {
-    type Error = Error;
-
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, Self::open_sequence)
-    }
-
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, Self::start_sequence)
-    }
-
-    fn stop(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Stop, lifecycle, Self::stop_sequence)
-    }
-
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |d| {
-            if let Some(l) = d.link.take() {
-                let n = l.counters();
-                let c = &mut d.transport_before;
-                c.frames_sent += n.frames_sent;
-                c.frames_received += n.frames_received;
-                c.rejected += n.rejected;
-                c.corrupt += n.corrupt;
-                c.sequence_gaps += n.sequence_gaps;
-                c.overruns += n.overruns;
-                c.error_frames += n.error_frames;
-            }
-            Ok(())
-        })
-    }
-
-    fn state(&self) -> State {
-        self.lifecycle.state()
-    }
-
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
-
-    fn stop_description(&self) -> &'static str {
-        "quick stop, power stage off (switch on disabled), NMT pre-operational"
-    }
-}
-
-impl CyclicDevice for Cia402 {
-    fn step(&mut self) -> Result<(), Error> {
-        Lifecycle::step(self, lifecycle, Self::exchange)
-    }
-
-    /// A step whose wait for the TPDOs ends at `budget` if that comes before `tpdo_timeout`.
-    fn step_within(&mut self, budget: Duration) -> Result<(), Error> {
-        self.budget = Some(budget);
-        let r = Lifecycle::step(self, lifecycle, Self::exchange);
-        self.budget = None;
-        r
-    }
-
-    fn update_period(&self) -> Duration {
-        self.config.period
-    }
-}
+impl_cyclic_device!(Cia402, lifecycle);
 
 impl LinkStatisticsSensor for Cia402 {
     fn link_statistics(&self) -> LinkStatistics {
@@ -1380,13 +1327,7 @@ impl JointTorqueSensor for Cia402 {
 impl JointTorqueActuator for Cia402 {
     fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Error> {
         self.check_mode(Mode::CyclicTorque, tau.len())?;
-        for (k, v) in tau.iter().enumerate() {
-            let u = &self.config.axes[k].units;
-            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
-                self.counters.commands_clamped += 1;
-            }
-            self.axes[k].target_torque = u.torque_permille(*v);
-        }
+        self.set_torques(tau, |a| &mut a.target_torque);
         Ok(())
     }
 }
@@ -1402,13 +1343,7 @@ impl JointTorqueFeedForward for Cia402 {
                 0,
             ));
         }
-        for (k, v) in tau.iter().enumerate() {
-            let u = &self.config.axes[k].units;
-            if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
-                self.counters.commands_clamped += 1;
-            }
-            self.axes[k].torque_offset = u.torque_permille(*v);
-        }
+        self.set_torques(tau, |a| &mut a.torque_offset);
         Ok(())
     }
 }

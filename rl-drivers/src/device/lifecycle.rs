@@ -3,6 +3,7 @@
 //! [`Lifecycle`] that records transitions, faults and failed steps in a row.
 
 use core::fmt;
+use core::time::Duration;
 
 use super::Error;
 use super::error::{DeviceError, ErrorKind};
@@ -96,14 +97,15 @@ impl fmt::Display for Operation {
 pub const DEFAULT_MAX_CONSECUTIVE_FAILURES: u32 = 10;
 
 /// The run-time state machine shared by all drivers: checks that a call is allowed, records
-/// transitions and faults, and counts failed steps in a row (too many fault the device; a lost
-/// connection faults it at once).
+/// transitions and faults, counts failed steps in a row (too many fault the device; a lost
+/// connection faults it at once) and holds the caller's time budget of the step in progress.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lifecycle {
     state: State,
     fault: Option<Error>,
     consecutive_failures: u32,
     max_consecutive_failures: u32,
+    step_budget: Option<Duration>,
 }
 
 impl Default for Lifecycle {
@@ -131,6 +133,7 @@ impl Lifecycle {
             } else {
                 max_consecutive_failures
             },
+            step_budget: None,
         }
     }
 
@@ -148,6 +151,12 @@ impl Lifecycle {
     /// The current run of failed steps.
     pub const fn consecutive_failures(&self) -> u32 {
         self.consecutive_failures
+    }
+
+    /// How long the step in progress may wait for the device, when its caller bounded it
+    /// ([`step_within`](Self::step_within)); `None` otherwise.
+    pub const fn step_budget(&self) -> Option<Duration> {
+        self.step_budget
     }
 
     /// Refuses `operation` with [`Error::State`] unless the current state allows it.
@@ -247,6 +256,20 @@ impl Lifecycle {
             }
             Err(e) => Err(lifecycle(driver).step_failed(e)),
         }
+    }
+
+    /// [`step`](Self::step) with the caller's bound on its wait: `body` finds `budget` in
+    /// [`step_budget`](Self::step_budget), which is `None` again afterwards.
+    pub fn step_within<D: ?Sized>(
+        driver: &mut D,
+        lifecycle: fn(&mut D) -> &mut Lifecycle,
+        budget: Duration,
+        body: impl FnOnce(&mut D) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        lifecycle(driver).step_budget = Some(budget);
+        let result = Self::step(driver, lifecycle, body);
+        lifecycle(driver).step_budget = None;
+        result
     }
 }
 

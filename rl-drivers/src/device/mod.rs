@@ -6,13 +6,20 @@
 //! Nothing here names a protocol: a driver owns its protocol's error type and reports it as a
 //! [`ProtocolError`] (a source and a short, allocation-free description). A driver implements
 //! its transitions with [`Lifecycle::transition`] and its step with [`Lifecycle::step`], which
-//! do the state checks, the fault bookkeeping and the count of failed steps in a row.
+//! do the state checks, the fault bookkeeping and the count of failed steps in a row; a driver
+//! of this crate writes only its sequences (the crate-private `Driver` trait) and has both
+//! traits implemented from them.
 
+// Every driver of the crate needs `std`: without it the trait and its macro have no user.
+#[cfg_attr(not(feature = "std"), allow(dead_code, unused_imports, unused_macros))]
+mod driver;
 mod error;
 mod lifecycle;
 
 use core::time::Duration;
 
+#[cfg_attr(not(feature = "std"), allow(unused_imports))]
+pub(crate) use driver::{Driver, FirstError, impl_cyclic_device};
 pub use error::{DESCRIPTION_CAPACITY, Description, DeviceError, Error, ErrorKind, ProtocolError};
 pub use lifecycle::{DEFAULT_MAX_CONSECUTIVE_FAILURES, Lifecycle, Operation, State};
 

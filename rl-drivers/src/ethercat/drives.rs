@@ -35,7 +35,7 @@ use crate::cia402::state::Goal;
 use crate::cia402::{
     AxisUnits, Command as DriveCommand, Controlword, Mode, PowerState, Statusword,
 };
-use crate::device::{CyclicDevice, Device, Error, Lifecycle, Operation, State};
+use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::canopen::pdo::Entry;
 use crate::proto::canopen::sdo::Address;
 use crate::proto::ecat::al::AlState;
@@ -220,10 +220,6 @@ fn get_u16(b: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([b[at], b[at + 1]])
 }
 
-fn lifecycle(d: &mut EthercatDrives) -> &mut Lifecycle {
-    &mut d.lifecycle
-}
-
 /// The generic error of a master error during `operation`.
 fn to_error(operation: Operation, e: EcError) -> Error {
     match e {
@@ -326,132 +322,6 @@ impl EthercatDrives {
         })
     }
 
-    // ---- open -------------------------------------------------------------------------------
-
-    fn open_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Open;
-        let e = |e| to_error(OP, e);
-        self.origin = Instant::now();
-        let mut m = Master::open(self.config.master.clone()).map_err(e)?;
-        m.scan().map_err(e)?;
-        self.names = m.devices.iter().map(|d| d.name.clone()).collect();
-        self.dc = if self.config.distributed_clocks {
-            m.dc_setup(self.origin, self.config.dc_static_frames)
-                .map_err(e)?
-        } else {
-            None
-        };
-        // INIT -> PRE-OP: the mailboxes.
-        for k in 0..m.devices.len() {
-            configure_mailbox(&mut m, k).map_err(e)?;
-        }
-        let all: Vec<usize> = (0..m.devices.len()).collect();
-        m.request_state(&all, AlState::PreOp, |_| Ok(()))
-            .map_err(e)?;
-        // The drives and their mapping.
-        let mut sizes = vec![(0usize, 0usize); m.devices.len()];
-        let mut drives = Vec::new();
-        for (k, size) in sizes.iter_mut().enumerate() {
-            let is_drive = m.devices[k].has_coe()
-                && m.sdo_read_u64(k, 0x1000, 0)
-                    .is_ok_and(|t| t & 0xFFFF == 402);
-            if is_drive {
-                let axis = drives.len();
-                let (rx, tx) = map_drive(&mut m, k, self.config.explicit_pdo).map_err(e)?;
-                let at = offsets(&rx, &tx).ok_or_else(|| {
-                    to_error(
-                        OP,
-                        EcError::Config {
-                            device: Some(m.devices[k].reference()),
-                            what: "the drive's mapping lacks the controlword, statusword or position",
-                        },
-                    )
-                })?;
-                let units = match self.config.units.get(axis) {
-                    Some(u) => *u,
-                    None => read_units(&mut m, k),
-                };
-                if !units.is_valid() {
-                    return Err(Error::InvalidArgument {
-                        what: "axis units (finite, positive factors; joint index)",
-                        expected: axis,
-                        got: axis,
-                    });
-                }
-                if self.dc.is_some() {
-                    // DC-synchronous mode where the drive has the object (best effort).
-                    let _ = m.sdo_download(k, Address::new(0x1C32, 1), &2u16.to_le_bytes(), false);
-                }
-                *size = (bytes(&rx), bytes(&tx));
-                drives.push(Drive {
-                    device: k,
-                    part: k,
-                    units,
-                    rx,
-                    tx,
-                    at,
-                });
-            } else {
-                *size = sii_sizes(&m.devices[k]);
-            }
-        }
-        let mut p = m.configure_process_data(&sizes, 0).map_err(e)?;
-        if let Some(dc) = &mut self.dc {
-            p.dc_reference = Some(m.devices[dc.reference].station);
-            let cycle = self.config.period;
-            for &k in &dc.devices {
-                if m.devices[k].dc_assign_activate != 0 || drives.iter().any(|d| d.device == k) {
-                    m.dc_start_sync0(k, cycle, Duration::from_millis(20), self.config.sync0_shift)
-                        .map_err(e)?;
-                }
-            }
-            dc.sync0_cycle = u32::try_from(cycle.as_nanos()).unwrap_or(u32::MAX);
-            // Let the first SYNC0 pulses come before SAFE-OP.
-            std::thread::sleep(Duration::from_millis(25));
-        }
-        // Outputs that hold: power off, targets at the actual positions.
-        for d in &drives {
-            let pos = m
-                .sdo_upload(d.device, Address::new(0x6064, 0), false)
-                .ok()
-                .and_then(|b| {
-                    b.get(..4)
-                        .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                })
-                .unwrap_or(0);
-            let out = p.outputs_of(d.part);
-            write_u16(out, d.at.controlword, 0);
-            if let Some(t) = d.at.target_position {
-                write_i32(out, t, pos);
-            }
-            if let Some(at) = d.at.mode {
-                out[at] = self.config.mode.code() as u8;
-            }
-        }
-        p.target = AlState::SafeOp;
-        m.request_state(&all, AlState::SafeOp, |_| Ok(()))
-            .map_err(e)?;
-        // Fill the inputs (a few tries: a frame may be lost).
-        let mut last = Ok(());
-        for _ in 0..10 {
-            last = p.exchange(
-                &mut m.link,
-                Instant::now() + self.config.period.max(self.config.frame_timeout),
-            );
-            if last.is_ok() {
-                break;
-            }
-            std::thread::sleep(self.config.period);
-        }
-        last.map_err(e)?;
-        self.drives = drives;
-        self.process = Some(p);
-        self.master = Some(m);
-        Ok(())
-    }
-
-    // ---- start ------------------------------------------------------------------------------
-
     fn cycle_paced(&mut self, operation: Operation, next: &mut Instant) -> Result<(), EcError> {
         let now = Instant::now();
         if *next > now {
@@ -464,95 +334,6 @@ impl EthercatDrives {
             return Err(EcError::Reply("closed"));
         };
         p.exchange(&mut m.link, Instant::now() + timeout)
-    }
-
-    fn start_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Start;
-        // Targets at the actual positions, power stage off, our mode.
-        self.hold_outputs(0);
-        let mut next = Instant::now();
-        // Back to SAFE-OP if a stop left the segment in PRE-OP.
-        {
-            let m = self.master_mut(OP)?;
-            let all: Vec<usize> = (0..m.devices.len()).collect();
-            let (s, _) = m.al_status(0).map_err(|e| to_error(OP, e))?;
-            if s.state() != Some(AlState::SafeOp) {
-                m.request_state(&all, AlState::SafeOp, |_| Ok(()))
-                    .map_err(|e| to_error(OP, e))?;
-            }
-        }
-        // Valid outputs before OP.
-        for _ in 0..3 {
-            let _ = self.cycle_paced(OP, &mut next);
-        }
-        if let Some(p) = self.process.as_mut() {
-            p.target = AlState::Op;
-        }
-        {
-            let m = self.master_mut(OP)?;
-            let deadline = Instant::now() + m.config.state_timeout;
-            for k in 0..m.devices.len() {
-                m.al_control(
-                    k,
-                    crate::proto::ecat::al::AlControl::request(AlState::Op),
-                    deadline,
-                )
-                .map_err(|e| to_error(OP, e))?;
-            }
-        }
-        let deadline = Instant::now() + self.config.master.state_timeout;
-        loop {
-            match self.cycle_paced(OP, &mut next) {
-                Ok(()) => break,
-                Err(e) if Instant::now() >= deadline => return Err(to_error(OP, e)),
-                Err(_) => {}
-            }
-        }
-        // Walk every drive to operation enabled.
-        let deadline = Instant::now() + self.config.enable_timeout;
-        let mut previous = vec![0u16; self.drives.len()];
-        loop {
-            let mut all = true;
-            for (k, prev) in previous.iter_mut().enumerate() {
-                let sw = self.statusword(k).map_or(0, |s| s.0);
-                let state = PowerState::from_statusword(sw);
-                let cw = match state.and_then(|s| s.next_command(Goal::OperationEnabled)) {
-                    None if state == Some(PowerState::OperationEnabled) => {
-                        Controlword::hold(PowerState::OperationEnabled).0
-                    }
-                    None => 0,
-                    Some(DriveCommand::FaultReset) if *prev & 0x80 != 0 => 0,
-                    Some(c) => c.bits(),
-                };
-                if state != Some(PowerState::OperationEnabled) {
-                    all = false;
-                }
-                *prev = cw;
-                self.hold_axis(k, cw);
-            }
-            if all {
-                break;
-            }
-            if Instant::now() >= deadline {
-                let k = (0..self.drives.len())
-                    .find(|&k| {
-                        self.statusword(k).and_then(|s| s.state())
-                            != Some(PowerState::OperationEnabled)
-                    })
-                    .unwrap_or(0);
-                return Err(Error::device(
-                    OP,
-                    "CiA 402 statusword",
-                    &self.drive_fault(k),
-                ));
-            }
-            if let Err(e) = self.cycle_paced(OP, &mut next) {
-                if Instant::now() >= deadline {
-                    return Err(to_error(OP, e));
-                }
-            }
-        }
-        Ok(())
     }
 
     fn drive_fault(&self, k: usize) -> DriveFault {
@@ -611,123 +392,6 @@ impl EthercatDrives {
         }
         if let Some(at) = d.at.mode {
             out[at] = mode;
-        }
-    }
-
-    // ---- step -------------------------------------------------------------------------------
-
-    fn exchange(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Step;
-        let timeout = self.config.frame_timeout.min(self.config.period);
-        let (Some(m), Some(p)) = (self.master.as_mut(), self.process.as_mut()) else {
-            return Err(Error::State {
-                operation: OP,
-                state: State::Closed,
-            });
-        };
-        p.exchange(&mut m.link, Instant::now() + timeout)
-            .map_err(|e| match e {
-                EcError::Timeout { .. } => Error::Timeout {
-                    operation: OP,
-                    waited: timeout,
-                },
-                e => to_error(OP, e),
-            })?;
-        for k in 0..self.drives.len() {
-            let d = &self.drives[k];
-            let sw = get_u16(p.inputs_of(d.part), d.at.statusword);
-            if PowerState::from_statusword(sw) != Some(PowerState::OperationEnabled) {
-                self.counters.drive_faults += 1;
-                return Err(Error::device(
-                    OP,
-                    "CiA 402 statusword",
-                    &self.drive_fault(k),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    // ---- stop -------------------------------------------------------------------------------
-
-    fn stop_sequence(&mut self) -> Result<(), Error> {
-        const OP: Operation = Operation::Stop;
-        let mut first: Option<Error> = None;
-        let mut keep = |r: Result<(), Error>| {
-            if let Err(e) = r {
-                first.get_or_insert(e);
-            }
-        };
-        if self.process.is_some() && self.master.is_some() {
-            // Drives to rest: disable operation, shutdown, disable voltage; each bounded.
-            let mut next = Instant::now();
-            for (cw, done) in [
-                (DriveCommand::SwitchOn.bits(), PowerState::SwitchedOn),
-                (DriveCommand::Shutdown.bits(), PowerState::ReadyToSwitchOn),
-                (
-                    DriveCommand::DisableVoltage.bits(),
-                    PowerState::SwitchOnDisabled,
-                ),
-            ] {
-                let deadline = Instant::now() + self.config.stop_timeout / 3;
-                let mut last_error = None;
-                loop {
-                    for k in 0..self.drives.len() {
-                        let s = self.statusword(k).and_then(|s| s.state());
-                        // A drive already further down is left alone.
-                        let further = matches!(
-                            s,
-                            Some(
-                                PowerState::SwitchOnDisabled
-                                    | PowerState::Fault
-                                    | PowerState::NotReadyToSwitchOn
-                            )
-                        ) || (done == PowerState::ReadyToSwitchOn
-                            && s == Some(PowerState::ReadyToSwitchOn));
-                        self.hold_axis(k, if further { 0 } else { cw });
-                    }
-                    match self.cycle_paced(OP, &mut next) {
-                        Ok(())
-                        | Err(EcError::WorkingCounter { .. })
-                        | Err(EcError::AlStatus { .. }) => {}
-                        Err(e) => last_error = Some(e),
-                    }
-                    let reached = (0..self.drives.len()).all(|k| {
-                        let s = self.statusword(k).and_then(|s| s.state());
-                        !s.is_some_and(|s| s.is_powered()) && s != Some(PowerState::SwitchedOn)
-                            || s == Some(done)
-                    });
-                    if reached {
-                        break;
-                    }
-                    if Instant::now() >= deadline {
-                        let k = (0..self.drives.len())
-                            .find(|&k| self.statusword(k).and_then(|s| s.state()) != Some(done))
-                            .unwrap_or(0);
-                        keep(Err(match last_error {
-                            Some(e) => to_error(OP, e),
-                            None => Error::device(OP, "CiA 402 statusword", &self.drive_fault(k)),
-                        }));
-                        break;
-                    }
-                }
-            }
-        }
-        if let Some(m) = self.master.as_mut() {
-            let all: Vec<usize> = (0..m.devices.len()).collect();
-            for target in [AlState::SafeOp, AlState::PreOp] {
-                keep(
-                    m.request_state(&all, target, |_| Ok(()))
-                        .map_err(|e| to_error(OP, e)),
-                );
-            }
-        }
-        if let Some(p) = self.process.as_mut() {
-            p.target = AlState::PreOp;
-        }
-        match first {
-            Some(e) => Err(e),
-            None => Ok(()),
         }
     }
 
@@ -926,61 +590,358 @@ fn sii_sizes(d: &super::master::SubDevice) -> (usize, usize) {
     )
 }
 
-impl Device for EthercatDrives {
-    type Error = Error;
+impl Driver for EthercatDrives {
+    const STOP_DESCRIPTION: &'static str =
+        "drives disabled (disable operation, shutdown, disable voltage), segment in PRE-OP";
 
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, Self::open_sequence)
-    }
+    // ---- open -------------------------------------------------------------------------------
 
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, Self::start_sequence)
-    }
-
-    fn stop(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Stop, lifecycle, Self::stop_sequence)
-    }
-
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |d| {
-            let stats = d.link_statistics();
-            let r = match d.master.as_mut() {
-                Some(m) => {
-                    let all: Vec<usize> = (0..m.devices.len()).collect();
-                    m.request_state(&all, AlState::Init, |_| Ok(()))
-                        .map_err(|e| to_error(Operation::Close, e))
+    fn open_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Open;
+        let e = |e| to_error(OP, e);
+        self.origin = Instant::now();
+        let mut m = Master::open(self.config.master.clone()).map_err(e)?;
+        m.scan().map_err(e)?;
+        self.names = m.devices.iter().map(|d| d.name.clone()).collect();
+        self.dc = if self.config.distributed_clocks {
+            m.dc_setup(self.origin, self.config.dc_static_frames)
+                .map_err(e)?
+        } else {
+            None
+        };
+        // INIT -> PRE-OP: the mailboxes.
+        for k in 0..m.devices.len() {
+            configure_mailbox(&mut m, k).map_err(e)?;
+        }
+        let all: Vec<usize> = (0..m.devices.len()).collect();
+        m.request_state(&all, AlState::PreOp, |_| Ok(()))
+            .map_err(e)?;
+        // The drives and their mapping.
+        let mut sizes = vec![(0usize, 0usize); m.devices.len()];
+        let mut drives = Vec::new();
+        for (k, size) in sizes.iter_mut().enumerate() {
+            let is_drive = m.devices[k].has_coe()
+                && m.sdo_read_u64(k, 0x1000, 0)
+                    .is_ok_and(|t| t & 0xFFFF == 402);
+            if is_drive {
+                let axis = drives.len();
+                let (rx, tx) = map_drive(&mut m, k, self.config.explicit_pdo).map_err(e)?;
+                let at = offsets(&rx, &tx).ok_or_else(|| {
+                    to_error(
+                        OP,
+                        EcError::Config {
+                            device: Some(m.devices[k].reference()),
+                            what: "the drive's mapping lacks the controlword, statusword or position",
+                        },
+                    )
+                })?;
+                let units = match self.config.units.get(axis) {
+                    Some(u) => *u,
+                    None => read_units(&mut m, k),
+                };
+                if !units.is_valid() {
+                    return Err(Error::InvalidArgument {
+                        what: "axis units (finite, positive factors; joint index)",
+                        expected: axis,
+                        got: axis,
+                    });
                 }
-                None => Ok(()),
-            };
-            d.link_before = stats;
-            d.master = None;
-            d.process = None;
-            r
-        })
+                if self.dc.is_some() {
+                    // DC-synchronous mode where the drive has the object (best effort).
+                    let _ = m.sdo_download(k, Address::new(0x1C32, 1), &2u16.to_le_bytes(), false);
+                }
+                *size = (bytes(&rx), bytes(&tx));
+                drives.push(Drive {
+                    device: k,
+                    part: k,
+                    units,
+                    rx,
+                    tx,
+                    at,
+                });
+            } else {
+                *size = sii_sizes(&m.devices[k]);
+            }
+        }
+        let mut p = m.configure_process_data(&sizes, 0).map_err(e)?;
+        if let Some(dc) = &mut self.dc {
+            p.dc_reference = Some(m.devices[dc.reference].station);
+            let cycle = self.config.period;
+            for &k in &dc.devices {
+                if m.devices[k].dc_assign_activate != 0 || drives.iter().any(|d| d.device == k) {
+                    m.dc_start_sync0(k, cycle, Duration::from_millis(20), self.config.sync0_shift)
+                        .map_err(e)?;
+                }
+            }
+            dc.sync0_cycle = u32::try_from(cycle.as_nanos()).unwrap_or(u32::MAX);
+            // Let the first SYNC0 pulses come before SAFE-OP.
+            std::thread::sleep(Duration::from_millis(25));
+        }
+        // Outputs that hold: power off, targets at the actual positions.
+        for d in &drives {
+            let pos = m
+                .sdo_upload(d.device, Address::new(0x6064, 0), false)
+                .ok()
+                .and_then(|b| {
+                    b.get(..4)
+                        .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                })
+                .unwrap_or(0);
+            let out = p.outputs_of(d.part);
+            write_u16(out, d.at.controlword, 0);
+            if let Some(t) = d.at.target_position {
+                write_i32(out, t, pos);
+            }
+            if let Some(at) = d.at.mode {
+                out[at] = self.config.mode.code() as u8;
+            }
+        }
+        p.target = AlState::SafeOp;
+        m.request_state(&all, AlState::SafeOp, |_| Ok(()))
+            .map_err(e)?;
+        // Fill the inputs (a few tries: a frame may be lost).
+        let mut last = Ok(());
+        for _ in 0..10 {
+            last = p.exchange(
+                &mut m.link,
+                Instant::now() + self.config.period.max(self.config.frame_timeout),
+            );
+            if last.is_ok() {
+                break;
+            }
+            std::thread::sleep(self.config.period);
+        }
+        last.map_err(e)?;
+        self.drives = drives;
+        self.process = Some(p);
+        self.master = Some(m);
+        Ok(())
     }
 
-    fn state(&self) -> State {
-        self.lifecycle.state()
+    // ---- start ------------------------------------------------------------------------------
+
+    fn start_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Start;
+        // Targets at the actual positions, power stage off, our mode.
+        self.hold_outputs(0);
+        let mut next = Instant::now();
+        // Back to SAFE-OP if a stop left the segment in PRE-OP.
+        {
+            let m = self.master_mut(OP)?;
+            let all: Vec<usize> = (0..m.devices.len()).collect();
+            let (s, _) = m.al_status(0).map_err(|e| to_error(OP, e))?;
+            if s.state() != Some(AlState::SafeOp) {
+                m.request_state(&all, AlState::SafeOp, |_| Ok(()))
+                    .map_err(|e| to_error(OP, e))?;
+            }
+        }
+        // Valid outputs before OP.
+        for _ in 0..3 {
+            let _ = self.cycle_paced(OP, &mut next);
+        }
+        if let Some(p) = self.process.as_mut() {
+            p.target = AlState::Op;
+        }
+        {
+            let m = self.master_mut(OP)?;
+            let deadline = Instant::now() + m.config.state_timeout;
+            for k in 0..m.devices.len() {
+                m.al_control(
+                    k,
+                    crate::proto::ecat::al::AlControl::request(AlState::Op),
+                    deadline,
+                )
+                .map_err(|e| to_error(OP, e))?;
+            }
+        }
+        let deadline = Instant::now() + self.config.master.state_timeout;
+        loop {
+            match self.cycle_paced(OP, &mut next) {
+                Ok(()) => break,
+                Err(e) if Instant::now() >= deadline => return Err(to_error(OP, e)),
+                Err(_) => {}
+            }
+        }
+        // Walk every drive to operation enabled.
+        let deadline = Instant::now() + self.config.enable_timeout;
+        let mut previous = vec![0u16; self.drives.len()];
+        loop {
+            let mut all = true;
+            for (k, prev) in previous.iter_mut().enumerate() {
+                let sw = self.statusword(k).map_or(0, |s| s.0);
+                let state = PowerState::from_statusword(sw);
+                let cw = match state.and_then(|s| s.next_command(Goal::OperationEnabled)) {
+                    None if state == Some(PowerState::OperationEnabled) => {
+                        Controlword::hold(PowerState::OperationEnabled).0
+                    }
+                    None => 0,
+                    Some(DriveCommand::FaultReset) if *prev & 0x80 != 0 => 0,
+                    Some(c) => c.bits(),
+                };
+                if state != Some(PowerState::OperationEnabled) {
+                    all = false;
+                }
+                *prev = cw;
+                self.hold_axis(k, cw);
+            }
+            if all {
+                break;
+            }
+            if Instant::now() >= deadline {
+                let k = (0..self.drives.len())
+                    .find(|&k| {
+                        self.statusword(k).and_then(|s| s.state())
+                            != Some(PowerState::OperationEnabled)
+                    })
+                    .unwrap_or(0);
+                return Err(Error::device(
+                    OP,
+                    "CiA 402 statusword",
+                    &self.drive_fault(k),
+                ));
+            }
+            if let Err(e) = self.cycle_paced(OP, &mut next) {
+                if Instant::now() >= deadline {
+                    return Err(to_error(OP, e));
+                }
+            }
+        }
+        Ok(())
     }
 
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
+    // ---- step -------------------------------------------------------------------------------
 
-    fn stop_description(&self) -> &'static str {
-        "drives disabled (disable operation, shutdown, disable voltage), segment in PRE-OP"
-    }
-}
-
-impl CyclicDevice for EthercatDrives {
-    fn step(&mut self) -> Result<(), Error> {
-        Lifecycle::step(self, lifecycle, Self::exchange)
-    }
-
-    fn update_period(&self) -> Duration {
+    fn period(&self) -> Duration {
         self.config.period
     }
+
+    fn exchange(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Step;
+        let timeout = self.config.frame_timeout.min(self.config.period);
+        let (Some(m), Some(p)) = (self.master.as_mut(), self.process.as_mut()) else {
+            return Err(Error::State {
+                operation: OP,
+                state: State::Closed,
+            });
+        };
+        p.exchange(&mut m.link, Instant::now() + timeout)
+            .map_err(|e| match e {
+                EcError::Timeout { .. } => Error::Timeout {
+                    operation: OP,
+                    waited: timeout,
+                },
+                e => to_error(OP, e),
+            })?;
+        for k in 0..self.drives.len() {
+            let d = &self.drives[k];
+            let sw = get_u16(p.inputs_of(d.part), d.at.statusword);
+            if PowerState::from_statusword(sw) != Some(PowerState::OperationEnabled) {
+                self.counters.drive_faults += 1;
+                return Err(Error::device(
+                    OP,
+                    "CiA 402 statusword",
+                    &self.drive_fault(k),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    // ---- stop -------------------------------------------------------------------------------
+
+    fn stop_sequence(&mut self) -> Result<(), Error> {
+        const OP: Operation = Operation::Stop;
+        let mut steps = FirstError::default();
+        if self.process.is_some() && self.master.is_some() {
+            // Drives to rest: disable operation, shutdown, disable voltage; each bounded.
+            let mut next = Instant::now();
+            for (cw, done) in [
+                (DriveCommand::SwitchOn.bits(), PowerState::SwitchedOn),
+                (DriveCommand::Shutdown.bits(), PowerState::ReadyToSwitchOn),
+                (
+                    DriveCommand::DisableVoltage.bits(),
+                    PowerState::SwitchOnDisabled,
+                ),
+            ] {
+                let deadline = Instant::now() + self.config.stop_timeout / 3;
+                let mut last_error = None;
+                loop {
+                    for k in 0..self.drives.len() {
+                        let s = self.statusword(k).and_then(|s| s.state());
+                        // A drive already further down is left alone.
+                        let further = matches!(
+                            s,
+                            Some(
+                                PowerState::SwitchOnDisabled
+                                    | PowerState::Fault
+                                    | PowerState::NotReadyToSwitchOn
+                            )
+                        ) || (done == PowerState::ReadyToSwitchOn
+                            && s == Some(PowerState::ReadyToSwitchOn));
+                        self.hold_axis(k, if further { 0 } else { cw });
+                    }
+                    match self.cycle_paced(OP, &mut next) {
+                        Ok(())
+                        | Err(EcError::WorkingCounter { .. })
+                        | Err(EcError::AlStatus { .. }) => {}
+                        Err(e) => last_error = Some(e),
+                    }
+                    let reached = (0..self.drives.len()).all(|k| {
+                        let s = self.statusword(k).and_then(|s| s.state());
+                        !s.is_some_and(|s| s.is_powered()) && s != Some(PowerState::SwitchedOn)
+                            || s == Some(done)
+                    });
+                    if reached {
+                        break;
+                    }
+                    if Instant::now() >= deadline {
+                        let k = (0..self.drives.len())
+                            .find(|&k| self.statusword(k).and_then(|s| s.state()) != Some(done))
+                            .unwrap_or(0);
+                        steps.keep(Err(match last_error {
+                            Some(e) => to_error(OP, e),
+                            None => Error::device(OP, "CiA 402 statusword", &self.drive_fault(k)),
+                        }));
+                        break;
+                    }
+                }
+            }
+        }
+        if let Some(m) = self.master.as_mut() {
+            let all: Vec<usize> = (0..m.devices.len()).collect();
+            for target in [AlState::SafeOp, AlState::PreOp] {
+                steps.keep(
+                    m.request_state(&all, target, |_| Ok(()))
+                        .map_err(|e| to_error(OP, e)),
+                );
+            }
+        }
+        if let Some(p) = self.process.as_mut() {
+            p.target = AlState::PreOp;
+        }
+        steps.into_result()
+    }
+
+    // ---- close ------------------------------------------------------------------------------
+
+    fn close_sequence(&mut self) -> Result<(), Error> {
+        let stats = self.link_statistics();
+        let r = match self.master.as_mut() {
+            Some(m) => {
+                let all: Vec<usize> = (0..m.devices.len()).collect();
+                m.request_state(&all, AlState::Init, |_| Ok(()))
+                    .map_err(|e| to_error(Operation::Close, e))
+            }
+            None => Ok(()),
+        };
+        self.link_before = stats;
+        self.master = None;
+        self.process = None;
+        r
+    }
 }
+
+impl_cyclic_device!(EthercatDrives, lifecycle);
 
 impl LinkStatisticsSensor for EthercatDrives {
     fn link_statistics(&self) -> LinkStatistics {

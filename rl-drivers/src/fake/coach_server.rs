@@ -12,13 +12,14 @@
 //! counted and described in [`CoachServerStatus::last_error`] — nothing is dropped silently.
 
 use std::collections::HashMap;
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use super::tcp_server::{self, Polled};
 use crate::proto::coach::Message;
 
 const POLL: Duration = Duration::from_millis(20);
@@ -207,33 +208,22 @@ impl Drop for CoachServer {
 }
 
 fn accept_loop(listener: &TcpListener, shared: &Arc<Mutex<Shared>>, stop: &Arc<AtomicBool>) {
-    let mut clients = Vec::new();
-    while !stop.load(Ordering::Relaxed) {
-        match listener.accept() {
-            Ok((stream, _)) => {
-                lock(shared).status.clients += 1;
-                let (s, st) = (shared.clone(), stop.clone());
-                if let Ok(t) = std::thread::Builder::new()
-                    .name("coach-client".into())
-                    .spawn(move || serve_client(stream, &s, &st))
-                {
-                    clients.push(t);
-                }
-            }
-            // A new client waits at most this long to be served.
-            Err(_) => std::thread::sleep(ACCEPT_POLL),
-        }
-    }
-    for t in clients {
-        let _ = t.join();
-    }
+    // A new client waits at most `ACCEPT_POLL` to be served.
+    tcp_server::accept_clients(
+        listener,
+        "coach-client",
+        ACCEPT_POLL,
+        shared,
+        stop,
+        |s| lock(s).status.clients += 1,
+        serve_client,
+    );
 }
 
 fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool) {
-    if stream.set_nonblocking(false).is_err() || stream.set_read_timeout(Some(POLL)).is_err() {
+    if !tcp_server::poll_reads(&stream, POLL) {
         return;
     }
-    let _ = stream.set_nodelay(true);
     let generation = lock(shared).generation;
     let mut line: Vec<u8> = Vec::new();
     let mut overlong = false;
@@ -252,18 +242,10 @@ fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool
             std::thread::sleep(Duration::from_millis(5));
             continue;
         }
-        let n = match stream.read(&mut buf) {
-            Ok(0) => return,
-            Ok(n) => n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                ) =>
-            {
-                continue;
-            }
-            Err(_) => return,
+        let n = match tcp_server::read_polled(&mut stream, &mut buf) {
+            Polled::Bytes(n) => n,
+            Polled::Idle => continue,
+            Polled::Closed => return,
         };
         let delivery = lock(shared).config.delivery;
         for &b in &buf[..n] {

@@ -30,7 +30,7 @@
 
 use std::collections::{HashMap, VecDeque};
 use std::fmt;
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::os::fd::AsFd;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,6 +42,7 @@ use glam::DVec3;
 use rl_core::model::{Data as ModelData, Model};
 use rl_core::rotation::euler;
 
+use super::tcp_server::{self, Polled};
 use crate::capability::Pose;
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, IoType, MAX_AXES, Mode, MxtType, PACKET_LEN, Packet,
@@ -1125,49 +1126,30 @@ impl Shared {
 }
 
 fn serve_r3(listener: &TcpListener, shared: &Arc<Mutex<Shared>>, stop: &Arc<AtomicBool>) {
-    let mut clients = Vec::new();
-    while !stop.load(Ordering::Relaxed) {
-        match listener.accept() {
-            Ok((stream, _)) => {
-                lock(shared).status.r3_clients += 1;
-                let (s, st) = (shared.clone(), stop.clone());
-                if let Ok(t) = std::thread::Builder::new()
-                    .name("fake-h7-r3-client".into())
-                    .spawn(move || serve_r3_client(stream, &s, &st))
-                {
-                    clients.push(t);
-                }
-            }
-            Err(_) => std::thread::sleep(POLL),
-        }
-    }
-    for t in clients {
-        let _ = t.join();
-    }
+    tcp_server::accept_clients(
+        listener,
+        "fake-h7-r3-client",
+        POLL,
+        shared,
+        stop,
+        |s| lock(s).status.r3_clients += 1,
+        serve_r3_client,
+    );
 }
 
 /// One R3 client: every receive is one request (the protocol has no request terminator;
 /// clients wait for each reply before the next request, as RL does; a trailing CR or LF, as
 /// serial clients send, is ignored).
 fn serve_r3_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool) {
-    if stream.set_nonblocking(false).is_err() || stream.set_read_timeout(Some(POLL)).is_err() {
+    if !tcp_server::poll_reads(&stream, POLL) {
         return;
     }
-    let _ = stream.set_nodelay(true);
     let mut buf = [0u8; 1024];
     while !stop.load(Ordering::Relaxed) {
-        let n = match stream.read(&mut buf) {
-            Ok(0) => return,
-            Ok(n) => n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                ) =>
-            {
-                continue;
-            }
-            Err(_) => return,
+        let n = match tcp_server::read_polled(&mut stream, &mut buf) {
+            Polled::Bytes(n) => n,
+            Polled::Idle => continue,
+            Polled::Closed => return,
         };
         // A frozen controller holds the request until it thaws.
         while lock(shared).is_frozen() {

@@ -6,3 +6,4 @@ pub mod cia402_drive;
 pub mod coach_server;
 pub mod ecat_segment;
 pub mod h7_controller;
+mod tcp_server;

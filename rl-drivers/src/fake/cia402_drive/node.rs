@@ -661,19 +661,7 @@ impl Node {
 
 impl Dictionary for Node {
     fn read(&mut self, a: Address, out: &mut [u8]) -> Result<usize, AbortCode> {
-        if let Some((addr, code)) = self.injected.sdo_abort {
-            if addr == a {
-                self.injected.sdo_abort = None;
-                return Err(code);
-            }
-        }
-        let v = match self.od.get(&(a.index, a.sub)) {
-            Some(v) => v,
-            None if self.od.keys().any(|(i, _)| *i == a.index) => {
-                return Err(AbortCode::NO_SUB_INDEX);
-            }
-            None => return Err(AbortCode::NO_OBJECT),
-        };
+        let v = self.sdo_object(a)?;
         if !v.access.readable() {
             return Err(AbortCode::WRITE_ONLY);
         }
@@ -683,19 +671,7 @@ impl Dictionary for Node {
     }
 
     fn write(&mut self, a: Address, data: &[u8]) -> Result<(), AbortCode> {
-        if let Some((addr, code)) = self.injected.sdo_abort {
-            if addr == a {
-                self.injected.sdo_abort = None;
-                return Err(code);
-            }
-        }
-        let v = match self.od.get(&(a.index, a.sub)) {
-            Some(v) => v,
-            None if self.od.keys().any(|(i, _)| *i == a.index) => {
-                return Err(AbortCode::NO_SUB_INDEX);
-            }
-            None => return Err(AbortCode::NO_OBJECT),
-        };
+        let v = self.sdo_object(a)?;
         if !v.access.writable() {
             return Err(AbortCode::READ_ONLY);
         }
@@ -720,6 +696,22 @@ impl Dictionary for Node {
 }
 
 impl Node {
+    /// The object an SDO request addresses, or the abort it gets: the injected one first (once),
+    /// then a missing object or sub-index.
+    fn sdo_object(&mut self, a: Address) -> Result<&Value, AbortCode> {
+        if let Some((addr, code)) = self.injected.sdo_abort {
+            if addr == a {
+                self.injected.sdo_abort = None;
+                return Err(code);
+            }
+        }
+        match self.od.get(&(a.index, a.sub)) {
+            Some(v) => Ok(v),
+            None if self.od.keys().any(|(i, _)| *i == a.index) => Err(AbortCode::NO_SUB_INDEX),
+            None => Err(AbortCode::NO_OBJECT),
+        }
+    }
+
     /// The object's value as an integer (for tests and status).
     pub fn value(&self, index: u16, sub: u8) -> i64 {
         self.get(index, sub)

@@ -86,6 +86,34 @@ impl MailboxServer {
         self.sdo(Response::Abort { address, code }.encode(), &[], capacity)
     }
 
+    /// Aborts a request the server does not take: one it cannot decode, a block transfer, or a
+    /// segment of no transfer in progress.
+    fn abort_command(&mut self, capacity: usize) -> Vec<u8> {
+        self.abort(Address::new(0, 0), AbortCode::COMMAND_SPECIFIER, capacity)
+    }
+
+    /// Acknowledges a download (its initiation, or the whole of an expedited or short one).
+    fn download_ack(&mut self, address: Address, complete: bool, capacity: usize) -> Vec<u8> {
+        let head = Response::DownloadInitiate { address }.encode();
+        self.sdo(with_ca(head, complete), &[], capacity)
+    }
+
+    /// Stores a download that arrived whole and acknowledges it, or aborts it.
+    fn store_download(
+        &mut self,
+        od: &mut Dictionary,
+        address: Address,
+        complete: bool,
+        data: &[u8],
+        capacity: usize,
+    ) -> Vec<u8> {
+        self.transfer = Transfer::Idle;
+        match download(od, address, complete, data) {
+            Ok(()) => self.download_ack(address, complete, capacity),
+            Err(code) => self.abort(address, code, capacity),
+        }
+    }
+
     /// Answers one message the master wrote into the mailbox (`message`: the whole mailbox
     /// buffer); `capacity` is the size of the mailbox the answer goes into. `None`: no answer
     /// (the master aborted a transfer).
@@ -118,11 +146,7 @@ impl MailboxServer {
         let request = match m.request() {
             Ok(r) => r,
             Err(_) => {
-                return Some(self.abort(
-                    Address::new(0, 0),
-                    AbortCode::COMMAND_SPECIFIER,
-                    capacity,
-                ));
+                return Some(self.abort_command(capacity));
             }
         };
         // Bytes of data an answer can carry after the 8-byte SDO message.
@@ -133,43 +157,15 @@ impl MailboxServer {
                 self.transfer = Transfer::Idle;
                 return None;
             }
-            Request::Block { .. } => {
-                self.abort(Address::new(0, 0), AbortCode::COMMAND_SPECIFIER, capacity)
-            }
+            Request::Block { .. } => self.abort_command(capacity),
             Request::DownloadExpedited { address, data } => {
-                self.transfer = Transfer::Idle;
-                let r = if complete {
-                    od.write_complete(address.index, data.as_slice())
-                } else {
-                    od.write(address, data.as_slice())
-                };
-                match r {
-                    Ok(()) => self.sdo(
-                        with_ca(Response::DownloadInitiate { address }.encode(), complete),
-                        &[],
-                        capacity,
-                    ),
-                    Err(code) => self.abort(address, code, capacity),
-                }
+                self.store_download(od, address, complete, data.as_slice(), capacity)
             }
             Request::DownloadInitiate { address, size } => {
                 let size = size.map_or(m.rest.len(), |s| s as usize);
                 let data = m.normal_data(size).to_vec();
                 if data.len() >= size {
-                    self.transfer = Transfer::Idle;
-                    let r = if complete {
-                        od.write_complete(address.index, &data)
-                    } else {
-                        od.write(address, &data)
-                    };
-                    match r {
-                        Ok(()) => self.sdo(
-                            with_ca(Response::DownloadInitiate { address }.encode(), complete),
-                            &[],
-                            capacity,
-                        ),
-                        Err(code) => self.abort(address, code, capacity),
-                    }
+                    self.store_download(od, address, complete, &data, capacity)
                 } else {
                     self.transfer = Transfer::Download {
                         address,
@@ -178,11 +174,7 @@ impl MailboxServer {
                         data,
                         toggle: false,
                     };
-                    self.sdo(
-                        with_ca(Response::DownloadInitiate { address }.encode(), complete),
-                        &[],
-                        capacity,
-                    )
+                    self.download_ack(address, complete, capacity)
                 }
             }
             Request::DownloadSegment { toggle, last, .. } => {
@@ -194,11 +186,7 @@ impl MailboxServer {
                     toggle: expected,
                 } = std::mem::take(&mut self.transfer)
                 else {
-                    return Some(self.abort(
-                        Address::new(0, 0),
-                        AbortCode::COMMAND_SPECIFIER,
-                        capacity,
-                    ));
+                    return Some(self.abort_command(capacity));
                 };
                 if toggle != expected {
                     return Some(self.abort(address, AbortCode::TOGGLE_BIT, capacity));
@@ -213,11 +201,7 @@ impl MailboxServer {
                         };
                         return Some(self.abort(address, code, capacity));
                     }
-                    let r = if complete {
-                        od.write_complete(address.index, &data)
-                    } else {
-                        od.write(address, &data)
-                    };
+                    let r = download(od, address, complete, &data);
                     if let Err(code) = r {
                         return Some(self.abort(address, code, capacity));
                     }
@@ -279,11 +263,7 @@ impl MailboxServer {
                     toggle: expected,
                 } = std::mem::take(&mut self.transfer)
                 else {
-                    return Some(self.abort(
-                        Address::new(0, 0),
-                        AbortCode::COMMAND_SPECIFIER,
-                        capacity,
-                    ));
+                    return Some(self.abort_command(capacity));
                 };
                 if toggle != expected {
                     return Some(self.abort(Address::new(0, 0), AbortCode::TOGGLE_BIT, capacity));
@@ -302,6 +282,20 @@ impl MailboxServer {
                 answer
             }
         })
+    }
+}
+
+/// Stores a download: the whole object (complete access) or one entry.
+fn download(
+    od: &mut Dictionary,
+    address: Address,
+    complete: bool,
+    data: &[u8],
+) -> Result<(), AbortCode> {
+    if complete {
+        od.write_complete(address.index, data)
+    } else {
+        od.write(address, data)
     }
 }
 

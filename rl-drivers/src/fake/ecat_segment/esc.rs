@@ -171,6 +171,12 @@ fn u64_at(m: &[u8], a: usize) -> u64 {
 }
 
 /// Whether the ECAT side may write register byte `a` (below 0x1000).
+/// The part of an access to `len` bytes at `a` that lies in process RAM (start, length).
+fn in_ram(a: usize, len: usize) -> Option<(usize, usize)> {
+    let start = a.max(RAM);
+    (a + len > RAM).then(|| (start, a + len - start))
+}
+
 fn ecat_writable(a: usize) -> bool {
     matches!(a,
         0x0010..=0x0011
@@ -450,23 +456,24 @@ impl Esc {
         }
     }
 
+    /// Whether the master may access `len` bytes at `a` (`write`): within the ESC's memory and,
+    /// in process RAM, as the sync managers there allow. A refusal is counted.
+    fn admit(&mut self, a: usize, len: usize, write: bool) -> bool {
+        let ok = a + len <= self.mem.len()
+            && in_ram(a, len).is_none_or(|(start, n)| self.check_sm(start, n, write).is_ok());
+        if !ok {
+            self.refused += 1;
+        }
+        ok
+    }
+
     /// Reads `out.len()` bytes at `address` for the master (`or` for broadcast reads).
     fn phys_read(&mut self, address: u16, out: &mut [u8], or: bool, times: &PassTimes) -> bool {
-        let a = usize::from(address);
-        let len = out.len();
+        let (a, len) = (usize::from(address), out.len());
         if len == 0 {
             return true;
         }
-        if a + len > self.mem.len() {
-            self.refused += 1;
-            return false;
-        }
-        if a + len > RAM
-            && self
-                .check_sm(a.max(RAM), a + len - a.max(RAM), false)
-                .is_err()
-        {
-            self.refused += 1;
+        if !self.admit(a, len, false) {
             return false;
         }
         // Live registers.
@@ -491,21 +498,19 @@ impl Esc {
                 self.ecat_event &= !(1 << (4 + n));
             }
         }
-        if a + len > RAM {
-            self.after_sm_access(a.max(RAM), a + len - a.max(RAM), false);
+        if let Some((start, n)) = in_ram(a, len) {
+            self.after_sm_access(start, n, false);
         }
         true
     }
 
     /// Writes `data` at `address` for the master.
     fn phys_write(&mut self, address: u16, data: &[u8], times: &PassTimes) -> bool {
-        let a = usize::from(address);
-        let len = data.len();
+        let (a, len) = (usize::from(address), data.len());
         if len == 0 {
             return true;
         }
-        if a + len > self.mem.len() {
-            self.refused += 1;
+        if !self.admit(a, len, true) {
             return false;
         }
         let touches = |r: u16| (a..a + len).contains(&usize::from(r));
@@ -516,14 +521,6 @@ impl Esc {
                 self.refused += 1;
                 return false;
             }
-        }
-        if a + len > RAM
-            && self
-                .check_sm(a.max(RAM), a + len - a.max(RAM), true)
-                .is_err()
-        {
-            self.refused += 1;
-            return false;
         }
         let mut sii_command = false;
         let mut sync_written = false;
@@ -589,8 +586,8 @@ impl Esc {
         if sii_command {
             self.sii_command();
         }
-        if a + len > RAM {
-            self.after_sm_access(a.max(RAM), a + len - a.max(RAM), true);
+        if let Some((start, n)) = in_ram(a, len) {
+            self.after_sm_access(start, n, true);
             for n in 0..SM_COUNT {
                 let s = self.sm(n);
                 if s.is_mailbox() && s.is_write() && (a..a + len).contains(&(s.end() as usize - 1))

@@ -5,7 +5,7 @@
 //! The SocketCAN `struct can_frame` (16 bytes): `can_id u32 | len u8 | __pad u8 | __res0 u8 |
 //! len8_dlc u8 | data[8]`. The kernel uses host byte order for `can_id`; the pcap link type
 //! `LINKTYPE_CAN_SOCKETCAN` (227) stores it in network (big-endian) byte order ([`IdOrder`]).
-//! The 72-byte `struct canfd_frame` is in [`fd`](super::fd).
+//! The 72-byte `struct canfd_frame` is in [`fd`].
 
 use core::fmt;
 

@@ -3,7 +3,7 @@
 //! loop flushes once per cycle). Received datagrams are checked — from the peer, version 2,
 //! DATA, every frame valid — or dropped whole and counted; gaps in the sequence numbers are
 //! counted as lost datagrams. Each frame carries the kernel's receive time of its datagram
-//! (`SO_TIMESTAMPNS`, [`timestamp`](crate::transport::timestamp)), as on SocketCAN.
+//! (`SO_TIMESTAMPNS`, [`timestamp`]), as on SocketCAN.
 //!
 //! A master [`connect`](CannelloniUdp::connect)s to a fixed peer: datagrams from any other
 //! address are rejected. A fake [`serve`](CannelloniUdp::serve)s on a bound address and

@@ -55,6 +55,19 @@ pub struct TransportCounters {
     pub error_frames: u64,
 }
 
+impl core::ops::AddAssign for TransportCounters {
+    /// Adds another link's counts (those of a link closed since, for totals that survive it).
+    fn add_assign(&mut self, n: Self) {
+        self.frames_sent += n.frames_sent;
+        self.frames_received += n.frames_received;
+        self.rejected += n.rejected;
+        self.corrupt += n.corrupt;
+        self.sequence_gaps += n.sequence_gaps;
+        self.overruns += n.overruns;
+        self.error_frames += n.error_frames;
+    }
+}
+
 /// A CAN link: frames out (queued, then flushed once per cycle) and in.
 pub trait CanTransport: Send {
     /// Queues a frame for the next [`flush`](Self::flush); never waits.
