@@ -180,7 +180,7 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     assert_eq!(blended.report.blended(), 2, "{}", blended.report);
     let plan = Plan::from_trajectory(
         &model,
-        PlanTrajectory::Blended(Box::new(blended.trajectory)),
+        PlanTrajectory::Blended(blended.trajectory),
         &limits,
         &PlanBudget::default(),
     )
