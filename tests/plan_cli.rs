@@ -260,13 +260,14 @@ fn plan_an_rl_scenario_with_rlkin_kinematics() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-#[test]
-fn bench_writes_ompl_logs_and_rl_csv() {
-    let dir = tmp("bench");
-    let o = rl(&[
+/// `rl plan bench` on the 7 Panda fixtures, 2 runs each, with VAMP's raw spheres, writing its
+/// logs into `dir`; `extra` arguments appended. Fails the test if the bench fails.
+fn bench_panda_fixtures(dir: &Path, extra: &[&str]) -> std::process::Output {
+    let problems = data("mbm/panda/problems");
+    let mut args = vec![
         "plan",
         "bench",
-        data("mbm/panda/problems").to_str().unwrap(),
+        problems.to_str().unwrap(),
         "--checker",
         "spheres",
         "--raw-spheres",
@@ -274,8 +275,17 @@ fn bench_writes_ompl_logs_and_rl_csv() {
         "2",
         "--out",
         dir.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = rl(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+#[test]
+fn bench_writes_ompl_logs_and_rl_csv() {
+    let dir = tmp("bench");
+    let o = bench_panda_fixtures(&dir, &[]);
     let table = String::from_utf8_lossy(&o.stdout);
     assert!(
         table.contains("planning µs") && table.contains("| 95%"),
@@ -357,20 +367,7 @@ fn ompl_benchmark_statistics_reads_the_logs() {
         return;
     }
     let dir = tmp("ompl");
-    let o = rl(&[
-        "plan",
-        "bench",
-        data("mbm/panda/problems").to_str().unwrap(),
-        "--checker",
-        "spheres",
-        "--raw-spheres",
-        "--runs",
-        "2",
-        "--fine-check",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    bench_panda_fixtures(&dir, &["--fine-check"]);
     let mut logs: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())

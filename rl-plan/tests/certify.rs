@@ -45,6 +45,24 @@ const BAR_URDF: &str = r#"<robot name="bar">
   </joint>
 </robot>"#;
 
+/// A 1 mm plate, 0.6 to 0.9 m out from the z axis and 20 cm tall, in the vertical plane
+/// through the axis at `angle` (rad) from x.
+fn plate_at(angle: f64) -> rl_sg::Model {
+    let (c, s) = (angle.cos(), angle.sin());
+    let mut env = rl_sg::Model::new("plate");
+    env.add_body("plate")
+        .add_shape(
+            "plate",
+            Geometry::cuboid(DVec3::new(0.3, 0.001, 0.1)).unwrap(),
+            PlueckerTransform::new(
+                glam::DMat3::from_rotation_z(angle),
+                DVec3::new(0.75 * c, 0.75 * s, 0.0),
+            ),
+        )
+        .unwrap();
+    env
+}
+
 #[test]
 fn a_thin_plate_between_the_verifiers_samples_is_caught() {
     let dir = std::env::temp_dir().join(format!("rl-plan-certify-{}", std::process::id()));
@@ -59,18 +77,7 @@ fn a_thin_plate_between_the_verifiers_samples_is_caught() {
     let (a, b) = ([-0.5], [0.5]);
     let delta: f64 = 1.0 / 32.0;
     let angle = -0.5 + (24.0 + 0.5) * delta;
-    let (c, s) = (angle.cos(), angle.sin());
-    let mut env = rl_sg::Model::new("plate");
-    env.add_body("plate")
-        .add_shape(
-            "plate",
-            Geometry::cuboid(DVec3::new(0.3, 0.001, 0.1)).unwrap(),
-            PlueckerTransform::new(
-                glam::DMat3::from_rotation_z(angle),
-                DVec3::new(0.75 * c, 0.75 * s, 0.0),
-            ),
-        )
-        .unwrap();
+    let env = plate_at(angle);
     let mut exact = robot.exact_checker(env).unwrap();
     assert!(exact.is_valid(&a) && exact.is_valid(&b));
     // The sampled verifier sees nothing...
@@ -162,18 +169,7 @@ fn a_floating_body_turning_through_a_thin_plate_is_caught() {
     let space = rl_plan::space::JointSpace::from_model_with_bounds(&model, &bounds).unwrap();
     assert_eq!(space.nq(), 7);
     let angle: f64 = 0.26;
-    let (c, s) = (angle.cos(), angle.sin());
-    let mut env = rl_sg::Model::new("plate");
-    env.add_body("plate")
-        .add_shape(
-            "plate",
-            Geometry::cuboid(DVec3::new(0.3, 0.001, 0.1)).unwrap(),
-            PlueckerTransform::new(
-                glam::DMat3::from_rotation_z(angle),
-                DVec3::new(0.75 * c, 0.75 * s, 0.0),
-            ),
-        )
-        .unwrap();
+    let env = plate_at(angle);
     let mut scene = rl_sg::Scene::new();
     let robot = scene.add_model(loaded.model).unwrap();
     scene.add_model(env).unwrap();
