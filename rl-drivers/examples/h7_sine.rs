@@ -4,6 +4,12 @@
 //! With `UDP_ADDR R3_ADDR` (for example `127.0.0.1:10000 127.0.0.1:10001` against
 //! `rl fake-robot h7`, or a real controller's address) it talks to that controller instead.
 //! A real robot will MOVE: only point this at hardware with the work cell cleared.
+//!
+//! The controller runs its own 7.11 ms cycle and answers at its ticks
+//! ([`CyclicDevice::runs_own_cycle`]): a command sent just after a tick waits almost a period
+//! for its reply, at the edge of the step's budget. So the loop wakes half a period after each
+//! reply — its command then reaches the controller half a period before the next tick. (`rl
+//! run` keeps the same phase with a phase-locked real-time loop.)
 
 use std::time::{Duration, Instant};
 
@@ -42,13 +48,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             *qi = q0[i] + 0.05 * (std::f64::consts::TAU * 0.5 * t).sin();
         }
         robot.set_joint_position(&q)?;
-        if let Err(e) = robot.step() {
-            failed += 1;
-            eprintln!("cycle {k}: {e}");
+        match robot.step() {
+            // The reply came at a tick: the next is a period later.
+            Ok(()) if robot.runs_own_cycle() => next = Instant::now() + period / 2,
+            Ok(()) => next += period,
+            Err(e) => {
+                failed += 1;
+                eprintln!("cycle {k}: {e}");
+                next += period;
+            }
         }
         robot.joint_position(&mut measured)?;
         worst = worst.max((measured[0] - q[0]).abs());
-        next += period;
         if let Some(wait) = next.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
