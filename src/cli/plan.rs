@@ -114,7 +114,8 @@ pub struct CommonArgs {
     /// RRT step (RL's delta, VAMP's range), rad.
     #[arg(long)]
     pub range: Option<f64>,
-    /// Plain RRT extensions instead of dynamic-domain ones (VAMP's default, on here too).
+    /// Plain RRT extensions instead of dynamic-domain ones (VAMP's default, on here too; used
+    /// by rrt-connect / rrt-ext-con only).
     #[arg(long)]
     pub no_dynamic_domain: bool,
     /// Joint limits to plan within, replacing the model's for the joints named:

@@ -28,7 +28,8 @@ pub struct RrtSettings {
     /// (RL).
     pub balance: bool,
     /// Dynamic-domain sampling for extensions towards samples (Yershova et al., ICRA 2005;
-    /// VAMP's default): `None` is RL's plain RRT.
+    /// VAMP's default): `None` is RL's plain RRT. Only [`RrtExtCon`](super::RrtExtCon) (VAMP's
+    /// RRTC) uses it; the other planners extend plainly.
     pub dynamic_domain: Option<DynamicDomain>,
 }
 
