@@ -33,6 +33,34 @@ fn clearance(checker: &mut SceneValidity, q: &[f64]) -> f64 {
     .fold(f64::INFINITY, f64::min)
 }
 
+/// The edge `a`–`b` is certified, and 2 001 samples along it agree: each keeps at least half
+/// the margin, and none is closer than the certificate's closest distance.
+fn certified_and_clear_densely(
+    exact: &mut SceneValidity,
+    space: &rl_plan::space::JointSpace,
+    a: &[f64],
+    b: &[f64],
+    options: &CertifyOptions,
+) {
+    let cert = exact
+        .certify_edge(a, b, options)
+        .unwrap()
+        .expect("clear of the plate");
+    let mut q = vec![0.0; space.nq()];
+    let dense = (0..=2_000)
+        .map(|k| {
+            space.interpolate(a, b, k as f64 / 2_000.0, &mut q);
+            clearance(exact, &q)
+        })
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "certified in {} steps, dense clearance {dense:.4} m",
+        cert.steps
+    );
+    assert!(dense >= options.margin / 2.0, "{dense}");
+    assert!(cert.min_distance >= dense - 1e-12);
+}
+
 /// A one-joint arm about z: a 1 m × 1 cm × 1 cm bar along x from the axis.
 const BAR_URDF: &str = r#"<robot name="bar">
   <link name="base"/>
@@ -113,20 +141,7 @@ fn a_thin_plate_between_the_verifiers_samples_is_caught() {
     // The same edge stopped short of the plate is certified, and dense sampling agrees that
     // it keeps at least half the margin everywhere.
     let short = [angle - 0.05];
-    let cert = exact
-        .certify_edge(&a, &short, &options)
-        .unwrap()
-        .expect("clear of the plate");
-    let dense = (0..=2_000)
-        .map(|k| -0.5 + (short[0] + 0.5) * k as f64 / 2_000.0)
-        .map(|q| clearance(&mut exact, &[q]))
-        .fold(f64::INFINITY, f64::min);
-    println!(
-        "certified in {} steps, dense clearance {dense:.4} m",
-        cert.steps
-    );
-    assert!(dense >= options.margin / 2.0, "{dense}");
-    assert!(cert.min_distance >= dense - 1e-12);
+    certified_and_clear_densely(&mut exact, &robot.space, &a, &short, &options);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -199,22 +214,7 @@ fn a_floating_body_turning_through_a_thin_plate_is_caught() {
         other => panic!("not caught: {other:?}"),
     }
     let short = floating(0.01, angle - 0.05);
-    let cert = exact
-        .certify_edge(&a, &short, &options)
-        .unwrap()
-        .expect("clear of the plate");
-    let dense = (0..=2_000)
-        .map(|k| {
-            space.interpolate(&a, &short, k as f64 / 2_000.0, &mut q);
-            clearance(&mut exact, &q)
-        })
-        .fold(f64::INFINITY, f64::min);
-    println!(
-        "certified in {} steps, dense clearance {dense:.4} m",
-        cert.steps
-    );
-    assert!(dense >= options.margin / 2.0, "{dense}");
-    assert!(cert.min_distance >= dense - 1e-12);
+    certified_and_clear_densely(&mut exact, &space, &a, &short, &options);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
