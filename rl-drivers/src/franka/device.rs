@@ -231,6 +231,8 @@ pub struct FrankaArm {
     have_state: bool,
     /// The id of the last state answered.
     answered: Option<u64>,
+    /// The highest state id answered or counted unanswered (during a motion).
+    accounted: Option<u64>,
     command: RobotCommand,
     motion: Option<Motion>,
     last_end: Option<MotionEnd>,
@@ -260,6 +262,7 @@ impl FrankaArm {
             state: Box::default(),
             have_state: false,
             answered: None,
+            accounted: None,
             command: RobotCommand::default(),
             motion: None,
             last_end: None,
@@ -519,6 +522,21 @@ impl FrankaArm {
         self.have_state = true;
         self.counters.states += 1;
         self.errors.record(self.state.errors);
+        // Ids between the last one accounted for and this one were never answered.
+        if let Some(done) = self.accounted {
+            let skipped = id.saturating_sub(done).saturating_sub(1);
+            if skipped > 0 {
+                self.counters.unanswered += skipped;
+                let run = self.counters.unanswered_in_a_row;
+                self.counters.unanswered_in_a_row =
+                    run.saturating_add(u32::try_from(skipped).unwrap_or(u32::MAX));
+                self.counters.max_unanswered_in_a_row = self
+                    .counters
+                    .max_unanswered_in_a_row
+                    .max(self.counters.unanswered_in_a_row);
+            }
+            self.accounted = Some(done.max(id - 1));
+        }
         true
     }
 
@@ -541,33 +559,11 @@ impl FrankaArm {
         }
     }
 
-    /// Counts the state ids between the last answered and `next` (exclusive) as unanswered.
-    fn count_unanswered(&mut self, next: u64) {
-        if let Some(last) = self.answered {
-            let skipped = next.saturating_sub(last).saturating_sub(1);
-            if skipped > 0 {
-                self.counters.unanswered += skipped;
-                self.counters.unanswered_in_a_row = self
-                    .counters
-                    .unanswered_in_a_row
-                    .saturating_add(u32::try_from(skipped).unwrap_or(u32::MAX));
-                self.counters.max_unanswered_in_a_row = self
-                    .counters
-                    .max_unanswered_in_a_row
-                    .max(self.counters.unanswered_in_a_row);
-            } else {
-                self.counters.unanswered_in_a_row = 0;
-            }
-        }
-    }
-
-    /// Answers the newest state with the buffered command.
-    fn send_command(&mut self, operation: Operation) -> Result<(), Error> {
-        let id = self.state.message_id;
+    /// Answers state `id` with the buffered command.
+    fn send_command(&mut self, operation: Operation, id: u64) -> Result<(), Error> {
         if self.answered.is_some_and(|a| a >= id) {
             return Ok(());
         }
-        self.count_unanswered(id);
         self.command.message_id = id;
         let udp = self.udp.as_mut().ok_or(Error::State {
             operation,
@@ -577,6 +573,10 @@ impl FrankaArm {
             .map_err(|e| Error::io(operation, &e))?;
         self.counters.commands += 1;
         self.answered = Some(id);
+        if self.accounted.is_some_and(|a| a < id) || self.accounted.is_none() {
+            self.accounted = Some(id);
+        }
+        self.counters.unanswered_in_a_row = 0;
         Ok(())
     }
 
@@ -613,6 +613,14 @@ impl FrankaArm {
         let Some(m) = self.motion else {
             return Ok(());
         };
+        if m.answer == Some(MoveStatus::ReflexAborted) && self.state.robot_mode != RobotMode::Reflex
+        {
+            // The answer can overtake the state that says why: wait for it (bounded).
+            let deadline = Instant::now() + 10 * CYCLE;
+            while self.state.robot_mode != RobotMode::Reflex
+                && self.wait_state(operation, deadline)?
+            {}
+        }
         let reflex = self.state.robot_mode == RobotMode::Reflex;
         let end = match m.answer {
             Some(MoveStatus::Success) => Some(MotionEnd::Finished),
@@ -693,7 +701,8 @@ impl FrankaArm {
                 MotionGeneratorMode::Idle
             ) && self.state.controller_mode != ControllerMode::ExternalController;
             if !idle {
-                self.send_command(operation)?;
+                let id = self.state.message_id;
+                self.send_command(operation, id)?;
             }
             if Instant::now() >= deadline {
                 return Err(Error::Timeout {
@@ -857,6 +866,7 @@ impl Driver for FrankaArm {
         // While the motion runs, the answer buffer does not grow.
         self.tcp(OP)?.may_grow = false;
         self.answered = None;
+        self.accounted = Some(self.state.message_id.saturating_sub(1));
         self.counters.unanswered_in_a_row = 0;
         Ok(())
     }
@@ -914,19 +924,23 @@ impl Driver for FrankaArm {
         if let Err(e) = ended {
             return Err(self.lifecycle.fail(e));
         }
-        // States that came since the last step: the newest is answered (a newer one than the
-        // command was computed for means this step is late).
-        let before = self.state.message_id;
+        // The command answers the state it was computed from (as libfranka's does); a newer
+        // state already waiting means this step came late, and the robot may count it so.
+        let answering = self.state.message_id;
         self.drain_states(OP)?;
-        if self.state.message_id != before && self.answered.is_some_and(|a| a == before) {
+        if self.state.message_id != answering {
             self.counters.late_steps += 1;
         }
+        self.send_command(OP, answering)?;
         if self.state.robot_mode == RobotMode::Reflex
             && let Err(e) = self.check_motion(OP)
         {
             return Err(self.lifecycle.fail(e));
         }
-        self.send_command(OP)?;
+        if self.state.message_id != answering {
+            // A fresh state is here already.
+            return Ok(());
+        }
         let deadline = begin + wait;
         if self.wait_state(OP, deadline)? {
             if self.state.robot_mode == RobotMode::Reflex

@@ -412,3 +412,37 @@ mod tests {
         assert!(!is_transform(&bad));
     }
 }
+
+#[cfg(test)]
+mod lost_runs {
+    use super::*;
+    use crate::franka::limits::FR3;
+
+    /// Lost commands are filled in at constant acceleration; where the path's acceleration
+    /// changes, the gap leaves a position error that the first command after it turns into an
+    /// acceleration jump. On `0.2 (1 − cos πt)` (jerk ≤ 6.2 rad/s³) runs of 8 lost commands
+    /// pass and runs of 15 do not — as the FCI documentation warns, lost packets cause
+    /// discontinuities.
+    #[test]
+    fn long_runs_of_lost_commands_on_a_curved_path_are_discontinuities() {
+        let ready = [0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+        let path = |k: usize| {
+            let mut q = ready;
+            q[3] += 0.2 * (1.0 - (std::f64::consts::PI * k as f64 * 1e-3).cos());
+            q
+        };
+        let run = |lost_len: usize| {
+            let mut arm = Arm::new(FR3, ready, None);
+            arm.begin();
+            (0..1500)
+                .map(|k| {
+                    let lost = k % 100 >= 50 && k % 100 < 50 + lost_len;
+                    let q = path(k);
+                    arm.tick(Generator::Position, (!lost).then_some(&q), None, None)
+                })
+                .fold(ErrorSet::EMPTY, ErrorSet::union)
+        };
+        assert!(run(8).is_empty(), "{}", run(8));
+        assert!(run(15).contains(RobotError::JointMotionGeneratorAccelerationDiscontinuity));
+    }
+}
