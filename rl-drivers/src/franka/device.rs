@@ -242,6 +242,8 @@ pub struct FrankaArm {
     errors: ReflexCounts,
     /// Answers to commands other than the running `Move`, awaited outside a motion.
     awaited: Option<(u32, Status)>,
+    /// The robot's cycle, measured at `open`.
+    cycle: Duration,
 }
 
 impl FrankaArm {
@@ -271,6 +273,7 @@ impl FrankaArm {
             counters: FrankaCounters::default(),
             errors: ReflexCounts::default(),
             awaited: None,
+            cycle: CYCLE,
             config,
         })
     }
@@ -908,16 +911,19 @@ impl Driver for FrankaArm {
         Ok(())
     }
 
+    /// The robot's cycle: 1 ms, or a slower simulator's measured one ([`FrankaArm::cycle`]).
     fn period(&self) -> Duration {
-        CYCLE
+        self.cycle
     }
 
     fn exchange(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Step;
+        // A simulator slower than the robot gets two of its cycles.
+        let state_wait = self.config.state_wait.max(2 * self.cycle);
         let wait = self
             .lifecycle
             .step_budget()
-            .map_or(self.config.state_wait, |b| b.min(self.config.state_wait));
+            .map_or(state_wait, |b| b.min(state_wait));
         let begin = Instant::now();
         // A motion's end comes over TCP.
         let ended = self.poll_tcp(OP).and_then(|()| self.check_motion(OP));
@@ -1007,6 +1013,7 @@ impl FrankaArm {
                 waited: self.config.command_timeout,
             });
         }
+        self.measure_cycle(operation)?;
         if self.config.fetch_model {
             self.urdf = None;
             let status = self.request(operation, Request::GetRobotModel)?;
@@ -1022,6 +1029,44 @@ impl FrankaArm {
             }
         }
         Ok(())
+    }
+}
+
+impl FrankaArm {
+    /// Times the robot's states for 20 intervals (at most half a second): a robot sends one
+    /// a millisecond, and its cycle is [`CYCLE`]; a simulator slower than real time
+    /// (franky-sim: about one every 4 ms on a 2-vCPU VM) is followed at its pace, so a loop
+    /// steps once per state. The median interval counts, rounded to 0.1 ms; below 1.5 ms it is
+    /// the robot's 1 ms.
+    fn measure_cycle(&mut self, operation: Operation) -> Result<(), Error> {
+        let mut intervals = [Duration::ZERO; 20];
+        let mut n = 0;
+        let deadline = Instant::now() + Duration::from_millis(500);
+        let mut last = Instant::now();
+        let mut last_id = self.state.message_id;
+        while n < intervals.len() && self.wait_state(operation, deadline)? {
+            let now = Instant::now();
+            let ids = self.state.message_id.saturating_sub(last_id).max(1);
+            // Per state id: a lost datagram does not lengthen the cycle.
+            intervals[n] = (now - last) / u32::try_from(ids).unwrap_or(u32::MAX);
+            last = now;
+            last_id = self.state.message_id;
+            n += 1;
+        }
+        let measured = &mut intervals[..n];
+        measured.sort();
+        let median = measured.get(n / 2).copied().unwrap_or(CYCLE);
+        self.cycle = if median < CYCLE * 3 / 2 {
+            CYCLE
+        } else {
+            Duration::from_micros(((median.as_micros() as u64).div_ceil(100)) * 100)
+        };
+        Ok(())
+    }
+
+    /// The robot's cycle as measured at `open` ([`CYCLE`] for a real robot).
+    pub fn cycle(&self) -> Duration {
+        self.cycle
     }
 }
 

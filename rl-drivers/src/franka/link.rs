@@ -195,9 +195,15 @@ impl StateChannel {
         loop {
             match self.socket.recv_from(buf) {
                 Ok((n, from)) => {
+                    // A robot on loopback is heard from any loopback source: a simulator that
+                    // binds its UDP socket to the wildcard (franky-sim) sends from 127.0.0.1
+                    // whatever address it serves on. The port is checked from the first state on.
                     let ours = match self.peer {
                         Some(p) => from == p,
-                        None => from.ip() == self.robot,
+                        None => {
+                            from.ip() == self.robot
+                                || (self.robot.is_loopback() && from.ip().is_loopback())
+                        }
                     };
                     if !ours {
                         self.foreign += 1;
