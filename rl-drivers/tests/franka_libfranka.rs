@@ -101,7 +101,10 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
         .expect("python runs");
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    println!("libfranka against the fake ({which}) in {:?}:\n{stdout}", start.elapsed());
+    println!(
+        "libfranka against the fake ({which}) in {:?}:\n{stdout}",
+        start.elapsed()
+    );
     std::thread::sleep(Duration::from_millis(20));
     let s = fake.status();
     println!(
@@ -121,9 +124,17 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
         s.max_lateness_us,
         s.raised
     );
-    assert!(out.status.success(), "libfranka's session failed:\n{stdout}\n{stderr}");
+    assert!(
+        out.status.success(),
+        "libfranka's session failed:\n{stdout}\n{stderr}"
+    );
     let report: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
-    for step in ["connect", "joint_motion", "torque_motion", "error_and_recovery"] {
+    for step in [
+        "connect",
+        "joint_motion",
+        "torque_motion",
+        "error_and_recovery",
+    ] {
         assert_eq!(report["steps"][step]["ok"], true, "{step}: {stdout}");
     }
     // The fake saw it all: one reflex (the torque step) and its recovery.

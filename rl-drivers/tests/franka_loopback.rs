@@ -5,9 +5,7 @@
 use std::net::{IpAddr, Ipv4Addr};
 use std::time::Duration;
 
-use rl_drivers::fake::franka_controller::{
-    FakeFranka, FakeFrankaConfig, READY, fr3_shaped_urdf,
-};
+use rl_drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, READY, fr3_shaped_urdf};
 use rl_drivers::franka::errors::RobotError;
 use rl_drivers::franka::message::CollisionBehavior;
 use rl_drivers::franka::state::RobotMode;
@@ -24,7 +22,10 @@ const LOCALHOST: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
 fn eventually(condition: impl Fn() -> bool) {
     let deadline = std::time::Instant::now() + Duration::from_secs(1);
     while !condition() {
-        assert!(std::time::Instant::now() < deadline, "condition not met within 1 s");
+        assert!(
+            std::time::Instant::now() < deadline,
+            "condition not met within 1 s"
+        );
         std::thread::sleep(Duration::from_millis(2));
     }
 }
@@ -94,7 +95,8 @@ fn another_version_is_refused_and_the_message_names_both() {
     let e = robot.open().unwrap_err();
     assert_eq!(e.kind(), ErrorKind::Device);
     assert!(
-        e.to_string().contains("incompatible version: robot 9, client 10"),
+        e.to_string()
+            .contains("incompatible version: robot 9, client 10"),
         "{e}"
     );
     assert_eq!(robot.state(), State::Closed);
@@ -153,8 +155,14 @@ fn a_joint_position_motion_runs_without_reflex_and_finishes() {
     assert_eq!(c.reflexes, 0);
     // Both ends agree on what was lost: the fake counts a cycle without its command, the
     // client a state it did not answer (or a step that waited in vain).
-    println!("client {c:?} timeouts {timeouts}; fake lost {} late {}", s.lost, s.late);
-    assert!(s.lost <= c.unanswered + c.timeouts + s.late + 2, "{s:?} {c:?}");
+    println!(
+        "client {c:?} timeouts {timeouts}; fake lost {} late {}",
+        s.lost, s.late
+    );
+    assert!(
+        s.lost <= c.unanswered + c.timeouts + s.late + 2,
+        "{s:?} {c:?}"
+    );
     robot.close().unwrap();
 }
 
@@ -221,14 +229,16 @@ fn lost_states_are_counted_and_twenty_in_a_row_stop_the_motion() {
     // Five states lost on the way: five commands the robot never gets.
     fake.drop_states(5);
     for _ in 0..100 {
-        robot.step().or_else(|e| {
-            if e.kind() == ErrorKind::Timeout {
-                Ok(())
-            } else {
-                Err(e)
-            }
-        })
-        .unwrap();
+        robot
+            .step()
+            .or_else(|e| {
+                if e.kind() == ErrorKind::Timeout {
+                    Ok(())
+                } else {
+                    Err(e)
+                }
+            })
+            .unwrap();
     }
     let c = robot.counters();
     assert!(c.unanswered - before >= 5, "{c:?}");
@@ -247,11 +257,19 @@ fn lost_states_are_counted_and_twenty_in_a_row_stop_the_motion() {
         }
     }
     let e = error.expect("a reflex");
-    assert!(e.to_string().contains("communication_constraints_violation"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("communication_constraints_violation"),
+        "{e}"
+    );
     assert!(robot.counters().max_unanswered_in_a_row >= 20);
     let s = settled(&fake);
     assert!(s.max_lost_in_a_row >= 20, "{s:?}");
-    assert!(s.raised.iter().any(|(e, _)| *e == RobotError::CommunicationConstraintsViolation));
+    assert!(
+        s.raised
+            .iter()
+            .any(|(e, _)| *e == RobotError::CommunicationConstraintsViolation)
+    );
     assert!(robot.link_statistics().lost >= 30);
 }
 
@@ -277,7 +295,10 @@ fn torques_move_the_simulated_arm_and_zero_torque_holds_it_against_gravity() {
     }
     let mut tau = [0.0; 7];
     robot.joint_torque(&mut tau).unwrap();
-    assert!(tau[1].abs() > 1.0, "gravity on joint 2 is measured: {tau:?}");
+    assert!(
+        tau[1].abs() > 1.0,
+        "gravity on joint 2 is measured: {tau:?}"
+    );
     // A torque of 0.5 N·m on joint 1 for 0.15 s turns it positive.
     for _ in 0..150 {
         let mut t = [0.0; 7];
@@ -310,7 +331,10 @@ fn a_torque_step_is_a_torque_discontinuity() {
     let e = (0..50)
         .find_map(|_| robot.step().err().filter(|e| e.kind() == ErrorKind::Device))
         .expect("a reflex");
-    assert!(e.to_string().contains("controller_torque_discontinuity"), "{e}");
+    assert!(
+        e.to_string().contains("controller_torque_discontinuity"),
+        "{e}"
+    );
     robot.stop().unwrap();
 }
 

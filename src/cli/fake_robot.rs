@@ -627,14 +627,19 @@ fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
     }
     // The robot's cycle runs at a real-time priority where the process may (root).
     config.on_thread_start = Some(fake_franka_thread);
-    let fake = FakeFranka::spawn(config)
-        .map_err(|e| CliError::failed(format!("fake Franka on {}:{}: {e}", args.bind, args.port)))?;
+    let fake = FakeFranka::spawn(config).map_err(|e| {
+        CliError::failed(format!("fake Franka on {}:{}: {e}", args.bind, args.port))
+    })?;
     let dynamics = fake.status().dynamics;
     let printed = outln!(
         "fake Franka FR3 (FCI v{}) on {}, {}; Ctrl-C to stop",
         rl_drivers::franka::connect::VERSION,
         fake.addr(),
-        if dynamics { "dynamics from --model" } else { "kinematic arm" }
+        if dynamics {
+            "dynamics from --model"
+        } else {
+            "kinematic arm"
+        }
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {

@@ -123,7 +123,7 @@ impl FakeFrankaConfig {
             initial_q: READY,
             version: VERSION,
             on_thread_start: None,
-            }
+        }
     }
 
     /// The same with the robot's URDF: its limits, and its dynamics.
@@ -615,7 +615,12 @@ impl Robot {
                 if let Some(m) = self.motion.take() {
                     self.arm.halt();
                     self.mode = RobotMode::Idle;
-                    self.answer(m.id, Command::Move, Status::Move(MoveStatus::Preempted), &[]);
+                    self.answer(
+                        m.id,
+                        Command::Move,
+                        Status::Move(MoveStatus::Preempted),
+                        &[],
+                    );
                 }
             }
             Request::SetCollisionBehavior(c) => {
@@ -681,7 +686,12 @@ impl Robot {
             }
             Request::GetRobotModel => {
                 let urdf = std::mem::take(&mut self.urdf);
-                self.answer(id, command, Status::Base(BaseStatus::Success), urdf.as_bytes());
+                self.answer(
+                    id,
+                    command,
+                    Status::Base(BaseStatus::Success),
+                    urdf.as_bytes(),
+                );
                 self.urdf = urdf;
             }
         }
@@ -848,13 +858,17 @@ impl Robot {
         self.arm.halt();
         self.status.reflexes += 1;
         if let Some(m) = self.motion.take() {
-            self.answer(m.id, Command::Move, Status::Move(MoveStatus::ReflexAborted), &[]);
+            self.answer(
+                m.id,
+                Command::Move,
+                Status::Move(MoveStatus::ReflexAborted),
+                &[],
+            );
         }
     }
 
     fn send_state(&mut self) {
-        let success =
-            self.window.iter().filter(|c| **c).count() as f64 / self.window.len() as f64;
+        let success = self.window.iter().filter(|c| **c).count() as f64 / self.window.len() as f64;
         let flange = self.arm.flange_pose();
         let (q_d, dq_d, ddq_d) = self.arm.desired();
         let s = &mut *self.state;
@@ -879,10 +893,11 @@ impl Robot {
         s.errors = self.errors;
         s.reflex_reason = self.reflex_reason;
         s.robot_mode = self.mode;
-        let (mg, cm) = self.motion.map_or(
-            (MotionGeneratorMode::Idle, ControllerMode::Other),
-            |m| (m.motion_generator, m.controller),
-        );
+        let (mg, cm) = self
+            .motion
+            .map_or((MotionGeneratorMode::Idle, ControllerMode::Other), |m| {
+                (m.motion_generator, m.controller)
+            });
         s.motion_generator_mode = mg;
         s.controller_mode = cm;
         s.control_command_success_rate = if self.motion.is_some() { success } else { 0.0 };

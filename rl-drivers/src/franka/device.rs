@@ -699,10 +699,8 @@ impl FrankaArm {
             {
                 return self.check_motion(operation);
             }
-            let idle = matches!(
-                self.state.motion_generator_mode,
-                MotionGeneratorMode::Idle
-            ) && self.state.controller_mode != ControllerMode::ExternalController;
+            let idle = matches!(self.state.motion_generator_mode, MotionGeneratorMode::Idle)
+                && self.state.controller_mode != ControllerMode::ExternalController;
             if !idle {
                 let id = self.state.message_id;
                 self.send_command(operation, id)?;
@@ -756,8 +754,8 @@ impl Driver for FrankaArm {
                 Error::io(OP, &e)
             }
         })?;
-        let udp =
-            StateChannel::bind(self.config.local, self.config.robot).map_err(|e| Error::io(OP, &e))?;
+        let udp = StateChannel::bind(self.config.local, self.config.robot)
+            .map_err(|e| Error::io(OP, &e))?;
         let port = udp.local_addr().map_err(|e| Error::io(OP, &e))?.port();
         self.tcp = Some(tcp);
         self.udp = Some(udp);
@@ -785,8 +783,7 @@ impl Driver for FrankaArm {
                 });
             }
         }
-        let in_error =
-            !self.state.errors.is_empty() || self.state.robot_mode == RobotMode::Reflex;
+        let in_error = !self.state.errors.is_empty() || self.state.robot_mode == RobotMode::Reflex;
         if in_error && self.config.automatic_recovery {
             self.execute(OP, Request::AutomaticErrorRecovery)?;
         }
@@ -892,9 +889,7 @@ impl Driver for FrankaArm {
         if let Some(tcp) = &mut self.tcp {
             tcp.may_grow = true;
         }
-        if self.config.automatic_recovery
-            && matches!(self.last_end, Some(MotionEnd::Reflex(_)))
-        {
+        if self.config.automatic_recovery && matches!(self.last_end, Some(MotionEnd::Reflex(_))) {
             steps.keep(self.execute(OP, Request::AutomaticErrorRecovery));
         }
         steps.into_result()
@@ -1082,7 +1077,10 @@ impl LinkStatisticsSensor for FrankaArm {
             late: c.late_steps + c.stale_states,
             rejected: c.foreign,
             corrupt: c.corrupt,
-            consecutive_failures: self.lifecycle.consecutive_failures().max(c.unanswered_in_a_row),
+            consecutive_failures: self
+                .lifecycle
+                .consecutive_failures()
+                .max(c.unanswered_in_a_row),
         }
     }
 }
@@ -1162,9 +1160,8 @@ impl CartesianPositionSensor for FrankaArm {
     fn cartesian_position(&self) -> Result<Pose, Error> {
         self.lifecycle.check(Operation::Get)?;
         let m = &self.state.O_T_EE;
-        let rotation = glam::DMat3::from_cols_array(&[
-            m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10],
-        ]);
+        let rotation =
+            glam::DMat3::from_cols_array(&[m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10]]);
         Ok(Pose::new(rotation, glam::DVec3::new(m[12], m[13], m[14])))
     }
 }

@@ -239,7 +239,9 @@ impl ErrorSet {
 
     /// The errors set, in flag order.
     pub fn iter(self) -> impl Iterator<Item = RobotError> {
-        RobotError::ALL.into_iter().filter(move |e| self.contains(*e))
+        RobotError::ALL
+            .into_iter()
+            .filter(move |e| self.contains(*e))
     }
 
     /// The first error set, if any.
@@ -340,7 +342,11 @@ mod tests {
         let mut c = ReflexCounts::default();
         let reflex = ErrorSet::EMPTY.with(RobotError::JointReflex);
         assert_eq!(c.record(reflex), reflex);
-        assert_eq!(c.record(reflex), ErrorSet::EMPTY, "still set: not raised again");
+        assert_eq!(
+            c.record(reflex),
+            ErrorSet::EMPTY,
+            "still set: not raised again"
+        );
         c.record(ErrorSet::EMPTY);
         c.record(reflex.with(RobotError::PowerLimitViolation));
         assert_eq!(c.count(RobotError::JointReflex), 2);

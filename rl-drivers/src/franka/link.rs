@@ -130,7 +130,10 @@ impl CommandChannel {
             }
             let status = Status::decode(header.command, self.rx[at + HEADER_LEN])
                 .map_err(LinkError::Message)?;
-            on_answer(Answer { header, status }, &self.rx[at + HEADER_LEN + 1..at + size]);
+            on_answer(
+                Answer { header, status },
+                &self.rx[at + HEADER_LEN + 1..at + size],
+            );
             at += size;
         }
         self.rx.copy_within(at..self.filled, 0);

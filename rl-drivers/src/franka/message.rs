@@ -386,6 +386,8 @@ pub struct Load {
 }
 
 /// A request of the TCP interface.
+// A value built on the stack and encoded at once: boxing the large variant would allocate.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Request {
     /// The handshake.
@@ -798,9 +800,7 @@ impl Status {
             | Command::SetEeToK
             | Command::SetNeToEe
             | Command::SetLoad => SetterStatus::from_u8(code).map(Self::Setter),
-            Command::AutomaticErrorRecovery => {
-                RecoveryStatus::from_u8(code).map(Self::Recovery)
-            }
+            Command::AutomaticErrorRecovery => RecoveryStatus::from_u8(code).map(Self::Recovery),
             Command::GetRobotModel => BaseStatus::from_u8(code).map(Self::Base),
         }
         .ok_or(bad)
@@ -935,7 +935,10 @@ mod tests {
             let n = req.encode(7, &mut buf).unwrap();
             assert_eq!(n, len, "{:?}", req.command());
             let h = Header::decode(&buf, MAX_REQUEST_LEN).unwrap();
-            assert_eq!((h.command, h.command_id, h.size as usize), (req.command(), 7, n));
+            assert_eq!(
+                (h.command, h.command_id, h.size as usize),
+                (req.command(), 7, n)
+            );
             assert_eq!(Request::decode(&h, &buf[HEADER_LEN..n]).unwrap(), *req);
         }
     }
@@ -954,7 +957,10 @@ mod tests {
         let Request::Move(m) = Request::decode(&h, &payload).unwrap() else {
             panic!("not a move")
         };
-        assert_eq!(m.motion_generator_mode, MoveMotionGeneratorMode::JointVelocity);
+        assert_eq!(
+            m.motion_generator_mode,
+            MoveMotionGeneratorMode::JointVelocity
+        );
         assert_eq!(m.async_maximum_velocity, None);
         // Shorter still is an error that says what was short.
         let e = Request::decode(&h, &payload[..40]).unwrap_err();

@@ -113,12 +113,35 @@ macro_rules! codes {
     };
 }
 
-codes!(MotionGeneratorMode, "motion_generator_mode", Idle = 0, JointPosition = 1,
-    JointVelocity = 2, CartesianPosition = 3, CartesianVelocity = 4, None = 5);
-codes!(ControllerMode, "controller_mode", JointImpedance = 0, CartesianImpedance = 1,
-    ExternalController = 2, Other = 3);
-codes!(RobotMode, "robot_mode", Other = 0, Idle = 1, Move = 2, Guiding = 3, Reflex = 4,
-    UserStopped = 5, AutomaticErrorRecovery = 6);
+codes!(
+    MotionGeneratorMode,
+    "motion_generator_mode",
+    Idle = 0,
+    JointPosition = 1,
+    JointVelocity = 2,
+    CartesianPosition = 3,
+    CartesianVelocity = 4,
+    None = 5
+);
+codes!(
+    ControllerMode,
+    "controller_mode",
+    JointImpedance = 0,
+    CartesianImpedance = 1,
+    ExternalController = 2,
+    Other = 3
+);
+codes!(
+    RobotMode,
+    "robot_mode",
+    Other = 0,
+    Idle = 1,
+    Move = 2,
+    Guiding = 3,
+    Reflex = 4,
+    UserStopped = 5,
+    AutomaticErrorRecovery = 6
+);
 
 impl fmt::Display for RobotMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

@@ -83,7 +83,11 @@ pub(crate) struct Arm {
 }
 
 impl Arm {
-    pub(crate) fn new(limits: [JointLimits; DOF], q: [f64; DOF], dynamics: Option<Dynamics>) -> Self {
+    pub(crate) fn new(
+        limits: [JointLimits; DOF],
+        q: [f64; DOF],
+        dynamics: Option<Dynamics>,
+    ) -> Self {
         let mut arm = Self {
             limits,
             dynamics,
@@ -182,11 +186,9 @@ impl Arm {
             Generator::Position | Generator::Velocity => {
                 let next = match (generator, q_c, dq_c) {
                     (Generator::Position, Some(q), _) => {
-                        if self.first
-                            && (0..DOF).any(|i| (q[i] - s.q[i]).abs() > START_TOLERANCE)
-                        {
-                            errors =
-                                errors.with(RobotError::JointPositionMotionGeneratorStartPoseInvalid);
+                        if self.first && (0..DOF).any(|i| (q[i] - s.q[i]).abs() > START_TOLERANCE) {
+                            errors = errors
+                                .with(RobotError::JointPositionMotionGeneratorStartPoseInvalid);
                         }
                         let v: [f64; DOF] = core::array::from_fn(|i| (q[i] - s.q[i]) / DELTA_T);
                         Signal {
@@ -220,11 +222,13 @@ impl Arm {
         if generator == Generator::Torque
             && let Some(tau) = tau_c
         {
-            for i in 0..DOF {
-                if ((tau[i] - self.tau_j_d[i]) / DELTA_T).abs() > MAX_TORQUE_RATE * (1.0 + RATE_SLACK)
-                {
-                    errors = errors.with(RobotError::ControllerTorqueDiscontinuity);
-                }
+            let rate_limit = MAX_TORQUE_RATE * (1.0 + RATE_SLACK);
+            if tau
+                .iter()
+                .zip(&self.tau_j_d)
+                .any(|(t, before)| ((t - before) / DELTA_T).abs() > rate_limit)
+            {
+                errors = errors.with(RobotError::ControllerTorqueDiscontinuity);
             }
             self.tau_j_d = *tau;
         }
@@ -277,17 +281,17 @@ impl Arm {
                 tau.copy_from_slice(t);
             }
         }
-        for i in 0..DOF {
-            let e = self.limits[i].effort;
-            if tau[i].abs() > e {
-                tau[i] = tau[i].clamp(-e, e);
+        for (t, l) in tau.iter_mut().zip(&self.limits) {
+            if t.abs() > l.effort {
+                *t = t.clamp(-l.effort, l.effort);
                 self.torque_clips += 1;
             }
         }
         if let Ok(qdd) = rl_core::algo::aba(&d.model, &mut d.data, &self.q, &self.dq, &tau) {
-            for i in 0..DOF {
-                self.dq[i] += qdd[i] * DELTA_T;
-                self.q[i] += self.dq[i] * DELTA_T;
+            // Semi-implicit Euler: the new velocity moves the joint.
+            for ((q, dq), a) in self.q.iter_mut().zip(&mut self.dq).zip(qdd) {
+                *dq += a * DELTA_T;
+                *q += *dq * DELTA_T;
             }
         }
         self.tau_j = tau;
@@ -369,11 +373,20 @@ mod tests {
         let mut arm = Arm::new(FR3, READY, None);
         arm.begin();
         let mut q = READY;
-        assert!(arm.tick(Generator::Position, Some(&q), None, None).is_empty());
+        assert!(
+            arm.tick(Generator::Position, Some(&q), None, None)
+                .is_empty()
+        );
         q[3] += 1e-3;
         let e = arm.tick(Generator::Position, Some(&q), None, None);
-        assert!(e.contains(RobotError::JointMotionGeneratorVelocityDiscontinuity), "{e}");
-        assert!(e.contains(RobotError::JointMotionGeneratorAccelerationDiscontinuity), "{e}");
+        assert!(
+            e.contains(RobotError::JointMotionGeneratorVelocityDiscontinuity),
+            "{e}"
+        );
+        assert!(
+            e.contains(RobotError::JointMotionGeneratorAccelerationDiscontinuity),
+            "{e}"
+        );
     }
 
     #[test]
@@ -383,7 +396,10 @@ mod tests {
         let mut q = READY;
         q[1] += 0.01;
         let e = arm.tick(Generator::Position, Some(&q), None, None);
-        assert!(e.contains(RobotError::JointPositionMotionGeneratorStartPoseInvalid), "{e}");
+        assert!(
+            e.contains(RobotError::JointPositionMotionGeneratorStartPoseInvalid),
+            "{e}"
+        );
     }
 
     #[test]
@@ -392,7 +408,10 @@ mod tests {
         arm.begin();
         let mut tau = [0.0; DOF];
         tau[0] = 0.9;
-        assert!(arm.tick(Generator::Torque, None, None, Some(&tau)).is_empty());
+        assert!(
+            arm.tick(Generator::Torque, None, None, Some(&tau))
+                .is_empty()
+        );
         tau[0] = 2.0;
         let e = arm.tick(Generator::Torque, None, None, Some(&tau));
         assert!(e.contains(RobotError::ControllerTorqueDiscontinuity), "{e}");

@@ -63,8 +63,8 @@ pub(crate) fn joint_limits(urdf: &str) -> Result<[JointLimits; DOF], String> {
 
 /// The arm's dynamics from `urdf`: it must have 7 degrees of freedom.
 pub(crate) fn dynamics(urdf: &str) -> Result<Dynamics, String> {
-    let loaded = load_str::<CAPACITY>(urdf, &UrdfOptions::default())
-        .map_err(|e| format!("URDF: {e}"))?;
+    let loaded =
+        load_str::<CAPACITY>(urdf, &UrdfOptions::default()).map_err(|e| format!("URDF: {e}"))?;
     let model = &loaded.model;
     if model.dof() != DOF || model.nq() != DOF {
         return Err(format!(
@@ -91,7 +91,8 @@ pub(crate) fn dynamics(urdf: &str) -> Result<Dynamics, String> {
 /// A URDF of the FR3's joints and limits only (no geometry, no inertia), in the form libfranka
 /// reads its velocity limits from.
 pub(crate) fn limits_only_urdf(limits: &[JointLimits; DOF]) -> String {
-    let mut s = String::from("<?xml version=\"1.0\" ?>\n<robot name=\"fr3\">\n  <link name=\"link0\"/>\n");
+    let mut s =
+        String::from("<?xml version=\"1.0\" ?>\n<robot name=\"fr3\">\n  <link name=\"link0\"/>\n");
     for (k, l) in limits.iter().enumerate() {
         let _ = write!(
             s,
