@@ -14,7 +14,7 @@
 //! - **Commands answer states.** A command counts for the cycle whose state id it carries,
 //!   if it arrives before the next tick; an older id is late, and a cycle without its command
 //!   is lost: the motion generator extrapolates at constant acceleration (a torque is held).
-//!   [`MAX_LOST_IN_A_ROW`](crate::franka::MAX_LOST_IN_A_ROW) lost in a row raise
+//!   [`crate::franka::MAX_LOST_IN_A_ROW`] lost in a row raise
 //!   `communication_constraints_violation`. `control_command_success_rate` is the share of the
 //!   last 100 cycles of a motion whose command came.
 //! - **It refuses what the robot refuses.** Another version at `Connect`

@@ -6,17 +6,17 @@
 //! |---|---|---|
 //! | 0 | `message_id` (the robot's millisecond) | u64 |
 //! | 8 | `O_T_EE`, `O_T_EE_d`, `F_T_EE`, `EE_T_K`, `F_T_NE`, `NE_T_EE` | 6 × 16 f32, column-major |
-//! | 392 | `m_ee`, `I_ee`[9], `F_x_Cee`[3], `m_load`, `I_load`[9], `F_x_Cload`[3] | f32 |
-//! | 496 | `elbow`[2], `elbow_d`[2] | f32 |
+//! | 392 | `m_ee`, `I_ee[9]`, `F_x_Cee[3]`, `m_load`, `I_load[9]`, `F_x_Cload[3]` | f32 |
+//! | 496 | `elbow[2]`, `elbow_d[2]` | f32 |
 //! | 512 | `tau_J`, `tau_J_d`, `dtau_J`, `q`, `q_d`, `dq`, `dq_d`, `ddq_d` | 8 × 7 f32 |
-//! | 736 | `joint_contact`[7], `cartesian_contact`[6], `joint_collision`[7], `cartesian_collision`[6] | f32 |
-//! | 840 | `tau_ext_hat_filtered`[7], `O_F_ext_hat_K`[6], `K_F_ext_hat_K`[6] | f32 |
-//! | 916 | `O_dP_EE_d`[6], `O_ddP_O`[3], `elbow_c`, `delbow_c`, `ddelbow_c`[2 each] | f32 |
-//! | 976 | `O_T_EE_c`[16], `O_dP_EE_c`[6], `O_ddP_EE_c`[6] | f32 |
-//! | 1088 | `theta`[7], `dtheta`[7] | f32 |
+//! | 736 | `joint_contact[7]`, `cartesian_contact[6]`, `joint_collision[7]`, `cartesian_collision[6]` | f32 |
+//! | 840 | `tau_ext_hat_filtered[7]`, `O_F_ext_hat_K[6]`, `K_F_ext_hat_K[6]` | f32 |
+//! | 916 | `O_dP_EE_d[6]`, `O_ddP_O[3]`, `elbow_c`, `delbow_c`, `ddelbow_c` (2 each) | f32 |
+//! | 976 | `O_T_EE_c[16]`, `O_dP_EE_c[6]`, `O_ddP_EE_c[6]` | f32 |
+//! | 1088 | `theta[7]`, `dtheta[7]` | f32 |
 //! | 1144 | `accelerometer_top`, `accelerometer_bottom` | 2 × 6 × 3 f32 |
 //! | 1288 | `motion_generator_mode`, `controller_mode` | u8, u8 |
-//! | 1290 | `errors`[41], `reflex_reason`[41] | bool |
+//! | 1290 | `errors[41]`, `reflex_reason[41]` | bool |
 //! | 1372 | `robot_mode` | u8 |
 //! | 1373 | `control_command_success_rate` | f32 |
 //!
