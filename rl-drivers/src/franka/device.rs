@@ -495,19 +495,30 @@ impl FrankaArm {
     fn drain_states(&mut self, operation: Operation) -> Result<bool, Error> {
         let mut any = false;
         let deadline = Instant::now() + CYCLE;
-        loop {
-            let udp = self.udp.as_mut().ok_or(Error::State {
-                operation,
-                state: State::Closed,
-            })?;
-            if !udp
-                .try_recv(&mut self.rx, deadline)
-                .map_err(|e| Error::io(operation, &e))?
-            {
-                return Ok(any);
-            }
+        while self.receive(operation, deadline, false)? {
             any |= self.take_state();
         }
+        Ok(any)
+    }
+
+    /// One datagram from the robot into `rx`: what is pending, or (`wait`) the next until
+    /// `deadline`. `Ok(false)`: none.
+    fn receive(
+        &mut self,
+        operation: Operation,
+        deadline: Instant,
+        wait: bool,
+    ) -> Result<bool, Error> {
+        let udp = self.udp.as_mut().ok_or(Error::State {
+            operation,
+            state: State::Closed,
+        })?;
+        let got = if wait {
+            udp.recv_until(&mut self.rx, deadline)
+        } else {
+            udp.try_recv(&mut self.rx, deadline)
+        };
+        got.map_err(|e| Error::io(operation, &e))
     }
 
     /// Decodes the datagram in `rx`; uses it if it is newer than the last. Returns whether it
@@ -546,14 +557,7 @@ impl FrankaArm {
     /// Waits (bounded) for a state newer than the one held.
     fn wait_state(&mut self, operation: Operation, deadline: Instant) -> Result<bool, Error> {
         loop {
-            let udp = self.udp.as_mut().ok_or(Error::State {
-                operation,
-                state: State::Closed,
-            })?;
-            if !udp
-                .recv_until(&mut self.rx, deadline)
-                .map_err(|e| Error::io(operation, &e))?
-            {
+            if !self.receive(operation, deadline, true)? {
                 return Ok(false);
             }
             if self.take_state() {
