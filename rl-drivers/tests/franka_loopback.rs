@@ -12,7 +12,7 @@ use rl_drivers::franka::state::RobotMode;
 use rl_drivers::franka::{ControlMode, FrankaArm, FrankaConfig, MotionEnd};
 use rl_drivers::{
     CyclicDevice, Device, DeviceError, ErrorKind, JointPositionActuator, JointPositionSensor,
-    JointTorqueActuator, JointTorqueSensor, LinkStatisticsSensor, State,
+    JointTorqueActuator, JointTorqueSensor, JointVelocityActuator, LinkStatisticsSensor, State,
 };
 
 const LOCALHOST: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
@@ -368,4 +368,42 @@ fn settings_are_refused_while_moving_and_when_out_of_range() {
     // NE_T_EE took effect: the state reports it.
     assert_eq!(robot.robot_state().NE_T_EE[14], f64::from(0.1f32));
     assert_eq!(settled(&fake).refused_requests, 2);
+}
+
+#[test]
+fn a_joint_velocity_motion_moves_the_joint_by_the_integral() {
+    real_time(80);
+    let fake = fake(FakeFrankaConfig::loopback());
+    let mut robot = arm(&fake, ControlMode::JointVelocity);
+    robot.open().unwrap();
+    robot.start().unwrap();
+    let q0 = robot.robot_state().q;
+    let id0 = robot.robot_state().message_id;
+    // Joint 1: 2 rad/s² for 0.1 s, 0.2 rad/s for 0.3 s, −2 rad/s² for 0.1 s: 0.08 rad in all.
+    let velocity = |t: f64| {
+        if t < 0.1 {
+            2.0 * t
+        } else if t < 0.4 {
+            0.2
+        } else {
+            (0.2 - 2.0 * (t - 0.4)).max(0.0)
+        }
+    };
+    loop {
+        let k = robot.robot_state().message_id - id0;
+        if k > 600 {
+            break;
+        }
+        let mut dq = [0.0; 7];
+        dq[0] = velocity(k as f64 * 1e-3);
+        robot.set_joint_velocity(&dq).unwrap();
+        if let Err(e) = robot.step() {
+            assert_eq!(e.kind(), ErrorKind::Timeout, "{e} {:?}", robot.motion_end());
+        }
+    }
+    robot.stop().unwrap();
+    let moved = robot.robot_state().q[0] - q0[0];
+    assert!((moved - 0.08).abs() < 2e-3, "{moved}");
+    let s = settled(&fake);
+    assert_eq!((s.reflexes, s.finished), (0, 1), "{s:?}");
 }
