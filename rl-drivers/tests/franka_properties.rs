@@ -51,8 +51,8 @@ proptest! {
         let mut d = RobotState::default();
         d.decode_into(&buf).unwrap();
         prop_assert_eq!(d.message_id, id);
-        for i in 0..7 {
-            prop_assert_eq!(d.q[i], f64::from(q[i] as f32));
+        for (got, sent) in d.q.iter().zip(q) {
+            prop_assert_eq!(*got, f64::from(sent as f32));
         }
     }
 }
