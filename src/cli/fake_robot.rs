@@ -29,6 +29,31 @@ pub enum FakeRobotCommand {
     /// A fake EtherCAT segment of CiA 402 drives on a network interface (raw Ethernet; needs
     /// root or CAP_NET_RAW).
     Ethercat(EthercatArgs),
+    /// A fake Franka FR3 speaking libfranka's protocol (FCI: TCP 1337 and 1 kHz UDP).
+    Franka(FrankaArgs),
+}
+
+/// Arguments of `rl fake-robot franka`.
+#[derive(Args, Debug)]
+pub struct FrankaArgs {
+    /// Address of the command server and state sender (loopback by default; libfranka always
+    /// connects to port 1337, so a second fake needs another address, e.g. 127.0.0.2).
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: std::net::IpAddr,
+    /// The command server's port.
+    #[arg(long, default_value_t = rl_drivers::franka::COMMAND_PORT)]
+    pub port: u16,
+    /// The arm's URDF (e.g. the FR3's): served to clients (`GetRobotModel`), its joint limits
+    /// checked, and its dynamics integrated (rl-core's ABA) so torques move the arm. Without
+    /// it the arm is kinematic with the FR3's limits.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
+    /// With --model: serve it and take its limits, but keep the arm kinematic.
+    #[arg(long)]
+    pub kinematic: bool,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
 }
 
 /// Arguments of `rl fake-robot ethercat`.
@@ -105,6 +130,7 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
         FakeRobotCommand::Coach(args) => run_coach(&args, &stop),
         FakeRobotCommand::Canopen(args) => run_canopen(&args, &stop),
         FakeRobotCommand::Ethercat(args) => run_ethercat(&args, &stop),
+        FakeRobotCommand::Franka(args) => run_franka(&args, &stop),
     }
 }
 
@@ -577,6 +603,75 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
         .map_err(|e| CliError::failed(format!("fake EtherCAT segment: {e}")))?;
     printed?;
     outln!("fake EtherCAT segment stopped after {} frames", c.frames)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn fake_franka_thread() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-franka")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(85)
+        .best_effort(true)
+        .apply_to_current();
+}
+
+fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig};
+    let mut config = FakeFrankaConfig::loopback();
+    config.bind = args.bind;
+    config.command_port = args.port;
+    if let Some(path) = &args.model {
+        let urdf = std::fs::read_to_string(path)
+            .map_err(|e| CliError::usage(format!("--model {}: {e}", path.display())))?;
+        config = config.with_urdf(urdf);
+        config.dynamics = !args.kinematic;
+    }
+    // The robot's cycle runs at a real-time priority where the process may (root).
+    config.on_thread_start = Some(fake_franka_thread);
+    let fake = FakeFranka::spawn(config).map_err(|e| {
+        CliError::failed(format!("fake Franka on {}:{}: {e}", args.bind, args.port))
+    })?;
+    let dynamics = fake.status().dynamics;
+    let printed = outln!(
+        "fake Franka FR3 (FCI v{}) on {}, {}; Ctrl-C to stop",
+        rl_drivers::franka::connect::VERSION,
+        fake.addr(),
+        if dynamics {
+            "dynamics from --model"
+        } else {
+            "kinematic arm"
+        }
+    );
+    let mut last = 0;
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let rate = s.states - last;
+            last = s.states;
+            outln!(
+                "t={t}s mode={} states={} ({rate}/s) commands={} lost={} max_lost_in_a_row={} \
+                 late={} motions={} finished={} reflexes={} errors={} recoveries={} refused={} \
+                 slips={} max_lateness_us={} q={}",
+                s.robot_mode,
+                s.states,
+                s.commands,
+                s.lost,
+                s.max_lost_in_a_row,
+                s.late,
+                s.motions,
+                s.finished,
+                s.reflexes,
+                s.errors,
+                s.recoveries,
+                s.refused_requests,
+                s.slips,
+                s.max_lateness_us,
+                joints(&s.q),
+            )
+        })
+    });
+    drop(fake);
+    printed?;
+    outln!("fake Franka stopped")?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -29,7 +29,7 @@ const R3_PORT: u16 = 10001;
 /// The devices `--device` accepts, for messages.
 pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PORT], fake-cia402, \
      cannelloni+udp://HOST:PORT[?nodes=1-6], cannelloni+tcp://HOST:PORT[?listen][&nodes=…] or \
-     socketcan://IFACE[?nodes=…] or ethercat://IF";
+     socketcan://IFACE[?nodes=…], ethercat://IF or franka://HOST[:PORT]";
 
 /// The robot `rl run` drives.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -56,6 +56,11 @@ pub enum DeviceSpec {
     Ethercat {
         /// The interface's name.
         interface: String,
+    },
+    /// A Franka arm (FCI, libfranka's protocol), in joint position mode.
+    Franka {
+        /// Its command server (port 1337 by default).
+        server: SocketAddr,
     },
 }
 
@@ -203,6 +208,10 @@ impl DeviceSpec {
             let server = resolve(rest, rl_drivers::coach::DEFAULT_PORT).map_err(bad)?;
             return Ok(Self::Coach { server });
         }
+        if let Some(rest) = text.strip_prefix("franka://") {
+            let server = resolve(rest, rl_drivers::franka::COMMAND_PORT).map_err(bad)?;
+            return Ok(Self::Franka { server });
+        }
         if let Some(interface) = text.strip_prefix("ethercat://") {
             if interface.is_empty() || interface.len() > 15 || interface.contains('/') {
                 return Err(bad(
@@ -330,6 +339,17 @@ impl DeviceSpec {
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("EtherCAT CiA 402 drives on {interface}"),
+                    fake: None,
+                })
+            }
+            Self::Franka { server } => {
+                let mut config = rl_drivers::franka::FrankaConfig::new(server.ip());
+                config.command_port = server.port();
+                let robot = rl_drivers::FrankaArm::new(config)
+                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                Ok(Opened {
+                    robot: Box::new(robot),
+                    name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
                     fake: None,
                 })
             }
@@ -473,6 +493,12 @@ mod tests {
             Ok(DeviceSpec::Cia402(_))
         ));
         assert_eq!(
+            DeviceSpec::parse("franka://127.0.0.2").ok(),
+            Some(DeviceSpec::Franka {
+                server: "127.0.0.2:1337".parse().expect("addr"),
+            })
+        );
+        assert_eq!(
             DeviceSpec::parse("ethercat://eth1").ok(),
             Some(DeviceSpec::Ethercat {
                 interface: "eth1".into()
@@ -489,6 +515,7 @@ mod tests {
             "h7://1.2.3.4?r3=x",
             "tcp://1.2.3.4",
             "coach://",
+            "franka://",
         ] {
             let e = DeviceSpec::parse(bad).expect_err(bad);
             assert_eq!(e.exit_code(), 2, "{bad}");
