@@ -120,6 +120,33 @@ impl<'py, T: Element> Output<'py, T> {
     }
 }
 
+/// `ob` as one number: a Python number or a 0-d array; `None` for anything with a shape.
+pub fn scalar(ob: &Bound<'_, PyAny>) -> Option<f64> {
+    if let Ok(a) = ob.cast::<numpy::PyUntypedArray>() {
+        if a.ndim() > 0 {
+            return None;
+        }
+    } else if ob.hasattr("__len__").unwrap_or(false) {
+        return None;
+    }
+    ob.extract::<f64>().ok()
+}
+
+/// A shape as Python writes it: `(6,)`, `(10, 6)`.
+pub fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
 /// What an argument of a possibly batched call must look like: `width` values, or a 2-D array
 /// of rows of `width` values (`batch` rows when another argument fixed it already).
 pub fn check_shape(
@@ -134,7 +161,8 @@ pub fn check_shape(
         [b, n] if *n == width => Some(*b),
         _ => {
             return Err(PyValueError::new_err(format!(
-                "{name}: shape {shape:?}, expected ({width},) or (batch, {width})"
+                "{name}: shape {}, expected ({width},) or (batch, {width})",
+                shape_text(shape)
             )));
         }
     };
@@ -143,7 +171,8 @@ pub fn check_shape(
         Some(expected) if *expected == rows => {}
         Some(expected) => {
             return Err(PyValueError::new_err(format!(
-                "{name}: shape {shape:?} does not match the other arguments ({})",
+                "{name}: shape {} does not match the other arguments ({})",
+                shape_text(shape),
                 match expected {
                     None => "one state".to_owned(),
                     Some(b) => format!("{b} states"),

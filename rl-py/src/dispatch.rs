@@ -310,6 +310,86 @@ impl<const N: usize> Loaded<N> {
     }
 }
 
+impl<const N: usize> Loaded<N> {
+    /// A batch on up to [`threads`] threads, each with its own workspace, in contiguous
+    /// chunks of rows; small batches on this thread. The error reported is that of the
+    /// first failing row.
+    fn rows_parallel(
+        &self,
+        algo: Algo,
+        inputs: &[&[f64]],
+        out: &mut [f64],
+        rows: usize,
+    ) -> Result<(), RowError> {
+        let threads = threads().min(rows / MIN_ROWS_PER_THREAD).max(1);
+        if threads == 1 {
+            let mut data = Box::new(Data::<N>::new());
+            return self.rows(algo, &mut data, inputs, out, rows);
+        }
+        let (nq, nv, width) = (self.nq(), self.nv(), self.width(algo));
+        let per = rows.div_ceil(threads);
+        let results: Vec<Result<(), RowError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = out
+                .chunks_mut(per * width.max(1))
+                .enumerate()
+                .map(|(c, cells)| {
+                    let first = c * per;
+                    let count = per.min(rows - first);
+                    let ins: Vec<&[f64]> = inputs
+                        .iter()
+                        .enumerate()
+                        .map(|(i, x)| {
+                            let w = if i == 0 { nq } else { nv };
+                            &x[first * w..(first + count) * w]
+                        })
+                        .collect();
+                    scope.spawn(move || {
+                        let mut data = Box::new(Data::<N>::new());
+                        self.rows(algo, &mut data, &ins, cells, count)
+                            .map_err(|e| RowError {
+                                row: e.row + first,
+                                message: e.message,
+                            })
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| {
+                    h.join().unwrap_or_else(|_| {
+                        Err(RowError {
+                            row: 0,
+                            message: "a worker thread panicked".into(),
+                        })
+                    })
+                })
+                .collect()
+        });
+        // Chunks are in row order: the first error is the first failing row.
+        results.into_iter().collect()
+    }
+}
+
+/// Fewer rows than this per thread are not worth a thread (spawning one costs about as much
+/// as a few dozen states of RNEA on an arm).
+const MIN_ROWS_PER_THREAD: usize = 256;
+
+/// Threads for batches: 0 = one per CPU.
+static THREADS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many threads a batch may use.
+pub fn threads() -> usize {
+    match THREADS.load(std::sync::atomic::Ordering::Relaxed) {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    }
+}
+
+/// Sets how many threads a batch may use (0: one per CPU).
+pub fn set_threads(n: usize) {
+    THREADS.store(n, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// `x` as a row-major 4 × 4 homogeneous matrix into `out` (16 values).
 fn homogeneous(x: &PlueckerTransform, out: &mut [f64]) {
     let r = &x.rotation;
@@ -372,8 +452,7 @@ impl<const N: usize> Kin for Loaded<N> {
             let mut data = self.data.lock().unwrap_or_else(|p| p.into_inner());
             self.rows(algo, &mut data, inputs, out, rows)
         } else {
-            let mut data = Box::new(Data::<N>::new());
-            self.rows(algo, &mut data, inputs, out, rows)
+            self.rows_parallel(algo, inputs, out, rows)
         }
     }
 

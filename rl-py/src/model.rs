@@ -22,7 +22,7 @@ use rl_core::loader::{
 };
 use rl_core::spatial::PlueckerTransform;
 
-use crate::array::{Input, Output, check_shape, shared_slice};
+use crate::array::{Input, Output, check_shape, shape_text, shared_slice};
 use crate::dispatch::{self, Algo, Kin};
 use crate::error;
 
@@ -193,6 +193,15 @@ impl Model {
         }
     }
 
+    /// How a report names the model: "name (path)" or the path.
+    pub(crate) fn name_and_path(&self) -> String {
+        if self.name.is_empty() {
+            self.path.display().to_string()
+        } else {
+            format!("{} ({})", self.name, self.path.display())
+        }
+    }
+
     /// The index of frame `name`, or a `KeyError` listing the frames.
     fn frame(&self, name: &str) -> PyResult<usize> {
         self.frame_index.get(name).copied().ok_or_else(|| {
@@ -253,8 +262,8 @@ impl Model {
         let input = Input::new(q, name)?;
         if input.shape() != [self.kin.nq()] {
             return Err(PyValueError::new_err(format!(
-                "{name}: shape {:?}, expected ({},)",
-                input.shape(),
+                "{name}: shape {}, expected ({},)",
+                shape_text(input.shape()),
                 self.kin.nq()
             )));
         }
@@ -443,8 +452,8 @@ impl Model {
         let v = Input::new(v, "v")?;
         if v.shape() != [self.kin.nv()] {
             return Err(PyValueError::new_err(format!(
-                "v: shape {:?}, expected ({},)",
-                v.shape(),
+                "v: shape {}, expected ({},)",
+                shape_text(v.shape()),
                 self.kin.nv()
             )));
         }
@@ -617,7 +626,8 @@ impl Model {
             [3] => IkGoal::position(tool, DVec3::from_slice(target.slice())),
             s => {
                 return Err(PyValueError::new_err(format!(
-                    "target: shape {s:?}, expected (4, 4) (a pose) or (3,) (a position)"
+                    "target: shape {}, expected (4, 4) (a pose) or (3,) (a position)",
+                    shape_text(s)
                 )));
             }
         };
