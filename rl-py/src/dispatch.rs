@@ -269,6 +269,21 @@ impl<const N: usize> Loaded<N> {
         Ok(())
     }
 
+    /// An algorithm's error as the `rl` tool words it (`src/cli/model.rs`): a singular mass
+    /// matrix names its joint.
+    fn message(&self, e: rl_core::Error) -> String {
+        let m = &self.loaded.model;
+        match e {
+            rl_core::Error::NotPositiveDefinite { dof } if dof < m.dof() => format!(
+                "the mass matrix cannot be factorised: joint \"{}\" (DOF {dof}) moves no mass \
+                 or inertia along its axis here (its subtree is massless), so forward dynamics \
+                 are undefined; give the links it moves an inertia",
+                m.joint_name(m.dof_body(dof))
+            ),
+            e => e.to_string(),
+        }
+    }
+
     fn rows(
         &self,
         algo: Algo,
@@ -290,12 +305,17 @@ impl<const N: usize> Loaded<N> {
                     return Err(RowError {
                         row,
                         message: format!(
-                            "q: the quaternion of joint \"{}\" at q[{}..{}] has norm {} (not \
-                             a unit quaternion); normalise it (Model.normalize)",
+                            "q: elements {at}..{} (x, y, z, w of joint \"{}\"'s quaternion) \
+                             have norm {}; a rotation needs a unit quaternion{}",
+                            bad.q_index + 3,
                             self.loaded.model.joint_name(bad.body),
-                            bad.q_index,
-                            bad.q_index + 4,
-                            bad.norm
+                            bad.norm,
+                            if bad.norm > 0.0 {
+                                " (Model.normalize divides it by its norm)"
+                            } else {
+                                ""
+                            },
+                            at = bad.q_index,
                         ),
                     });
                 }
@@ -303,7 +323,7 @@ impl<const N: usize> Loaded<N> {
             let cell = &mut out[row * width..(row + 1) * width];
             self.one(algo, data, ins, cell).map_err(|e| RowError {
                 row,
-                message: e.to_string(),
+                message: self.message(e),
             })?;
         }
         Ok(())
