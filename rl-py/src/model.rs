@@ -114,6 +114,7 @@ pub struct Model {
     frames: Vec<String>,
     frame_index: HashMap<String, usize>,
     limits: [Vec<f64>; 4],
+    wraparound: Vec<bool>,
     gravity: [f64; 3],
     warnings: Vec<String>,
 }
@@ -123,6 +124,7 @@ struct Facts {
     name: String,
     joint_names: Vec<String>,
     limits: [Vec<f64>; 4],
+    wraparound: Vec<bool>,
     gravity: [f64; 3],
     warnings: Vec<String>,
 }
@@ -144,6 +146,7 @@ fn facts<const N: usize>(l: &LoadedModel<N>) -> Facts {
         name: m.name().to_owned(),
         joint_names,
         limits,
+        wraparound: (0..nv).map(|k| m.limits(k).wraparound).collect(),
         gravity: m.gravity().to_array(),
         warnings: l.warnings.clone(),
     }
@@ -171,6 +174,7 @@ impl Model {
             name: String::new(),
             joint_names: Vec::new(),
             limits: Default::default(),
+            wraparound: Vec::new(),
             gravity: [0.0; 3],
             warnings: Vec::new(),
         });
@@ -188,6 +192,7 @@ impl Model {
             frames,
             frame_index,
             limits: f.limits,
+            wraparound: f.wraparound,
             gravity: f.gravity,
             warnings: f.warnings,
         }
@@ -372,6 +377,13 @@ impl Model {
     #[getter]
     fn effort_limits<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         crate::array::vector(py, &self.limits[3])
+    }
+
+    /// Per degree of freedom: whether it is an angle that wraps around (a continuous joint,
+    /// whose position limits do not apply; Pinocchio stores it as `(cos, sin)`).
+    #[getter]
+    fn wraparound(&self) -> Vec<bool> {
+        self.wraparound.clone()
     }
 
     /// The gravity vector, m/s² (world frame).
