@@ -367,12 +367,12 @@ impl ControlRun {
     #[pyo3(signature = (timeout=0.1))]
     fn poll<'py>(&self, py: Python<'py>, timeout: f64) -> PyResult<Option<Bound<'py, PyAny>>> {
         let wait = Duration::from_secs_f64(timeout.clamp(0.0, 3600.0));
-        let mut guard = self.run.lock().unwrap_or_else(|p| p.into_inner());
-        let Some(run) = guard.as_mut() else {
+        let mut running = crate::gil::lock(py, &self.run);
+        let Some(run) = running.as_mut() else {
             return Ok(None);
         };
-        let mut guard = self.telemetry.lock().unwrap_or_else(|p| p.into_inner());
-        let telemetry: &mut Telemetry = &mut guard;
+        let mut drained = crate::gil::lock(py, &self.telemetry);
+        let telemetry: &mut Telemetry = &mut drained;
         let progress = py.detach(|| {
             let p = run.poll(wait);
             run.drain(telemetry);
@@ -401,17 +401,17 @@ impl ControlRun {
     /// report as a dict (`rl run --json`'s keys, plus "text": the report `rl run` prints, and
     /// for an in-process fake what it saw). Later calls return the same report.
     fn join<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut cached = self.report.lock().unwrap_or_else(|p| p.into_inner());
+        let mut cached = crate::gil::lock(py, &self.report);
         if let Some(r) = cached.as_ref() {
             return Ok(r.bind(py).clone());
         }
-        let run = self.run.lock().unwrap_or_else(|p| p.into_inner()).take();
+        let run = crate::gil::lock(py, &self.run).take();
         let Some(run) = run else {
             return Err(PyValueError::new_err("the run has no report"));
         };
-        let mut guard = self.telemetry.lock().unwrap_or_else(|p| p.into_inner());
-        let telemetry: &mut Telemetry = &mut guard;
-        let fake = self.fake.lock().unwrap_or_else(|p| p.into_inner()).take();
+        let mut drained = crate::gil::lock(py, &self.telemetry);
+        let telemetry: &mut Telemetry = &mut drained;
+        let fake = crate::gil::lock(py, &self.fake).take();
         let (report, fake_json) = py.detach(|| {
             let mut report = run.join(telemetry);
             let seen = fake.as_ref().map(|f| f.after_run(report.shutdown.stopped));
@@ -443,7 +443,7 @@ impl ControlRun {
     /// {cycle, t, commanded (n, dof), measured (n, dof), feed_forward (n, dof), latency_ns,
     /// step_ns}.
     fn telemetry<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let t = self.telemetry.lock().unwrap_or_else(|p| p.into_inner());
+        let t = crate::gil::lock(py, &self.telemetry);
         let n = t.cycle.len();
         let d = PyDict::new(py);
         let column = |values: &[f64], shape: &[usize]| {

@@ -11,6 +11,7 @@
 //! - [`plan`]: `rlrs.Planner`, `rlrs.plan`: rl-plan on MoveIt problems, certified paths;
 //! - [`control`]: `rlrs.ControlRun`: the supervised controller of `rl run` (the tool's device
 //!   table, [`cli`] its error type);
+//! - [`gil`]: waiting for a lock without holding the GIL;
 //! - [`error`]: the exceptions, with the Rust errors' what-and-where text.
 //!
 //! Python's docs are the doc comments here (PyO3 turns them into docstrings) and the stubs.
@@ -20,6 +21,7 @@ mod cli;
 mod control;
 mod dispatch;
 mod error;
+mod gil;
 mod model;
 mod plan;
 mod scene;

@@ -233,8 +233,8 @@ impl Scene {
 
     /// The models of the scene (the robot first, then the obstacles).
     #[getter]
-    fn models(&self) -> Vec<String> {
-        let s = self.inner.lock().unwrap_or_else(|p| p.into_inner());
+    fn models(&self, py: Python<'_>) -> Vec<String> {
+        let s = crate::gil::lock(py, &self.inner);
         s.scene()
             .models()
             .iter()
@@ -251,7 +251,7 @@ impl Scene {
         if self.rows(&input)?.is_some() {
             return Err(PyValueError::new_err("check takes one configuration (nq,)"));
         }
-        let mut s = self.inner.lock().unwrap_or_else(|p| p.into_inner());
+        let mut s = crate::gil::lock(py, &self.inner);
         s.place(input.slice()).map_err(crate::error::model)?;
         let r = report::check(s.scene(), s.robot());
         let o = PyDict::new(py);

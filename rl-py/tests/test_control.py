@@ -3,6 +3,9 @@ loopback, pacing its replies at the H7's 7.11 ms): the report is the tool's, the
 arrays hold one row per cycle, a stop request brings the arm to rest, and a run that cannot
 start raises without moving anything."""
 
+import threading
+import time
+
 import numpy as np
 import pytest
 
@@ -46,6 +49,27 @@ def test_stop_brings_the_arm_to_rest():
     assert "end: stopped on request, brought to rest" in report["text"]
     assert report["device_stopped"] and not report["fake_servo_on"]
     assert report["trajectory_time_s"] < run.plan_duration
+
+
+def test_another_thread_may_stop_and_join_while_one_polls():
+    """Waiting (poll) holds the run with the GIL released; stop and join from another thread
+    neither deadlock nor lose the report."""
+    run = rlrs.ControlRun("fake-h7")
+    seen = []
+
+    def watch():
+        while (p := run.poll(1.0)) is not None:
+            seen.append(p)
+
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    time.sleep(0.5)
+    run.stop()
+    report = run.join()
+    watcher.join(timeout=30)
+    assert not watcher.is_alive()
+    assert seen and report["exit_code"] == 130, report["text"]
+    assert len(run.telemetry()["cycle"]) == report["cycles"]
 
 
 def test_runs_that_cannot_start_raise():
