@@ -109,9 +109,9 @@ impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
 /// stops the device safely.
 ///
 /// Args:
-///     device: as `rl run --device`: "fake-h7" (default: a fake Mitsubishi H7 in this process
-///         on loopback), "h7://HOST[:PORT][?r3=PORT]", "coach://HOST[:PORT]", "fake-cia402",
-///         "cannelloni+udp://HOST:PORT[?nodes=1-6]", "socketcan://IFACE", "ethercat://IF".
+///     device: as `rl run --device`: `fake-h7` (default: a fake Mitsubishi H7 in this process
+///         on loopback), `h7://HOST[:PORT][?r3=PORT]`, `coach://HOST[:PORT]`, `fake-cia402`,
+///         `cannelloni+udp://HOST:PORT[?nodes=1-6]`, `socketcan://IFACE`, `ethercat://IF`.
 ///     model: a `Model` or a model file (default: the embedded Mitsubishi RV-6SL).
 ///     duration: stop (at rest, along the path) after this many seconds.
 ///     speed: fraction of the model's speed limits, in (0, 1].

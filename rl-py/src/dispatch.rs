@@ -78,7 +78,7 @@ fn over_capacity(e: &LoadError) -> bool {
 /// Pinocchio's frames are; if that does not fit the largest capacity, only the leaves are.
 /// RL XML files keep their own tools (the leaf frames).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Box<dyn Kin>, String> {
-    let first = load_into(path, options, 0).map_err(|e| over_capacity_message(e))?;
+    let first = load_into(path, options, 0).map_err(over_capacity_message)?;
     if first.format() != loader::Format::Urdf {
         return Ok(first);
     }

@@ -3,16 +3,16 @@
 //! The compiled module `rlrs._rlrs`; the Python package `rlrs` (`python/rlrs`) re-exports it
 //! with type stubs. One file per concept:
 //!
-//! - [`array`]: numpy in and out (no copy for C-contiguous float64 input), all the `unsafe`;
-//! - [`dispatch`]: a model in the capacity that holds it, behind one trait;
-//! - [`model`]: `rlrs.load` and `rlrs.Model` (kinematics, dynamics, IK; batched);
-//! - [`traj`]: `rlrs.JerkLimited`, jerk-limited profiles on arrays of times;
-//! - [`scene`]: `rlrs.Scene`: collision and distance queries (rl-sg);
-//! - [`plan`]: `rlrs.Planner`, `rlrs.plan`: rl-plan on MoveIt problems, certified paths;
-//! - [`control`]: `rlrs.ControlRun`: the supervised controller of `rl run` (the tool's device
-//!   table, [`cli`] its error type);
-//! - [`gil`]: waiting for a lock without holding the GIL;
-//! - [`error`]: the exceptions, with the Rust errors' what-and-where text.
+//! - `src/array.rs`: numpy in and out (no copy for C-contiguous float64 input), all the `unsafe`;
+//! - `src/dispatch.rs`: a model in the capacity that holds it, behind one trait;
+//! - `src/model.rs`: `rlrs.load` and `rlrs.Model` (kinematics, dynamics, IK; batched);
+//! - `src/traj.rs`: `rlrs.JerkLimited`, jerk-limited profiles on arrays of times;
+//! - `src/scene.rs`: `rlrs.Scene`: collision and distance queries (rl-sg);
+//! - `src/plan.rs`: `rlrs.Planner`, `rlrs.plan`: rl-plan on MoveIt problems, certified paths;
+//! - `src/control.rs`: `rlrs.ControlRun`: the supervised controller of `rl run` (the tool's device
+//!   table, `src/cli.rs` its error type);
+//! - `src/gil.rs`: waiting for a lock without holding the GIL;
+//! - `src/error.rs`: the exceptions, with the Rust errors' what-and-where text.
 //!
 //! Python's docs are the doc comments here (PyO3 turns them into docstrings) and the stubs.
 

@@ -17,6 +17,14 @@ use rl_core::traj::{JerkLimited as Profile, Limits, Trajectory, TrajectoryError}
 use crate::array::{Input, Output, scalar, shape_text};
 use crate::error;
 
+/// Position, velocity, acceleration and jerk arrays.
+type Samples<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+);
+
 /// Capacities (most axes) the profile is built for.
 pub const AXES: &[usize] = &[8, 16, 64];
 
@@ -197,16 +205,7 @@ impl JerkLimited {
     /// Position, velocity, acceleration and jerk at `t` (times outside [0, duration] are
     /// clamped to it): a tuple of four (axes,) arrays for one time, of (len(t), axes) arrays
     /// for an array of times.
-    fn sample<'py>(
-        &self,
-        py: Python<'py>,
-        t: &Bound<'py, PyAny>,
-    ) -> PyResult<(
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-        Bound<'py, PyAny>,
-    )> {
+    fn sample<'py>(&self, py: Python<'py>, t: &Bound<'py, PyAny>) -> PyResult<Samples<'py>> {
         let one;
         let times = match scalar(t) {
             Some(x) => {
