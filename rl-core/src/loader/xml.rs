@@ -12,20 +12,14 @@ use roxmltree::{Document, Node, ParsingOptions};
 
 use super::error::{ElementRef, LoadError, LoadErrorKind};
 
-/// Parses `text` within `limits` (DTDs allowed: roxmltree bounds entity expansion). The size
-/// and the nesting depth are checked first, in one pass over the bytes, so a huge or deeply
-/// nested input is refused before a tree is built.
+/// Parses `text` within `limits` (DTDs allowed: roxmltree bounds entity expansion). The size,
+/// the nesting depth and the attributes per element are checked first ([`check`]), so a huge,
+/// deeply nested or attribute-laden input is refused before a tree is built.
 pub(crate) fn parse<'i>(
     text: &'i str,
     limits: &super::InputLimits,
 ) -> Result<Document<'i>, LoadError> {
-    if text.len() as u64 > limits.max_bytes {
-        return Err(LoadError::new(LoadErrorKind::TooLarge {
-            what: "size in bytes",
-            limit: limits.max_bytes,
-        }));
-    }
-    check_depth(text.as_bytes(), limits.max_depth)?;
+    check(text, limits)?;
     let opt = ParsingOptions {
         allow_dtd: true,
         nodes_limit: limits.max_nodes,
@@ -40,15 +34,42 @@ pub(crate) fn parse<'i>(
     })
 }
 
-/// Refuses element nesting deeper than `max` (an error naming line:column of the element that
-/// goes too deep). Skips comments, CDATA, processing instructions, the DOCTYPE and quoted
+/// Refuses `text` above the size limit, element nesting deeper than the depth limit and
+/// elements with more attributes than the attribute limit (an error naming line:column of the
+/// element at fault). Skips comments, CDATA, processing instructions, the DOCTYPE and quoted
 /// attribute values; malformed markup is left for the parser to report. Linear, no allocation.
-fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
+pub(crate) fn check(text: &str, limits: &super::InputLimits) -> Result<(), LoadError> {
+    if text.len() as u64 > limits.max_bytes {
+        return Err(LoadError::new(LoadErrorKind::TooLarge {
+            what: "size in bytes",
+            limit: limits.max_bytes,
+        }));
+    }
+    let b = text.as_bytes();
     let find = |from: usize, pat: &[u8]| {
         b[from.min(b.len())..]
             .windows(pat.len())
             .position(|w| w == pat)
             .map_or(b.len(), |p| from + p + pat.len())
+    };
+    // The element starting at byte `start`, for an error.
+    let element_at = |start: usize| {
+        let line_start = b[..start]
+            .iter()
+            .rposition(|&c| c == b'\n')
+            .map_or(0, |p| p + 1);
+        let name_len = b[start + 1..]
+            .iter()
+            .position(|c| c.is_ascii_whitespace() || matches!(c, b'/' | b'>'))
+            .unwrap_or(0)
+            .min(200);
+        let tag = String::from_utf8_lossy(&b[start + 1..start + 1 + name_len]);
+        ElementRef {
+            tag: tag.into_owned(),
+            id: None,
+            line: (b[..start].iter().filter(|&&c| c == b'\n').count() + 1) as u32,
+            column: (text[line_start..start].chars().count() + 1) as u32,
+        }
     };
     let mut depth = 0usize;
     let mut i = 0;
@@ -89,6 +110,8 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
             let start = i;
             let mut quote = 0u8;
             let mut last = 0u8;
+            // Every attribute's value is quoted: one opening quote per attribute.
+            let mut attributes = 0usize;
             i += 1;
             while i < b.len() {
                 let c = b[i];
@@ -99,6 +122,16 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
                     }
                 } else if c == b'"' || c == b'\'' {
                     quote = c;
+                    attributes += 1;
+                    if attributes > limits.max_attributes {
+                        return Err(LoadError::at(
+                            element_at(start),
+                            LoadErrorKind::TooLarge {
+                                what: "number of attributes of one element",
+                                limit: limits.max_attributes as u64,
+                            },
+                        ));
+                    }
                 } else if c == b'>' {
                     break;
                 } else if !c.is_ascii_whitespace() {
@@ -107,27 +140,12 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
             }
             if last != b'/' {
                 depth += 1;
-                if depth > max {
-                    let line_start = b[..start]
-                        .iter()
-                        .rposition(|&c| c == b'\n')
-                        .map_or(0, |p| p + 1);
-                    let name_len = b[start + 1..]
-                        .iter()
-                        .position(|c| c.is_ascii_whitespace() || matches!(c, b'/' | b'>'))
-                        .unwrap_or(0);
-                    let tag = String::from_utf8_lossy(&b[start + 1..start + 1 + name_len]);
-                    let at = ElementRef {
-                        tag: tag.into_owned(),
-                        id: None,
-                        line: (b[..start].iter().filter(|&&c| c == b'\n').count() + 1) as u32,
-                        column: (start - line_start + 1) as u32,
-                    };
+                if depth > limits.max_depth {
                     return Err(LoadError::at(
-                        at,
+                        element_at(start),
                         LoadErrorKind::TooLarge {
                             what: "nesting depth",
-                            limit: max as u64,
+                            limit: limits.max_depth as u64,
                         },
                     ));
                 }
