@@ -220,6 +220,30 @@ fn several_roots_print_the_first_few_and_a_count() {
     );
 }
 
+#[test]
+fn a_file_on_one_line_loads_in_linear_time() {
+    // Elements' columns were counted from the start of their line: a URDF written on one line
+    // (as generators do) was quadratic in its size (9 s for 100 000 links). A scaling check,
+    // not a timed one: 4× the links may take at most 8× the time (best of three each).
+    let best = |n: usize| {
+        let text = urdf(n, false).replace('\n', "");
+        (0..3)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                let e = loader::load_urdf_str::<64>(&text, &UrdfOptions::default()).unwrap_err();
+                assert!(matches!(e.kind, LoadErrorKind::Model(_)), "{e}");
+                t.elapsed()
+            })
+            .min()
+            .unwrap()
+    };
+    let small = best(5_000);
+    let large = best(20_000);
+    let ratio = large.as_secs_f64() / small.as_secs_f64();
+    println!("5 000 links {small:?}, 20 000 links {large:?}: ratio {ratio:.1}");
+    assert!(ratio < 8.0, "4× the links took {ratio:.1}× the time");
+}
+
 /// Runs `f` on a thread and fails if it has not returned within 20 s (a reader that blocks on
 /// a FIFO must fail the test, not hang it).
 fn within<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {

@@ -174,11 +174,23 @@ fn element_ref(node: Node, line: u32, column: u32) -> ElementRef {
     }
 }
 
-/// Where the lines of a document start, so that an element's line and column cost a binary
-/// search instead of a scan from the start (which made loading quadratic in the file's size).
+/// Where the lines of a document start, and how many characters precede every 1 KiB block, so
+/// that an element's line and column cost a binary search and a scan of at most 1 KiB instead
+/// of a scan from the start of the document or of its line (either made loading quadratic: the
+/// first in the file's size, the second in the length of a line, for files on one line).
 pub(crate) struct Lines<'i> {
     text: &'i str,
     starts: std::vec::Vec<usize>,
+    /// Characters in `text[..k · BLOCK]`, for every block `k`.
+    chars_before_block: std::vec::Vec<usize>,
+}
+
+/// The block size of [`Lines`]' character counts.
+const BLOCK: usize = 1024;
+
+/// Whether byte `b` starts a character (is not a UTF-8 continuation byte).
+fn starts_char(b: u8) -> bool {
+    b & 0xC0 != 0x80
 }
 
 impl<'i> Lines<'i> {
@@ -191,19 +203,36 @@ impl<'i> Lines<'i> {
                 .filter(|&(_, b)| b == b'\n')
                 .map(|(i, _)| i + 1),
         );
-        Self { text, starts }
+        let mut chars_before_block = std::vec![0];
+        let mut chars = 0;
+        for block in text.as_bytes().chunks(BLOCK) {
+            chars += block.iter().filter(|&&b| starts_char(b)).count();
+            chars_before_block.push(chars);
+        }
+        Self {
+            text,
+            starts,
+            chars_before_block,
+        }
+    }
+
+    /// Characters in `text[..at]` (`at` at a character boundary).
+    fn chars_before(&self, at: usize) -> usize {
+        let block = at / BLOCK;
+        let from = block * BLOCK;
+        self.chars_before_block[block]
+            + self.text.as_bytes()[from..at]
+                .iter()
+                .filter(|&&b| starts_char(b))
+                .count()
     }
 
     /// The reference of `node` (of this document), line and column (in characters) from 1.
     pub(crate) fn elem(&self, node: Node) -> ElementRef {
-        let at = node.range().start;
+        let at = node.range().start.min(self.text.len());
         let line = self.starts.partition_point(|&s| s <= at).max(1);
         let start = self.starts[line - 1];
-        let column = self
-            .text
-            .get(start..at)
-            .map_or(at - start, |s| s.chars().count())
-            + 1;
+        let column = self.chars_before(at) - self.chars_before(start) + 1;
         element_ref(node, line as u32, column as u32)
     }
 }
@@ -340,5 +369,38 @@ pub(crate) fn unit_axis(node: Node, what: &str, v: DVec3) -> Result<DVec3, LoadE
             &std::format!("{} {} {}", v.x, v.y, v.z),
             "zero axis",
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::format;
+
+    #[test]
+    fn line_index_columns_count_characters() {
+        // Long lines with multi-byte characters across block boundaries: every element's line
+        // and column as a scan from the start of the text finds them.
+        let mut text = String::from("<r>\n");
+        for k in 0..3000 {
+            text.push_str(&format!("<é n=\"ü{k}\"/>"));
+            if k % 700 == 699 {
+                text.push('\n');
+            }
+        }
+        text.push_str("</r>");
+        let doc = Document::parse(&text).unwrap();
+        let lines = Lines::new(&text);
+        let mut checked = 0;
+        for n in doc.descendants().filter(|n| n.is_element()) {
+            let at = n.range().start;
+            let before = &text[..at];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().unwrap().chars().count() + 1;
+            let e = lines.elem(n);
+            assert_eq!((e.line, e.column), (line as u32, column as u32), "{at}");
+            checked += 1;
+        }
+        assert_eq!(checked, 3001);
     }
 }
