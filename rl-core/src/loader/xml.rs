@@ -71,6 +71,15 @@ pub(crate) fn check(text: &str, limits: &super::InputLimits) -> Result<(), LoadE
             column: (text[line_start..start].chars().count() + 1) as u32,
         }
     };
+    let too_large = |start: usize, what: &'static str, limit: usize| {
+        LoadError::at(
+            element_at(start),
+            LoadErrorKind::TooLarge {
+                what,
+                limit: limit as u64,
+            },
+        )
+    };
     let mut depth = 0usize;
     let mut i = 0;
     while i < b.len() {
@@ -124,12 +133,10 @@ pub(crate) fn check(text: &str, limits: &super::InputLimits) -> Result<(), LoadE
                     quote = c;
                     attributes += 1;
                     if attributes > limits.max_attributes {
-                        return Err(LoadError::at(
-                            element_at(start),
-                            LoadErrorKind::TooLarge {
-                                what: "number of attributes of one element",
-                                limit: limits.max_attributes as u64,
-                            },
+                        return Err(too_large(
+                            start,
+                            "number of attributes of one element",
+                            limits.max_attributes,
                         ));
                     }
                 } else if c == b'>' {
@@ -141,13 +148,7 @@ pub(crate) fn check(text: &str, limits: &super::InputLimits) -> Result<(), LoadE
             if last != b'/' {
                 depth += 1;
                 if depth > limits.max_depth {
-                    return Err(LoadError::at(
-                        element_at(start),
-                        LoadErrorKind::TooLarge {
-                            what: "nesting depth",
-                            limit: limits.max_depth as u64,
-                        },
-                    ));
+                    return Err(too_large(start, "nesting depth", limits.max_depth));
                 }
             }
         }

@@ -45,8 +45,8 @@ impl SceneLimits {
     /// 64 MiB per file (rl-core's model limit), 128 MiB and 1024 files per VRML scene, 2 million
     /// VRML nodes, 20 million node visits, 200 000 shapes, 4 million vertices, 4 million
     /// triangles. RL's example scenes are far below (the largest file is 1.4 MB, the largest
-    /// scene 1 074 shapes and 24 000 triangles); loading a scene at the shape or triangle limit
-    /// takes about 1 GB (see rl-sg/NOTES.md for the measurement).
+    /// scene 60 shapes and 32 000 triangles); a scene at the triangle limit takes about 0.8 GB
+    /// to load, one at the shape limit 130 MB (see rl-sg/NOTES.md for the measurement).
     pub const DEFAULT: Self = Self {
         max_file_bytes: 64 << 20,
         max_total_bytes: 128 << 20,
@@ -155,11 +155,5 @@ impl Budget {
             ));
         }
         Ok(())
-    }
-
-    /// How many shapes, vertices and triangles were counted.
-    #[cfg(test)]
-    pub(crate) fn counts(&self) -> (usize, usize, usize) {
-        (self.shapes, self.vertices, self.triangles)
     }
 }
