@@ -224,24 +224,27 @@ fn several_roots_print_the_first_few_and_a_count() {
 fn a_file_on_one_line_loads_in_linear_time() {
     // Elements' columns were counted from the start of their line: a URDF written on one line
     // (as generators do) was quadratic in its size (9 s for 100 000 links). A scaling check,
-    // not a timed one: 4× the links may take at most 8× the time (best of three each).
-    let best = |n: usize| {
-        let text = urdf(n, false).replace('\n', "");
-        (0..3)
-            .map(|_| {
-                let t = std::time::Instant::now();
-                let e = loader::load_urdf_str::<64>(&text, &UrdfOptions::default()).unwrap_err();
-                assert!(matches!(e.kind, LoadErrorKind::Model(_)), "{e}");
-                t.elapsed()
-            })
-            .min()
-            .unwrap()
-    };
-    let small = best(5_000);
-    let large = best(20_000);
-    let ratio = large.as_secs_f64() / small.as_secs_f64();
-    println!("5 000 links {small:?}, 20 000 links {large:?}: ratio {ratio:.1}");
-    assert!(ratio < 8.0, "4× the links took {ratio:.1}× the time");
+    // not a timed one: 4× the links may take at most 10× the time (linear is 4×, the old count
+    // 19×). Sizes alternate and the best of three counts for each.
+    let texts = [
+        urdf(5_000, false).replace('\n', ""),
+        urdf(20_000, false).replace('\n', ""),
+    ];
+    let mut best = [std::time::Duration::MAX; 2];
+    for _ in 0..3 {
+        for (k, text) in texts.iter().enumerate() {
+            let t = std::time::Instant::now();
+            let e = loader::load_urdf_str::<64>(text, &UrdfOptions::default()).unwrap_err();
+            best[k] = best[k].min(t.elapsed());
+            assert!(matches!(e.kind, LoadErrorKind::Model(_)), "{e}");
+        }
+    }
+    let ratio = best[1].as_secs_f64() / best[0].as_secs_f64();
+    println!(
+        "5 000 links {:?}, 20 000 links {:?}: ratio {ratio:.1}",
+        best[0], best[1]
+    );
+    assert!(ratio < 10.0, "4× the links took {ratio:.1}× the time");
 }
 
 /// Runs `f` on a thread and fails if it has not returned within 20 s (a reader that blocks on

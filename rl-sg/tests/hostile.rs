@@ -323,25 +323,25 @@ fn objects(n: usize) -> String {
 #[test]
 fn a_planning_scene_of_many_objects_loads_in_linear_time() {
     // Each id was looked up in a list of the bodies before it: 100 000 objects took 50 s. A
-    // scaling check, not a timed one: 4× the objects may take at most 8× the time (best of
-    // three each; linear is 4×, the list made it 13× here).
-    let best = |n: usize| {
-        let text = objects(n);
-        (0..3)
-            .map(|_| {
-                let t = Instant::now();
-                let m = moveit::environment_from_str(&text, "env").unwrap();
-                assert_eq!(m.bodies().len(), n);
-                t.elapsed()
-            })
-            .min()
-            .unwrap()
-    };
-    let small = best(10_000);
-    let large = best(40_000);
-    let ratio = large.as_secs_f64() / small.as_secs_f64();
-    println!("10 000 objects {small:?}, 40 000 objects {large:?}: ratio {ratio:.1}");
-    assert!(ratio < 8.0, "4× the objects took {ratio:.1}× the time");
+    // scaling check, not a timed one: 4× the objects may take at most 10× the time (linear is
+    // 4×; the list made it 40× here). Sizes alternate and the best of three counts for each, so
+    // a busy moment spoils neither side alone.
+    let texts = [objects(10_000), objects(40_000)];
+    let mut best = [Duration::MAX; 2];
+    for _ in 0..3 {
+        for (k, text) in texts.iter().enumerate() {
+            let t = Instant::now();
+            let m = moveit::environment_from_str(text, "env").unwrap();
+            best[k] = best[k].min(t.elapsed());
+            assert_eq!(m.bodies().len(), [10_000, 40_000][k]);
+        }
+    }
+    let ratio = best[1].as_secs_f64() / best[0].as_secs_f64();
+    println!(
+        "10 000 objects {:?}, 40 000 objects {:?}: ratio {ratio:.1}",
+        best[0], best[1]
+    );
+    assert!(ratio < 10.0, "4× the objects took {ratio:.1}× the time");
     // Duplicate ids are still found, with the object named.
     let e = moveit::environment_from_str(
         "world:\n  collision_objects:\n    - id: a\n    - id: b\n    - id: a\n",

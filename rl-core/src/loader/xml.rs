@@ -175,8 +175,8 @@ fn element_ref(node: Node, line: u32, column: u32) -> ElementRef {
     }
 }
 
-/// Where the lines of a document start, and how many characters precede every 1 KiB block, so
-/// that an element's line and column cost a binary search and a scan of at most 1 KiB instead
+/// Where the lines of a document start, and how many characters precede every 256-byte block, so
+/// that an element's line and column cost a binary search and two scans of at most 256 bytes instead
 /// of a scan from the start of the document or of its line (either made loading quadratic: the
 /// first in the file's size, the second in the length of a line, for files on one line).
 pub(crate) struct Lines<'i> {
@@ -187,7 +187,7 @@ pub(crate) struct Lines<'i> {
 }
 
 /// The block size of [`Lines`]' character counts.
-const BLOCK: usize = 1024;
+const BLOCK: usize = 256;
 
 /// Whether byte `b` starts a character (is not a UTF-8 continuation byte).
 fn starts_char(b: u8) -> bool {

@@ -2,7 +2,7 @@
 //! nodes), `Inline`, `Shape` with `Box`, `Sphere`, `Cylinder`, `Cone` or `IndexedFaceSet` with
 //! its `Coordinate`, and `DEF`/`USE`. Other nodes (appearance, lights, viewpoints) are read and
 //! ignored; a `Shape` with any other geometry is an error that names it. No Rust VRML crate
-//! exists; the reader is [`parse`] (syntax) plus this module (meaning).
+//! exists; the reader is `parse` (syntax) plus this module (meaning).
 //!
 //! Meaning, as RL (through Coin3D) gives it:
 //! - `Transform` is `T · C · R · SR · S · −SR · −C` (VRML97 §6.52); scales are baked into
