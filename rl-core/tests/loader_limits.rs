@@ -148,11 +148,8 @@ fn input_above_the_size_depth_and_node_limits_is_refused() {
 fn an_element_with_100k_attributes_is_refused_before_it_is_parsed() {
     // The parser compares each new attribute with the element's earlier ones: these 1.1 MB
     // took 22.4 s. The check before parsing refuses them in one pass, naming the element.
-    let mut text = String::from("<robot name=\"r\">\n  <link name=\"a\"");
-    for k in 0..100_000 {
-        text.push_str(&format!(" a{k}=\"x\""));
-    }
-    text.push_str("/>\n</robot>\n");
+    let attributes: String = (0..100_000).map(|k| format!(" a{k}=\"x\"")).collect();
+    let text = format!("<robot name=\"r\">\n  <link name=\"a\"{attributes}/>\n</robot>\n");
     assert!(text.len() > 1_000_000);
     let e = loader::load_str_options::<64>(&text, &LoadOptions::default()).unwrap_err();
     assert!(
@@ -167,11 +164,8 @@ fn an_element_with_100k_attributes_is_refused_before_it_is_parsed() {
     );
     assert!(e.to_string().starts_with("2:3: <link>"), "{e}");
     // 256 attributes are read (and the limit is the caller's).
-    let mut ok = String::from("<robot name=\"r\"><link name=\"a\"");
-    for k in 0..255 {
-        ok.push_str(&format!(" a{k}='x'"));
-    }
-    ok.push_str("/></robot>");
+    let attributes: String = (0..255).map(|k| format!(" a{k}='x'")).collect();
+    let ok = format!("<robot name=\"r\"><link name=\"a\"{attributes}/></robot>");
     loader::load_str_options::<64>(&ok, &LoadOptions::default()).unwrap();
     let strict = LoadOptions {
         input: InputLimits {
@@ -191,11 +185,10 @@ fn an_element_with_100k_attributes_is_refused_before_it_is_parsed() {
 fn several_roots_print_the_first_few_and_a_count() {
     // 100 000 links and no joint: each is a root. The message printed all their names
     // (23.9 MB for longer names); now the first five and how many more.
-    let mut text = String::from("<robot name=\"r\">");
-    for k in 0..100_000 {
-        text.push_str(&format!("<link name=\"link_with_a_long_name_{k}\"/>"));
-    }
-    text.push_str("</robot>");
+    let links: String = (0..100_000)
+        .map(|k| format!("<link name=\"link_with_a_long_name_{k}\"/>"))
+        .collect();
+    let text = format!("<robot name=\"r\">{links}</robot>");
     let e = loader::load_str_options::<64>(&text, &LoadOptions::default()).unwrap_err();
     let LoadErrorKind::NoSingleRoot { roots, count } = &e.kind else {
         panic!("{e}")
@@ -225,13 +218,13 @@ fn a_file_on_one_line_loads_in_linear_time() {
     // Elements' columns were counted from the start of their line: a URDF written on one line
     // (as generators do) was quadratic in its size (9 s for 100 000 links). A scaling check,
     // not a timed one: 4× the links may take at most 10× the time (linear is 4×, the old count
-    // 19×). Sizes alternate and the best of three counts for each.
+    // 19×). Sizes alternate and the best of five counts for each.
     let texts = [
         urdf(5_000, false).replace('\n', ""),
         urdf(20_000, false).replace('\n', ""),
     ];
     let mut best = [std::time::Duration::MAX; 2];
-    for _ in 0..3 {
+    for _ in 0..5 {
         for (k, text) in texts.iter().enumerate() {
             let t = std::time::Instant::now();
             let e = loader::load_urdf_str::<64>(text, &UrdfOptions::default()).unwrap_err();
@@ -269,16 +262,9 @@ fn the_reader_refuses_devices_fifos_and_large_files_unread() {
 
     // /dev/zero never ends: reading it first grew `rl model info` to 8.8 GB. It is refused
     // without being opened, and so is a link to it.
+    let not_regular = |file_type| LoadErrorKind::File(ReadErrorKind::NotRegular { file_type });
     let e = loader::load_file::<64>("/dev/zero").unwrap_err();
-    assert!(
-        matches!(
-            e.kind,
-            LoadErrorKind::File(ReadErrorKind::NotRegular {
-                file_type: "a character device"
-            })
-        ),
-        "{e}"
-    );
+    assert_eq!(e.kind, not_regular("a character device"), "{e}");
     assert!(
         e.to_string().starts_with("/dev/zero: a character device"),
         "{e}"
@@ -298,15 +284,7 @@ fn the_reader_refuses_devices_fifos_and_large_files_unread() {
     {
         let f = fifo.clone();
         let e = within(move || loader::load_file::<64>(&f).unwrap_err());
-        assert!(
-            matches!(
-                e.kind,
-                LoadErrorKind::File(ReadErrorKind::NotRegular {
-                    file_type: "a FIFO (named pipe)"
-                })
-            ),
-            "{e}"
-        );
+        assert_eq!(e.kind, not_regular("a FIFO (named pipe)"), "{e}");
     } else {
         println!("SKIPPED (FIFO case only): mkfifo is not available");
     }
