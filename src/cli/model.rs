@@ -821,8 +821,8 @@ fn bench(a: BenchArgs) -> CliResult {
     let states_text = match &a.states_file {
         None => None,
         Some(path) => Some(
-            std::fs::read_to_string(path)
-                .map_err(|e| CliError::usage(format!("--states-file {}: {e}", path.display())))?,
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| CliError::usage(format!("--states-file {e}")))?,
         ),
     };
     let extra = a.tool.iter().cloned().collect();

@@ -276,9 +276,10 @@ pub fn run(args: PlanArgs) -> CliResult {
     let model = args.model.as_ref().ok_or_else(|| {
         usage("give a robot (URDF with --scene and --request) or an rlplan scenario")
     })?;
-    let is_scenario = std::fs::read_to_string(model)
+    let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+    let is_scenario = rl_core::loader::read_text(model, max)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
-        .map_err(|e| usage(format!("{}: {e}", model.display())))?;
+        .map_err(|e| usage(e.to_string()))?;
     let (space, result, checker_name, certified) = if is_scenario {
         let sc = Scenario::load(model).map_err(failed)?;
         let (mut space, mut checker) = sc.build().map_err(failed)?;

@@ -744,12 +744,15 @@ fn read_waypoints<const B: usize>(
 ) -> Result<Vec<Vec<f64>>, CliError> {
     let shown = path.display();
     let usage = |m: String| CliError::usage(format!("--waypoints {shown}{m}"));
+    // Read within the loaders' size limit (a FIFO or a device is refused unread).
+    let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+    let bytes = rl_core::loader::read_bytes(path, max)
+        .map_err(|e| usage(format!(": cannot read: {}", e.kind)))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(|e| usage(format!(": cannot read: {e}")))?;
+        .from_reader(bytes.as_slice());
     let headers = reader
         .headers()
         .map_err(|e| usage(format!(":1: bad header row: {e}")))?

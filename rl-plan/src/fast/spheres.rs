@@ -147,8 +147,9 @@ impl SphereSet {
         path: &Path,
         kinematics: &LoadedModel<N>,
     ) -> Result<Self, PlanError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| PlanError::Load(format!("{}: {e}", path.display())))?;
+        let text =
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| PlanError::Load(e.to_string()))?;
         Self::from_spherized_urdf_str(&text, kinematics).map_err(|e| match e {
             PlanError::File {
                 line,
@@ -172,6 +173,8 @@ impl SphereSet {
         text: &str,
         kinematics: &LoadedModel<N>,
     ) -> Result<Self, PlanError> {
+        rl_core::loader::check_xml(text, &rl_core::loader::InputLimits::DEFAULT)
+            .map_err(|e| PlanError::file("", "XML", e.to_string()))?;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             let p = e.pos();
             PlanError::file("", "XML", e.to_string()).at_position(p.row, p.col)
