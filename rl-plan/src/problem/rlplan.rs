@@ -7,8 +7,9 @@
 //! the sampler, the verifier, and an optional optimiser after the planner element.
 //!
 //! Units as RL reads them: `<q unit="deg">` and `<delta unit="deg">` are degrees, else radians
-//! or metres; `<world>` rotations are degrees about x, y, z applied as `Rz·Ry·Rx`. The viewer
-//! element is ignored. RL's RRTs have no verifier element — they check each new vertex and
+//! or metres; `<world>` rotations are degrees about x, y, z applied as `Rz·Ry·Rx`. Of the viewer
+//! element, its `<model>` is read (what rlPlanDemo draws: RL's scenarios name the visual scene
+//! there); the rest is ignored. RL's RRTs have no verifier element — they check each new vertex and
 //! rely on a small `delta` — so for them the verifier is sequential at the planner's `delta`,
 //! which checks exactly the new vertex of each step. The kinematics file is read by its root
 //! element; RL reads it by `<kinematics type>` (`kin` when absent), so a type that contradicts
@@ -85,6 +86,49 @@ pub struct Scenario {
     pub model_index: usize,
     /// The scene file.
     pub scene: PathBuf,
+    /// The model rlPlanDemo shows (`<viewer><model>`: RL's scenarios name the visual scene
+    /// there and the convex one for planning), if the file has a viewer element.
+    pub viewer: Option<ScenarioModel>,
+}
+
+/// A `<model>` element of a scenario (the planner's, or the viewer's): the kinematics, where
+/// they are placed, the robot's index in the scene, the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScenarioModel {
+    /// The kinematic model file.
+    pub kinematics: PathBuf,
+    /// `<kinematics type>` as written.
+    pub kinematics_type: Option<KinematicsType>,
+    /// `<kinematics><world>`: where the model's world frame is placed.
+    pub world: Option<PlueckerTransform>,
+    /// The robot's model index in the scene.
+    pub model_index: usize,
+    /// The scene file.
+    pub scene: PathBuf,
+}
+
+impl ScenarioModel {
+    /// Where the kinematic model `loaded` (this element's kinematics file) is placed in the
+    /// scene: `<world>` replaces the file's own world frame, so a body at `x` in the loaded
+    /// model's world is at `base · x` (identity without `<world>`). What the planner's checker
+    /// uses ([`Scenario::build`]) and what a viewer must use to draw the same poses.
+    pub fn base<const N: usize>(
+        &self,
+        loaded: &rl_core::loader::LoadedModel<N>,
+    ) -> PlueckerTransform {
+        match self.world {
+            Some(w) => {
+                let file_world = loaded
+                    .frames
+                    .iter()
+                    .find(|f| f.body == ROOT)
+                    .map(|f| f.placement)
+                    .unwrap_or(PlueckerTransform::IDENTITY);
+                w * file_world.inverse()
+            }
+            None => PlueckerTransform::IDENTITY,
+        }
+    }
 }
 
 fn err(path: &Path, doc: &roxmltree::Document, n: Node, message: impl Into<String>) -> PlanError {
@@ -115,6 +159,87 @@ fn resolve(dir: &Path, href: &str) -> PathBuf {
         }
     }
     p
+}
+
+/// The number in element `n`, in radians or metres (`unit="deg"` converted).
+fn number(path: &Path, doc: &roxmltree::Document, n: Node) -> Result<f64, PlanError> {
+    let t = n.text().unwrap_or("").trim();
+    let v: f64 = t
+        .parse()
+        .map_err(|_| err(path, doc, n, format!("\"{t}\" is not a number")))?;
+    if !v.is_finite() {
+        return Err(err(path, doc, n, format!("{v} is not finite")));
+    }
+    Ok(if n.attribute("unit") == Some("deg") {
+        v.to_radians()
+    } else {
+        v
+    })
+}
+
+/// A `<model>` element (`<kinematics href type><world/></kinematics>`, `<model>` index,
+/// `<scene href>`), its `href`s relative to `dir`.
+fn model_element(
+    path: &Path,
+    doc: &roxmltree::Document,
+    model: Node,
+    dir: &Path,
+) -> Result<ScenarioModel, PlanError> {
+    let num = |n: Node| number(path, doc, n);
+    let kin = child(model, "kinematics").ok_or_else(|| err(path, doc, model, "no <kinematics>"))?;
+    let href = kin
+        .attribute("href")
+        .ok_or_else(|| err(path, doc, kin, "no href"))?;
+    let kinematics_type = match kin.attribute("type") {
+        None => None,
+        Some("kin") => Some(KinematicsType::Kin),
+        Some("mdl") => Some(KinematicsType::Mdl),
+        Some(other) => {
+            return Err(err(
+                path,
+                doc,
+                kin,
+                format!("type=\"{other}\": RL's kinematics types are \"kin\" and \"mdl\""),
+            ));
+        }
+    };
+    let world = match child(kin, "world") {
+        Some(w) => {
+            let v = |e: Option<Node>, k: &str| -> Result<f64, PlanError> {
+                Ok(match e.and_then(|e| child(e, k)) {
+                    Some(n) => num(n)?,
+                    None => 0.0,
+                })
+            };
+            let (r, t) = (child(w, "rotation"), child(w, "translation"));
+            let (rx, ry, rz) = (v(r, "x")?, v(r, "y")?, v(r, "z")?);
+            let rot = DMat3::from_rotation_z(rz.to_radians())
+                * DMat3::from_rotation_y(ry.to_radians())
+                * DMat3::from_rotation_x(rx.to_radians());
+            Some(PlueckerTransform::new(
+                rot,
+                DVec3::new(v(t, "x")?, v(t, "y")?, v(t, "z")?),
+            ))
+        }
+        None => None,
+    };
+    let index_node =
+        child(model, "model").ok_or_else(|| err(path, doc, model, "no <model> index"))?;
+    let model_index = num(index_node)?;
+    if model_index < 0.0 || model_index.fract() != 0.0 {
+        return Err(err(path, doc, index_node, "not a model index"));
+    }
+    let scene_node = child(model, "scene").ok_or_else(|| err(path, doc, model, "no <scene>"))?;
+    let scene_href = scene_node
+        .attribute("href")
+        .ok_or_else(|| err(path, doc, scene_node, "no href"))?;
+    Ok(ScenarioModel {
+        kinematics: resolve(dir, href),
+        kinematics_type,
+        world,
+        model_index: model_index as usize,
+        scene: resolve(dir, scene_href),
+    })
 }
 
 impl Scenario {
@@ -156,20 +281,7 @@ impl Scenario {
             .ok_or_else(|| err(path, &doc, holder, "no planner element"))?;
         let name = p.tag_name().name().to_string();
         // Numbers, with `unit="deg"` converted.
-        let num = |n: Node| -> Result<f64, PlanError> {
-            let t = n.text().unwrap_or("").trim();
-            let v: f64 = t
-                .parse()
-                .map_err(|_| err(path, &doc, n, format!("\"{t}\" is not a number")))?;
-            if !v.is_finite() {
-                return Err(err(path, &doc, n, format!("{v} is not finite")));
-            }
-            Ok(if n.attribute("unit") == Some("deg") {
-                v.to_radians()
-            } else {
-                v
-            })
-        };
+        let num = |n: Node| number(path, &doc, n);
         let opt = |n: Node, tag: &str| -> Result<Option<f64>, PlanError> {
             child(n, tag).map(num).transpose()
         };
@@ -186,55 +298,11 @@ impl Scenario {
         let duration = Duration::try_from_secs_f64(duration).unwrap_or(Duration::from_secs(86_400));
         // Model.
         let model = child(p, "model").ok_or_else(|| err(path, &doc, p, "no <model>"))?;
-        let kin =
-            child(model, "kinematics").ok_or_else(|| err(path, &doc, model, "no <kinematics>"))?;
-        let href = kin
-            .attribute("href")
-            .ok_or_else(|| err(path, &doc, kin, "no href"))?;
-        let kinematics_type = match kin.attribute("type") {
-            None => None,
-            Some("kin") => Some(KinematicsType::Kin),
-            Some("mdl") => Some(KinematicsType::Mdl),
-            Some(other) => {
-                return Err(err(
-                    path,
-                    &doc,
-                    kin,
-                    format!("type=\"{other}\": RL's kinematics types are \"kin\" and \"mdl\""),
-                ));
-            }
-        };
-        let world = match child(kin, "world") {
-            Some(w) => {
-                let v = |e: Option<Node>, k: &str| -> Result<f64, PlanError> {
-                    Ok(match e.and_then(|e| child(e, k)) {
-                        Some(n) => num(n)?,
-                        None => 0.0,
-                    })
-                };
-                let (r, t) = (child(w, "rotation"), child(w, "translation"));
-                let (rx, ry, rz) = (v(r, "x")?, v(r, "y")?, v(r, "z")?);
-                let rot = DMat3::from_rotation_z(rz.to_radians())
-                    * DMat3::from_rotation_y(ry.to_radians())
-                    * DMat3::from_rotation_x(rx.to_radians());
-                Some(PlueckerTransform::new(
-                    rot,
-                    DVec3::new(v(t, "x")?, v(t, "y")?, v(t, "z")?),
-                ))
-            }
+        let planned = model_element(path, &doc, model, dir)?;
+        let viewer = match child(p, "viewer").and_then(|v| child(v, "model")) {
+            Some(m) => Some(model_element(path, &doc, m, dir)?),
             None => None,
         };
-        let index_node =
-            child(model, "model").ok_or_else(|| err(path, &doc, model, "no <model> index"))?;
-        let model_index = num(index_node)?;
-        if model_index < 0.0 || model_index.fract() != 0.0 {
-            return Err(err(path, &doc, index_node, "not a model index"));
-        }
-        let scene_node =
-            child(model, "scene").ok_or_else(|| err(path, &doc, model, "no <scene>"))?;
-        let scene_href = scene_node
-            .attribute("href")
-            .ok_or_else(|| err(path, &doc, scene_node, "no href"))?;
         // Nearest neighbours, sampler, verifier.
         let nn = p
             .children()
@@ -356,12 +424,24 @@ impl Scenario {
             seed,
             start,
             goal,
-            kinematics: resolve(dir, href),
-            kinematics_type,
-            world,
-            model_index: model_index as usize,
-            scene: resolve(dir, scene_href),
+            kinematics: planned.kinematics,
+            kinematics_type: planned.kinematics_type,
+            world: planned.world,
+            model_index: planned.model_index,
+            scene: planned.scene,
+            viewer,
         })
+    }
+
+    /// The planner's `<model>` element.
+    pub fn model(&self) -> ScenarioModel {
+        ScenarioModel {
+            kinematics: self.kinematics.clone(),
+            kinematics_type: self.kinematics_type,
+            world: self.world,
+            model_index: self.model_index,
+            scene: self.scene.clone(),
+        }
     }
 
     /// The space and the exact checker of the scenario: the kinematic model, the scene with
@@ -390,15 +470,9 @@ impl Scenario {
         rl_sg::load::rlsg::link_kinematics(robot, &self.kinematics, &loaded)?;
         let space = JointSpace::from_model(&loaded.model)?;
         let mut checker = SceneValidity::new(scene, id, loaded.model.clone(), space.clone())?;
-        if let Some(w) = self.world {
+        if self.world.is_some() {
             // Replace the file's world frame by the scenario's.
-            let file_world = loaded
-                .frames
-                .iter()
-                .find(|f| f.body == ROOT)
-                .map(|f| f.placement)
-                .unwrap_or(PlueckerTransform::IDENTITY);
-            checker = checker.with_base(w * file_world.inverse());
+            checker = checker.with_base(self.model().base(&loaded));
         }
         Ok((space, checker))
     }

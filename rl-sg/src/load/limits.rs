@@ -69,6 +69,8 @@ impl Default for SceneLimits {
 #[derive(Clone, Debug)]
 pub(crate) struct Budget {
     pub(crate) limits: SceneLimits,
+    /// Files read from memory instead of the file system, when given.
+    files: Option<std::sync::Arc<super::EmbeddedFiles>>,
     bytes: u64,
     nodes: usize,
     visits: u64,
@@ -81,6 +83,7 @@ impl Budget {
     pub(crate) fn new(limits: SceneLimits) -> Self {
         Self {
             limits,
+            files: None,
             bytes: 0,
             nodes: 0,
             visits: 0,
@@ -94,9 +97,44 @@ impl Budget {
         SgError::new(SgErrorKind::TooLarge { what, limit })
     }
 
+    /// The same budget reading files from `files` instead of the file system.
+    pub(crate) fn with_files(mut self, files: Option<std::sync::Arc<super::EmbeddedFiles>>) -> Self {
+        self.files = files;
+        self
+    }
+
+    /// The in-memory files read instead of the file system, if any.
+    pub(crate) fn files(&self) -> Option<&std::sync::Arc<super::EmbeddedFiles>> {
+        self.files.as_ref()
+    }
+
+    /// Whether the file at `path` exists (in the in-memory files, when given).
+    pub(crate) fn exists(&self, path: &Path) -> bool {
+        match &self.files {
+            Some(f) => f.contains(path),
+            None => path.exists(),
+        }
+    }
+
     /// Reads the text of `path` within the file limit and counts it against the total.
     pub(crate) fn read_text(&mut self, path: &Path) -> Result<String, SgError> {
-        let text = super::read_text_within(path, self.limits.max_file_bytes)?;
+        let text = match &self.files {
+            Some(f) => {
+                let t = f.get(path).ok_or_else(|| {
+                    SgError::new(SgErrorKind::MissingFile {
+                        path: path.to_path_buf(),
+                    })
+                })?;
+                if t.len() as u64 > self.limits.max_file_bytes {
+                    return Err(
+                        Self::too_large("file size in bytes", self.limits.max_file_bytes)
+                            .in_file(path),
+                    );
+                }
+                t.to_string()
+            }
+            None => super::read_text_within(path, self.limits.max_file_bytes)?,
+        };
         self.bytes = self.bytes.saturating_add(text.len() as u64);
         if self.bytes > self.limits.max_total_bytes {
             return Err(

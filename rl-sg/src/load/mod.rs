@@ -5,6 +5,7 @@
 //! format has lines, the line and column. Every file is read through rl-core's bounded reader
 //! and every load is bounded by [`SceneLimits`] (see [`limits`]).
 
+pub mod embedded;
 pub mod limits;
 pub mod mesh_file;
 pub mod moveit;
@@ -15,6 +16,7 @@ pub mod urdf;
 pub mod vrml;
 mod xml;
 
+pub use embedded::EmbeddedFiles;
 pub use limits::SceneLimits;
 pub use mesh_file::{MeshCache, load_mesh};
 pub use setup::{RobotScene, RobotSetup, is_urdf};

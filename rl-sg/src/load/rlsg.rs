@@ -25,13 +25,14 @@
 //! them (file order for a serial chain). [`link_kinematics`] picks one by the loaded format.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use rl_core::loader::{Format, LoadedModel};
 use roxmltree::Node;
 
 use super::vrml::{VrmlScene, rigid};
 use super::xml::{at, attr, child, children, parse};
-use super::{SceneLimits, dir_of, read_text, read_text_within};
+use super::{EmbeddedFiles, SceneLimits, dir_of, read_text, read_text_within};
 use crate::error::{SgError, SgErrorKind};
 use crate::scene::{KinematicLink, Model, Scene, Shape};
 
@@ -46,6 +47,17 @@ pub fn scene_from_str_with(
     text: &str,
     path: &Path,
     limits: &SceneLimits,
+) -> Result<Scene, SgError> {
+    scene_from_str_in(text, path, limits, None)
+}
+
+/// [`scene_from_str_with`] reading the VRML from `files` when given (in-memory files) instead
+/// of the file system.
+pub fn scene_from_str_in(
+    text: &str,
+    path: &Path,
+    limits: &SceneLimits,
+    files: Option<Arc<EmbeddedFiles>>,
 ) -> Result<Scene, SgError> {
     let doc = parse(text)?;
     let root = doc.root_element();
@@ -65,8 +77,8 @@ pub fn scene_from_str_with(
         child(holder, "scene").ok_or_else(|| at(holder, SgError::missing("<scene>")))?;
     let href = attr(scene_node, "href")?;
     let wrl = dir_of(path).join(href);
-    let vrml =
-        VrmlScene::load_with(&wrl, limits).map_err(|e| at(scene_node, SgError::nested(e)))?;
+    let vrml = VrmlScene::load_in(&wrl, limits, files)
+        .map_err(|e| at(scene_node, SgError::nested(e)))?;
     let mut scene = Scene::new();
     for m in children(scene_node, "model") {
         let name = attr(m, "name")?;
@@ -143,6 +155,21 @@ pub fn load_scene(path: &Path) -> Result<Scene, SgError> {
 pub fn load_scene_with(path: &Path, limits: &SceneLimits) -> Result<Scene, SgError> {
     let text = read_text_within(path, limits.max_file_bytes)?;
     scene_from_str_with(&text, path, limits).map_err(|e| e.in_file(path))
+}
+
+/// Reads the rlsg file at `path` and the VRML it names from the in-memory `files` (a scene
+/// compiled into a program), within `limits`.
+pub fn load_scene_embedded(
+    path: &Path,
+    files: &Arc<EmbeddedFiles>,
+    limits: &SceneLimits,
+) -> Result<Scene, SgError> {
+    let text = files.get(path).ok_or_else(|| {
+        SgError::new(SgErrorKind::MissingFile {
+            path: path.to_path_buf(),
+        })
+    })?;
+    scene_from_str_in(text, path, limits, Some(files.clone())).map_err(|e| e.in_file(path))
 }
 
 /// Reads a bare `.wrl` as a scene of one model (named after the file) with one body `""`.

@@ -14,7 +14,7 @@
 use std::path::Path;
 
 use super::read_text;
-use super::xml::{attr, children, parse, robot_root};
+use super::xml::{at, attr, children, number, parse, robot_root};
 use crate::error::SgError;
 use crate::scene::Model;
 
@@ -94,4 +94,82 @@ pub fn apply_str(text: &str, model: &mut Model) -> Result<SrdfReport, SgError> {
 pub fn apply_file(path: &Path, model: &mut Model) -> Result<SrdfReport, SgError> {
     let text = read_text(path)?;
     apply_str(&text, model).map_err(|e| e.in_file(path))
+}
+
+/// A named configuration of an SRDF (`<group_state name group>` with its `<joint name value>`
+/// elements): MoveIt's "home", "ready", … poses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedState {
+    /// Its name.
+    pub name: String,
+    /// The planning group it is for.
+    pub group: String,
+    /// Joint values by joint name (rad or m; several values for a multi-coordinate joint).
+    pub joints: Vec<(String, Vec<f64>)>,
+}
+
+/// The named states (`<group_state>`) of the SRDF in `text`, in file order.
+pub fn named_states_str(text: &str) -> Result<Vec<NamedState>, SgError> {
+    let doc = parse(text)?;
+    let robot = robot_root(&doc, "an SRDF")?;
+    let mut out = Vec::new();
+    for g in children(robot, "group_state") {
+        let mut joints = Vec::new();
+        for j in children(g, "joint") {
+            let name = attr(j, "name")?;
+            let text = attr(j, "value")?;
+            let values = text
+                .split_whitespace()
+                .map(|v| number(j, "value", v))
+                .collect::<Result<Vec<_>, _>>()?;
+            if values.is_empty() {
+                return Err(at(j, SgError::invalid("value", text, "no number")));
+            }
+            joints.push((name.to_string(), values));
+        }
+        out.push(NamedState {
+            name: attr(g, "name")?.to_string(),
+            group: attr(g, "group")?.to_string(),
+            joints,
+        });
+    }
+    Ok(out)
+}
+
+/// The named states of the SRDF file at `path`.
+pub fn named_states_file(path: &Path) -> Result<Vec<NamedState>, SgError> {
+    let text = read_text(path)?;
+    named_states_str(&text).map_err(|e| e.in_file(path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn named_states_are_read_in_file_order_with_bad_values_refused() {
+        let s = named_states_str(
+            r#"<robot name="r">
+                 <group_state name="home" group="arm">
+                   <joint name="a" value="0.5"/><joint name="b" value="-1.57"/>
+                 </group_state>
+                 <group_state name="open" group="hand"><joint name="f" value="0.04"/></group_state>
+               </robot>"#,
+        )
+        .unwrap();
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[0].name, "home");
+        assert_eq!(s[0].group, "arm");
+        assert_eq!(
+            s[0].joints,
+            vec![("a".into(), vec![0.5]), ("b".into(), vec![-1.57])]
+        );
+        assert_eq!(s[1].joints, vec![("f".into(), vec![0.04])]);
+        let e = named_states_str(
+            r#"<robot name="r"><group_state name="x" group="g"><joint name="a" value="NaN?"/></group_state></robot>"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("value"), "{e}");
+    }
 }

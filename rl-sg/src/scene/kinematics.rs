@@ -11,13 +11,16 @@ use super::Model;
 use crate::error::{SgError, SgErrorKind};
 
 /// For each body of a scene model, the rl-core body it moves with (or the world) and its pose
-/// in that body's frame.
+/// in that body's frame; and where the kinematic model's world frame is in the scene (its
+/// base placement: RL's rlplan `<kinematics><world>`, `rl view --place`), identity unless set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct KinematicLink {
     /// Per scene body: `(rl-core body or ROOT, pose in it)`; `None` leaves the body where it is.
     frames: Vec<Option<(usize, PlueckerTransform)>>,
     /// The number of rl-core bodies (`Data` must hold them).
     bodies: usize,
+    /// The kinematic model's world frame in the scene's.
+    base: PlueckerTransform,
 }
 
 impl KinematicLink {
@@ -39,7 +42,26 @@ impl KinematicLink {
                 crate::pose::check(&format!("placement of scene body {i}"), x)?;
             }
         }
-        Ok(Self { frames, bodies })
+        Ok(Self {
+            frames,
+            bodies,
+            base: PlueckerTransform::IDENTITY,
+        })
+    }
+
+    /// The same link with the kinematic model's world frame placed at `base` in the scene: a
+    /// body at `x` in the model's world is at `base · x` in the scene. A pose that is not a
+    /// finite rigid transform is an error.
+    pub fn with_base(mut self, base: PlueckerTransform) -> Result<Self, SgError> {
+        crate::pose::check("base placement", &base)?;
+        self.base = base;
+        Ok(self)
+    }
+
+    /// Where the kinematic model's world frame is in the scene (identity unless set by
+    /// [`KinematicLink::with_base`]).
+    pub fn base(&self) -> PlueckerTransform {
+        self.base
     }
 
     /// Links every body of `model` to the frame of `loaded` with the same name (URDF links,

@@ -169,14 +169,15 @@ impl Scene {
                 capacity: N,
             });
         }
+        let base = link.base();
         for (i, (body, frame)) in m.bodies.iter_mut().zip(link.frames()).enumerate() {
             let Some((k, placement)) = frame else {
                 continue;
             };
             let x = if *k == ROOT {
-                *placement
+                base * *placement
             } else {
-                *data.world_pose(*k) * *placement
+                base * *data.world_pose(*k) * *placement
             };
             if !(x.translation.is_finite() && x.rotation.is_finite()) {
                 return Err(UpdateError::NotFinite { body: i });

@@ -326,6 +326,21 @@ impl Model {
         self.kinematics = Some(link);
     }
 
+    /// Places the kinematic model's world frame at `base` in the scene
+    /// ([`KinematicLink::with_base`]); the bodies move there on the next
+    /// [`crate::Scene::update`]. An error if the model follows no kinematic model or `base` is
+    /// not a finite rigid transform.
+    pub fn set_base(&mut self, base: PlueckerTransform) -> Result<(), SgError> {
+        let link = self
+            .kinematics
+            .as_ref()
+            .ok_or_else(|| SgError::missing("a kinematic model to place (the model has none)"))?
+            .clone()
+            .with_base(base)?;
+        self.kinematics = Some(link);
+        Ok(())
+    }
+
     /// Allows every pair of bodies that ride on one kinematic body (links joined by fixed
     /// joints): they cannot move against each other, so their contact is no collision.
     pub fn allow_rigidly_joined(&mut self) {

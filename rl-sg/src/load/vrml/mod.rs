@@ -63,9 +63,13 @@ pub struct VrmlScene {
 const ROOT: NodeIndex = NodeIndex::MAX;
 
 /// What identifies a file for reading it once and for finding cycles: its canonical path
-/// (links resolved, `..` removed), or the path as given when it has none.
-fn file_key(path: &Path) -> PathBuf {
-    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+/// (links resolved, `..` removed), or the path as given when it has none; in-memory files
+/// ([`super::EmbeddedFiles`]) by their path as the table looks it up.
+fn file_key(path: &Path, budget: &Budget) -> PathBuf {
+    match budget.files() {
+        Some(_) => super::embedded::normal(path),
+        None => std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
 }
 
 /// A shape found under a node: its geometry, its pose relative to the node, its name.
@@ -91,7 +95,17 @@ impl VrmlScene {
     /// Reads the file at `path` and the files it inlines, within `limits` (which also bound the
     /// searches and expansions of the scene).
     pub fn load_with(path: &Path, limits: &SceneLimits) -> Result<Self, SgError> {
-        let mut budget = Budget::new(*limits);
+        Self::load_in(path, limits, None)
+    }
+
+    /// [`VrmlScene::load_with`] reading `path` and its inlines from `files` when given
+    /// (in-memory files, [`super::EmbeddedFiles`]) instead of the file system.
+    pub fn load_in(
+        path: &Path,
+        limits: &SceneLimits,
+        files: Option<std::sync::Arc<super::EmbeddedFiles>>,
+    ) -> Result<Self, SgError> {
+        let mut budget = Budget::new(*limits).with_files(files);
         let text = budget.read_text(path)?;
         Self::from_text(&text, path, budget)
     }
@@ -121,7 +135,7 @@ impl VrmlScene {
             },
             budget: RefCell::new(budget),
         };
-        let key = file_key(path);
+        let key = file_key(path, s.budget.get_mut());
         let mut known = HashMap::from([(key.clone(), 0)]);
         s.load_inlines(0, &mut vec![key], &mut known)?;
         Ok(s)
@@ -165,7 +179,7 @@ impl VrmlScene {
     }
 
     /// Reads the files that the `Inline`s of file `file` name, each file once (`known`: the
-    /// files read, by [`file_key`]), refusing cycles (`stack`: the files being read).
+    /// files read, by `file_key`), refusing cycles (`stack`: the files being read).
     fn load_inlines(
         &mut self,
         file: usize,
@@ -182,14 +196,17 @@ impl VrmlScene {
                 Some(Value::Strings(u)) => u.clone(),
                 _ => return Err(self.error_at(r, SgError::missing("field \"url\""))),
             };
-            let found = urls.iter().map(|u| dir.join(u)).find(|p| p.exists());
+            let found = {
+                let budget = self.budget.get_mut();
+                urls.iter().map(|u| dir.join(u)).find(|p| budget.exists(p))
+            };
             let Some(path) = found else {
                 let first = urls.first().map_or_else(PathBuf::new, |u| dir.join(u));
                 return Err(
                     self.error_at(r, SgError::new(SgErrorKind::MissingFile { path: first }))
                 );
             };
-            let key = file_key(&path);
+            let key = file_key(&path, self.budget.get_mut());
             if stack.len() >= MAX_INLINE_DEPTH || stack.contains(&key) {
                 return Err(self.error_at(
                     r,
