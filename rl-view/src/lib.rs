@@ -42,9 +42,10 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
 pub use error::ViewError;
-pub use load::{LoadOptions, ModelSource, World};
+pub use load::{LoadOptions, ModelSource, PlanView, RobotOptions, World};
+pub use path::PathData;
 pub use publish::{PublishError, Publisher};
-pub use state::{Engine, IkReport, Source};
+pub use state::{Engine, IkReport, RunStatus, Source};
 
 use admission::Admission;
 use files::FileTable;
@@ -308,6 +309,11 @@ impl Viewer {
         let (p, r) = publish::channel(&nq);
         lock(&self.shared.live).push(r);
         p
+    }
+
+    /// Sets what the page says about a controller's run (running; ended, and how).
+    pub fn set_run_status(&self, run: RunStatus) {
+        lock(&self.shared.engine).set_run(run);
     }
 
     /// Stops the listeners and waits for their threads (also done on drop).

@@ -1,6 +1,9 @@
 //! A path to play back: the CSV files `rl plan` writes. `--out` writes a header of joint names
 //! and one waypoint per row; `--trajectory` writes `t`, the joint names, then their `/v` and `/a`
-//! columns, one sample per row. Waypoints without times are placed one second apart.
+//! columns, one sample per row. Waypoints without times are timed at the robot's speed
+//! limits: each straight segment takes as long as its slowest joint needs at its limit
+//! (`max_k |Δq_k| / v_k`; joints without a limit at [`UNKNOWN_SPEED`], as `rl run` assumes) — a
+//! bound no motion of the robot can beat, without the accelerations a controller adds.
 //!
 //! Columns are matched to the model's joints by name; if the names differ but the count fits,
 //! they are taken in order.
@@ -10,6 +13,10 @@ use std::path::Path;
 use crate::error::ViewError;
 use crate::load::JointInfo;
 
+/// Speed assumed for a joint whose model gives no speed limit, rad/s or m/s (what `rl run` and
+/// rl-plan's execution assume).
+pub const UNKNOWN_SPEED: f64 = 0.5;
+
 /// Times and configurations of a path, for model 0.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PathData {
@@ -17,9 +24,57 @@ pub struct PathData {
     pub t: Vec<f64>,
     /// Configuration of each sample (the model's `q` order).
     pub q: Vec<Vec<f64>>,
+    /// Where the times came from.
+    pub timing: Timing,
+}
+
+/// Where a path's times came from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Timing {
+    /// The file's `t` column.
+    File,
+    /// The robot's speed limits (the joints named had none: [`UNKNOWN_SPEED`] was assumed).
+    SpeedLimits {
+        /// Joints without a speed limit.
+        assumed: Vec<String>,
+    },
 }
 
 impl PathData {
+    /// Waypoints `q` timed at the speed limits of `joints` (see the module docs).
+    pub fn at_speed_limits(q: Vec<Vec<f64>>, joints: &[JointInfo]) -> PathData {
+        let speed = |k: usize| {
+            joints
+                .get(k)
+                .map(|j| j.max_speed)
+                .filter(|v| v.is_finite() && *v > 0.0)
+        };
+        let mut t = Vec::with_capacity(q.len());
+        let mut now = 0.0;
+        for (i, w) in q.iter().enumerate() {
+            if i > 0 {
+                now += w
+                    .iter()
+                    .zip(&q[i - 1])
+                    .enumerate()
+                    .map(|(k, (b, a))| (b - a).abs() / speed(k).unwrap_or(UNKNOWN_SPEED))
+                    .fold(0.0, f64::max);
+            }
+            t.push(now);
+        }
+        let assumed = joints
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| speed(*k).is_none())
+            .map(|(_, j)| j.name.clone())
+            .collect();
+        PathData {
+            t,
+            q,
+            timing: Timing::SpeedLimits { assumed },
+        }
+    }
+
     /// Reads the CSV at `path` for a model with `joints`.
     pub fn load(path: &Path, joints: &[JointInfo]) -> Result<PathData, ViewError> {
         let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
@@ -72,7 +127,7 @@ impl PathData {
         };
         let mut t = Vec::new();
         let mut q = Vec::new();
-        for (k, (i, line)) in lines.enumerate() {
+        for (i, line) in lines {
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
             if cells.len() != names.len() {
                 return Err((
@@ -92,7 +147,7 @@ impl PathData {
             };
             let time = match time_col {
                 Some(c) => num(c)?,
-                None => k as f64,
+                None => 0.0,
             };
             if t.last().is_some_and(|&last| time < last) {
                 return Err((i + 1, format!("time {time} goes backwards")));
@@ -107,6 +162,13 @@ impl PathData {
         if t.is_empty() {
             return Err((0, "no samples".into()));
         }
-        Ok(PathData { t, q })
+        Ok(match time_col {
+            Some(_) => PathData {
+                t,
+                q,
+                timing: Timing::File,
+            },
+            None => PathData::at_speed_limits(q, joints),
+        })
     }
 }

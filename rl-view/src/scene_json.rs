@@ -1,5 +1,6 @@
 //! The Scene JSON of the protocol (`/api/scene`, and inside `hello`): models with their joints,
-//! tool and drawn geometry, the obstacles, and the path to play back.
+//! tool, placement and drawn geometry, the obstacles, the path to play back (with where its
+//! times came from) and a plan's start and goal ghosts and tool trail.
 
 use rl_core::spatial::PlueckerTransform;
 use rl_sg::{Geometry, Shape};
@@ -7,6 +8,7 @@ use serde_json::{Value, json};
 
 use crate::files::FileTable;
 use crate::load::World;
+use crate::path::{Timing, UNKNOWN_SPEED};
 
 /// Protocol version in the Scene JSON.
 pub const VERSION: u32 = 1;
@@ -105,7 +107,8 @@ pub fn scene_json(world: &World) -> Value {
                 .iter()
                 .map(|j| {
                     json!({"name": j.name, "kind": j.kind, "min": finite_or_null(j.min),
-                           "max": finite_or_null(j.max), "unit": j.unit})
+                           "max": finite_or_null(j.max), "unit": j.unit,
+                           "max_speed": finite_or_null(j.max_speed)})
                 })
                 .collect();
             let tool = r
@@ -134,6 +137,8 @@ pub fn scene_json(world: &World) -> Value {
                 "tool": tool,
                 "tool_body": tool_body,
                 "initial_q": r.initial_q,
+                "initial_source": r.initial_source,
+                "base": pose7(&r.base),
                 "bodies": bodies,
                 "warnings": r.warnings,
             })
@@ -168,14 +173,29 @@ pub fn scene_json(world: &World) -> Value {
                    "pose": pose7(b.pose()), "shapes": shapes})
         })
         .collect();
-    let path = world
-        .path
-        .as_ref()
-        .map(|p| json!({"model": 0, "t": p.t, "q": p.q}));
+    let path = world.path.as_ref().map(|p| {
+        let timing = match &p.timing {
+            Timing::File => json!({"from": "file"}),
+            Timing::SpeedLimits { assumed } => json!({
+                "from": "speed_limits", "assumed_speed": UNKNOWN_SPEED, "assumed_for": assumed,
+            }),
+        };
+        json!({"model": 0, "t": p.t, "q": p.q, "timing": timing})
+    });
+    let plan = world.plan.as_ref().map(|v| {
+        let poses = |b: &[PlueckerTransform]| b.iter().map(pose7).collect::<Vec<_>>();
+        json!({
+            "model": v.model,
+            "start": {"q": v.start, "bodies": poses(&v.start_bodies)},
+            "goal": {"q": v.goal, "bodies": poses(&v.goal_bodies)},
+            "trail": v.trail.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+        })
+    });
     json!({
         "version": VERSION,
         "models": models,
         "env": {"bodies": env},
         "path": path,
+        "plan": plan,
     })
 }

@@ -65,6 +65,17 @@ pub struct IkReport {
     pub iterations: usize,
 }
 
+/// A controller's run as the page shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunStatus {
+    /// Whether the run has ended.
+    pub ended: bool,
+    /// Whether it went well (or goes well so far).
+    pub ok: bool,
+    /// One line: what happened (`"ended: passed after 4.00 s"`, the fault and when, …).
+    pub summary: String,
+}
+
 /// Coach counters.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct CoachStats {
@@ -103,6 +114,7 @@ pub struct Engine {
     distance: Value,
     ik: Option<IkReport>,
     coach: CoachStats,
+    run: Option<RunStatus>,
     page_errors: u64,
     seq: u64,
     changed: bool,
@@ -157,6 +169,7 @@ impl Engine {
             distance: Value::Null,
             ik: None,
             coach: CoachStats::default(),
+            run: None,
             page_errors: 0,
             seq: 0,
             changed: true,
@@ -357,6 +370,8 @@ impl Engine {
         let Some(x) = pose_from7(target) else {
             return fail("target is not a finite pose with a non-zero quaternion".into());
         };
+        // The target is in the scene's frame; the kinematics in the robot's placed world frame.
+        let x = robot.base.inverse() * x;
         let kin = &robot.kinematics.model;
         if kin.tools().is_empty() {
             return fail("the model has no tool".into());
@@ -423,14 +438,30 @@ impl Engine {
         }
     }
 
-    /// Counts a Coach line, and a rejection with its reason.
+    /// Counts a Coach line, and a rejection with its reason. A line taken clears the last
+    /// rejection (the count stays): the page shows an error only while it is the latest word.
     pub fn coach_line(&mut self, rejected: Option<String>) {
         self.coach.lines += 1;
-        if let Some(e) = rejected {
-            self.coach.rejected += 1;
-            self.coach.last_error = Some(e);
+        match rejected {
+            Some(e) => {
+                self.coach.rejected += 1;
+                self.coach.last_error = Some(e);
+            }
+            None => self.coach.last_error = None,
         }
         self.touch();
+    }
+
+    /// Sets what the page says about a controller's run (`rl run --view`): running, or ended
+    /// and how.
+    pub fn set_run(&mut self, run: RunStatus) {
+        self.run = Some(run);
+        self.touch();
+    }
+
+    /// What the page says about a run, if anything.
+    pub fn run(&self) -> Option<&RunStatus> {
+        self.run.as_ref()
     }
 
     /// A Coach client came or went.
@@ -585,6 +616,7 @@ impl Engine {
             "ik": ik,
             "coach": {"clients": self.coach.clients, "lines": self.coach.lines,
                       "rejected": self.coach.rejected, "last_error": self.coach.last_error},
+            "run": self.run.as_ref().map(|r| json!({"ended": r.ended, "ok": r.ok, "summary": r.summary})),
             "page_errors": self.page_errors,
             "t": self.start.elapsed().as_secs_f64(),
         })

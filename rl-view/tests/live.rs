@@ -80,15 +80,17 @@ fn bad_coach_lines_are_counted_and_reported() {
     for line in bad {
         coach.send(line);
     }
-    // Still answering, and the model did not move.
+    let s = page.wait_state(|s| s["coach"]["rejected"] == bad.len());
+    assert!(close(&q_of(&s, 0), &q0, 0.0), "bad lines moved nothing");
+    let last = s["coach"]["last_error"].as_str().unwrap();
+    assert!(last.contains("longer"), "{last}");
+    // Still answering; a good line clears the error shown (the count stays).
     coach.send("6 0\n");
     let reply = coach.read_line();
     assert!(reply.starts_with("6 0 "), "{reply}");
-    let s = page.wait_state(|s| s["coach"]["rejected"] == bad.len());
-    assert!(close(&q_of(&s, 0), &q0, 0.0), "bad lines moved nothing");
-    assert_eq!(s["coach"]["lines"], bad.len() + 1);
-    let last = s["coach"]["last_error"].as_str().unwrap();
-    assert!(last.contains("longer"), "{last}");
+    let s = page.wait_state(|s| s["coach"]["lines"] == bad.len() + 1);
+    assert_eq!(s["coach"]["rejected"], bad.len());
+    assert!(s["coach"]["last_error"].is_null(), "{}", s["coach"]);
     // Each reason is reported in turn.
     let mut c2 = Coach::connect(v.coach_addr().unwrap());
     c2.send("2 0 1 2\n");
@@ -105,6 +107,10 @@ fn bad_coach_lines_are_counted_and_reported() {
         "{}",
         s["coach"]["last_error"]
     );
+    c2.send("2 0 0.1 0.2 0.3 0.4 0.5 0.6\n");
+    let s = page.wait_state(|s| close(&q_of(s, 0), &[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], 1e-12));
+    assert!(s["coach"]["last_error"].is_null(), "{}", s["coach"]);
+    assert_eq!(s["coach"]["rejected"], bad.len() + 2);
 }
 
 #[test]

@@ -5,6 +5,7 @@ pub mod fake_robot;
 pub mod jitter;
 pub mod model;
 pub mod output;
+pub mod placement;
 pub mod plan;
 pub mod run;
 pub mod scene;

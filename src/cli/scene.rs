@@ -19,6 +19,8 @@ use rl_sg::report::{self, NamedDistance};
 use rl_sg::{CollisionFilter, Geometry, ModelId, Scene};
 use serde_json::{Value, json};
 
+use super::output::outln;
+use super::placement::{ScenarioRobot, is_scenario, parse_place};
 use super::{CliError, CliResult};
 
 /// Capacity of the robots `rl scene` loads (bodies and degrees of freedom), as the tool had
@@ -91,8 +93,10 @@ pub struct InfoArgs {
 /// The robot and its surroundings.
 #[derive(Args, Debug, Clone)]
 pub struct RobotArgs {
-    /// The robot: a URDF, or an RL scene (rlsg XML) whose first model is the robot (then give
-    /// its kinematic model with --kinematics).
+    /// The robot: a URDF, an RL scene (rlsg XML) whose first model is the robot (then give
+    /// its kinematic model with --kinematics), or an RL planning scenario (rlplan XML: the
+    /// scene, kinematics and <world> placement its planner checks; --q start and --q goal
+    /// take its start and goal).
     model: PathBuf,
     /// RL scenes: the robot's kinematic model (rlmdl or rlkin XML); its bodies (rlkin: links)
     /// pair with the scene's first model's in order, its <ignore> elements apply.
@@ -105,6 +109,10 @@ pub struct RobotArgs {
     /// Obstacles: a MoveIt planning scene (.yaml), an RL scene (rlsg XML or .wrl) or a URDF.
     #[arg(long, value_name = "SCENE")]
     env: Option<PathBuf>,
+    /// Where the robot's kinematic world frame stands in the scene: x,y,z (m) or
+    /// x,y,z,rx,ry,rz (m, degrees about x, y, z applied as Rz·Ry·Rx, as RL's rlplan <world>).
+    #[arg(long, value_name = "POSE", allow_hyphen_values = true)]
+    place: Option<String>,
     /// URDF: add a six-DOF root joint (q starts with x,y,z,qx,qy,qz,qw).
     #[arg(long)]
     floating_base: bool,
@@ -120,7 +128,8 @@ pub struct RobotArgs {
 pub struct CheckArgs {
     #[command(flatten)]
     robot: RobotArgs,
-    /// Joint positions, comma-separated (nq values, the model's joint order).
+    /// Joint positions, comma-separated (nq values, the model's joint order); with an RL
+    /// scenario also `start` or `goal`.
     #[arg(long, allow_hyphen_values = true)]
     q: String,
 }
@@ -192,12 +201,38 @@ struct Setup {
     robot: ModelId,
     kinematics: Box<LoadedModel<CAPACITY>>,
     env: bool,
+    /// The RL scenario the robot came from, if it did.
+    scenario: Option<ScenarioRobot>,
 }
 
 fn setup(r: &RobotArgs) -> Result<Setup, CliError> {
+    let scenario = if is_scenario(&r.model) {
+        if r.kinematics.is_some() {
+            return Err(CliError::usage(
+                "--kinematics: an RL scenario names its kinematic model itself",
+            ));
+        }
+        if r.place.is_some() {
+            return Err(CliError::usage(
+                "--place: an RL scenario places its robot itself (<kinematics><world>)",
+            ));
+        }
+        Some(ScenarioRobot::load(&r.model, false)?)
+    } else {
+        None
+    };
+    let (model, kinematics) = match &scenario {
+        Some(s) => (s.scene.clone(), Some(s.kinematics.clone())),
+        None => (r.model.clone(), r.kinematics.clone()),
+    };
+    let place = match (&scenario, &r.place) {
+        (Some(s), _) => Some(s.place),
+        (None, Some(p)) => Some(parse_place(p, "--place")?),
+        (None, None) => None,
+    };
     let setup = load::RobotSetup {
-        model: r.model.clone(),
-        kinematics: r.kinematics.clone(),
+        model,
+        kinematics,
         srdf: r.srdf.clone(),
         environment: r.env.clone(),
         urdf: UrdfOptions {
@@ -213,10 +248,17 @@ fn setup(r: &RobotArgs) -> Result<Setup, CliError> {
     };
     let loaded = Box::new(setup.load::<CAPACITY>().map_err(usage)?);
     let RobotScene {
-        scene,
+        mut scene,
         robot,
         kinematics,
     } = *loaded;
+    if let Some(x) = place {
+        scene
+            .model_mut(robot)
+            .ok_or_else(|| CliError::usage("no robot model to place"))?
+            .set_base(x)
+            .map_err(|e| CliError::usage(format!("--place: {e}")))?;
+    }
     // Obstacles from --env, or the other models of an RL scene.
     let env = scene.models().len() > 1;
     Ok(Setup {
@@ -224,7 +266,22 @@ fn setup(r: &RobotArgs) -> Result<Setup, CliError> {
         robot,
         kinematics: Box::new(kinematics),
         env,
+        scenario,
     })
+}
+
+/// Parses `--q` for `s`: `start` or `goal` of its scenario, or exactly nq finite numbers.
+fn scenario_q(text: &str, s: &Setup) -> Result<Vec<f64>, CliError> {
+    let n = s.kinematics.model.nq();
+    match (text.trim(), &s.scenario) {
+        ("start", Some(sc)) => Ok(sc.start.clone()),
+        ("goal", Some(sc)) => Ok(sc.goal.clone()),
+        ("start" | "goal", None) => Err(CliError::usage(format!(
+            "--q {}: start and goal come from an RL scenario (rlplan XML) given as the model",
+            text.trim()
+        ))),
+        _ => parse_q(text, n),
+    }
 }
 
 /// Parses `--q`: exactly `n` finite numbers.
@@ -267,7 +324,7 @@ fn distance_json(d: &Option<NamedDistance>) -> Value {
 
 fn check(a: CheckArgs) -> CliResult {
     let mut s = setup(&a.robot)?;
-    let q = parse_q(&a.q, s.kinematics.model.nq())?;
+    let q = scenario_q(&a.q, &s)?;
     place(&mut s, &q)?;
     let r = report::check(&s.scene, s.robot);
     let robot = &s.scene.models()[s.robot.0];
@@ -288,7 +345,7 @@ fn check(a: CheckArgs) -> CliResult {
         out["environment_min_distance"] = distance_json(&r.environment_min_distance);
         out["environment_bodies"] = json!(r.environment_bodies);
     }
-    println!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
+    outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -332,7 +389,7 @@ fn dump(a: DumpArgs) -> CliResult {
     let nq = s.kinematics.model.nq();
     let mut qs = Vec::new();
     if let Some(q) = &a.q {
-        qs.push(parse_q(q, nq)?);
+        qs.push(scenario_q(q, &s)?);
     }
     let random = random_configs(&s.kinematics.model, a.random);
     qs.extend(random.chunks(nq.max(1)).take(a.random).map(<[f64]>::to_vec));
@@ -409,7 +466,7 @@ fn dump(a: DumpArgs) -> CliResult {
         "environment_pairs": env_pairs,
         "configs": configs,
     });
-    println!("{}", serde_json::to_string(&out).unwrap_or_default());
+    outln!("{}", serde_json::to_string(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -487,19 +544,19 @@ fn info(a: InfoArgs) -> CliResult {
                        "allowed_pairs": m.allowed_collisions().len(), "warnings": m.warnings()})
             })
             .collect();
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(
                 &json!({"file": a.file.display().to_string(), "models": models})
             )
             .unwrap_or_default()
-        );
+        )?;
         return Ok(ExitCode::SUCCESS);
     }
-    println!("scene      {}", a.file.display());
+    outln!("scene      {}", a.file.display())?;
     let (mut shapes, mut meshes, mut triangles) = (0, 0, 0);
     for m in scene.models() {
-        println!(
+        outln!(
             "model      \"{}\": {} bodies, {} shapes{}",
             m.name(),
             m.bodies().len(),
@@ -513,12 +570,12 @@ fn info(a: InfoArgs) -> CliResult {
             } else {
                 String::new()
             }
-        );
+        )?;
         for b in m.bodies() {
-            println!("  body     \"{}\"", b.name());
+            outln!("  body     \"{}\"", b.name())?;
             for sh in b.shapes() {
                 let (line, tris) = shape_line(sh);
-                println!("    shape  {line}");
+                outln!("    shape  {line}")?;
                 shapes += 1;
                 if tris > 0 {
                     meshes += 1;
@@ -527,10 +584,10 @@ fn info(a: InfoArgs) -> CliResult {
             }
         }
         for w in m.warnings() {
-            println!("warning: {w}");
+            outln!("warning: {w}")?;
         }
     }
-    println!("total      {shapes} shapes, {meshes} meshes, {triangles} triangles");
+    outln!("total      {shapes} shapes, {meshes} meshes, {triangles} triangles")?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -680,15 +737,15 @@ fn bench(a: BenchArgs) -> CliResult {
         for (k, ns) in &out {
             v[format!("{k}_ns")] = json!(ns);
         }
-        println!("{}", serde_json::to_string(&v).unwrap_or_default());
+        outln!("{}", serde_json::to_string(&v).unwrap_or_default())?;
     } else {
-        println!(
+        outln!(
             "{name}: {configs} random configurations ({colliding} self-colliding), {} capsules, {} obstacle spheres",
             fitted.capsules.len(),
             spheres.len()
-        );
+        )?;
         for (k, ns) in &out {
-            println!("  {k:<22} {ns:>12.0} ns per query");
+            outln!("  {k:<22} {ns:>12.0} ns per query")?;
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -161,6 +161,19 @@ fn resolve(dir: &Path, href: &str) -> PathBuf {
     p
 }
 
+/// Whether `path` is an RL planning scenario: an XML file whose root is `<rlplan>` or
+/// `<rl>` holding `<plan>` (for tools that take a scenario where they take other files).
+pub fn is_scenario(path: &Path) -> bool {
+    let limits = rl_core::loader::InputLimits::DEFAULT;
+    rl_core::loader::read_text(path, limits.max_bytes).is_ok_and(|t| {
+        rl_core::loader::check_xml(&t, &limits).is_ok()
+            && roxmltree::Document::parse(&t).is_ok_and(|d| {
+                let r = d.root_element();
+                r.has_tag_name("rlplan") || (r.has_tag_name("rl") && child(r, "plan").is_some())
+            })
+    })
+}
+
 /// The number in element `n`, in radians or metres (`unit="deg"` converted).
 fn number(path: &Path, doc: &roxmltree::Document, n: Node) -> Result<f64, PlanError> {
     let t = n.text().unwrap_or("").trim();
