@@ -387,6 +387,8 @@ struct Shared {
     servo_polls_left: Option<u32>,
     drop_fraction: f64,
     drop_seen: u64,
+    /// Replies still to drop in a row ([`FakeH7::drop_next`]).
+    drop_burst: u32,
     r3_split: Option<(usize, Duration)>,
     last_reply: Option<Packet>,
     handled: u64,
@@ -467,6 +469,7 @@ impl FakeH7 {
             servo_polls_left: None,
             drop_fraction: 0.0,
             drop_seen: 0,
+            drop_burst: 0,
             r3_split: None,
             last_reply: None,
             handled: 0,
@@ -526,6 +529,12 @@ impl FakeH7 {
         let mut s = lock(&self.shared);
         s.drop_fraction = fraction.clamp(0.0, 1.0);
         s.drop_seen = 0;
+    }
+
+    /// Drops the next `count` replies in a row (a short loss on the link; the controller goes
+    /// on handling the packets).
+    pub fn drop_next(&self, count: u32) {
+        lock(&self.shared).drop_burst = count;
     }
 
     /// Freezes the controller: while frozen it reads real-time packets but neither handles
@@ -742,6 +751,10 @@ impl Cycle {
                 .fault
                 .filter(|f| f.every > 0 && count % u64::from(f.every) == 0)
                 .map(|f| f.fault);
+            if fault.is_none() && s.drop_burst > 0 {
+                s.drop_burst -= 1;
+                fault = Some(Fault::Drop);
+            }
             // Evenly spread drops: drop when the running share falls behind the fraction.
             if fault.is_none() && s.drop_fraction > 0.0 {
                 let due = (count as f64 * s.drop_fraction).floor() as u64;
