@@ -14,7 +14,9 @@
 //!   to it until the cycle's deadline ([`MitsubishiH7Config::reply_timeout`], one period).
 //! - `stop` (from running or faulted): the end packet (command 255), `STOP`, `DSTATE`, and
 //!   `SRVOFF` with a poll until the servo is off — every step attempted even when an earlier
-//!   one failed, each bounded in time; the first error is returned.
+//!   one failed, each bounded in time; the first error is returned. An R3 connection that
+//!   dropped (before or during the stop) is opened again once and the step repeated: the servo
+//!   must go off.
 //! - `close`: drop both sockets (the counts stay).
 //!
 //! Every reply is checked: it must come from the controller's address, be 196 bytes, decode,
@@ -41,7 +43,9 @@ use crate::capability::{
     CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
     JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{
+    DeviceError, Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device,
+};
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
@@ -233,6 +237,8 @@ pub struct H7Counters {
     pub r3_stale_bytes: u64,
     /// Current run of failed steps.
     pub consecutive_failures: u32,
+    /// R3 connections opened again by `stop` after the controller dropped one.
+    pub r3_reconnects: u64,
     /// Steps that sent nothing because the previous request was still unanswered: the
     /// controller was a cycle behind, and waiting for that reply lets it catch up.
     pub held: u64,
@@ -562,6 +568,37 @@ impl MitsubishiH7 {
         self.r3_exchange(operation, slot, body).map(|_| ())
     }
 
+    /// Connects R3 (again).
+    fn connect_r3(&mut self, operation: Operation) -> Result<(), Error> {
+        let timeout = self.config.r3_timeout;
+        self.r3 = None;
+        let r3 = TcpLink::connect(self.config.r3, timeout).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::TimedOut {
+                Error::Timeout {
+                    operation,
+                    waited: timeout,
+                }
+            } else {
+                Error::io(operation, &e)
+            }
+        })?;
+        self.r3 = Some(r3);
+        Ok(())
+    }
+
+    /// Runs an R3 step of the stop; if the connection is gone (reset or closed by the
+    /// controller, before or during the stop), connects again once and repeats the step.
+    fn stop_r3<T>(&mut self, step: impl Fn(&mut Self) -> Result<T, Error>) -> Result<T, Error> {
+        match step(self) {
+            Err(e) if e.kind().is_link_loss() || self.r3.is_none() => {
+                self.connect_r3(Operation::Stop)?;
+                self.counters.r3_reconnects += 1;
+                step(self)
+            }
+            r => r,
+        }
+    }
+
     fn dstate(&mut self, operation: Operation) -> Result<DState, Error> {
         let payload = self.r3_exchange(operation, 1, "DSTATE")?;
         DState::parse(payload).map_err(|e| Error::protocol(operation, "R3 DSTATE", &e))
@@ -737,25 +774,20 @@ impl Driver for MitsubishiH7 {
 
     fn open_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Open;
-        let timeout = self.config.r3_timeout;
-        let r3 = TcpLink::connect(self.config.r3, timeout).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation: OP,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(OP, &e)
-            }
-        })?;
+        self.connect_r3(OP)?;
         // A wildcard address would hear every interface: bind to the one that routes to
         // the controller.
         let mut local = self.config.local;
-        if local.ip().is_unspecified() {
-            local.set_ip(route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?);
-        }
-        let udp = UdpLink::bind(local, self.config.server).map_err(|e| Error::io(OP, &e))?;
-        self.r3 = Some(r3);
+        let bound = (|| {
+            if local.ip().is_unspecified() {
+                local.set_ip(route_ip(self.config.server)?);
+            }
+            UdpLink::bind(local, self.config.server)
+        })();
+        let udp = bound.map_err(|e| {
+            self.r3 = None;
+            Error::io(OP, &e)
+        })?;
         self.udp = Some(udp);
         self.reply = None;
         self.read_joint_report().inspect_err(|_| self.drop_links())
@@ -832,9 +864,9 @@ impl Driver for MitsubishiH7 {
             self.counters.sent += 1;
         }
         steps.keep(sent);
-        steps.keep(self.r3_command(OP, 1, "STOP"));
+        steps.keep(self.stop_r3(|d| d.r3_command(OP, 1, "STOP")));
         // If the state cannot be read, switch the servo off anyway.
-        let servo_on = match self.dstate(OP) {
+        let servo_on = match self.stop_r3(|d| d.dstate(OP)) {
             Ok(state) => state.servo_on(),
             Err(e) => {
                 steps.keep(Err(e));
@@ -842,8 +874,8 @@ impl Driver for MitsubishiH7 {
             }
         };
         if servo_on {
-            steps.keep(self.r3_command(OP, 1, "SRVOFF"));
-            steps.keep(self.wait_servo(OP, false));
+            steps.keep(self.stop_r3(|d| d.r3_command(OP, 1, "SRVOFF")));
+            steps.keep(self.stop_r3(|d| d.wait_servo(OP, false)));
         }
         steps.into_result()
     }
