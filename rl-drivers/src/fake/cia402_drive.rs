@@ -11,7 +11,9 @@
 //! than its mapping is an EMCY 0x8210. Faults can be injected ([`FakeFault`]).
 //!
 //! The fake runs its own thread (it imitates remote hardware); it serves on any
-//! [`CanTransport`] — cannelloni UDP or TCP on loopback, SocketCAN, or the in-process bus.
+//! [`CanTransport`] — cannelloni UDP or TCP on loopback, SocketCAN, or the in-process bus. On
+//! cannelloni UDP it serves one master, the first sender, and ignores (counts) datagrams from
+//! other addresses while that master is active, as a gateway with one remote would.
 
 mod motor;
 mod node;
@@ -337,6 +339,9 @@ pub struct FakeStatus {
     pub frames_sent: u64,
     /// Master connections accepted (TCP).
     pub connections: u64,
+    /// Frames or datagrams the transport refused: from another sender than the master it
+    /// serves (a bus would not deliver them), or malformed.
+    pub rejected: u64,
     /// The longest the fake's own thread woke after it meant to (a wait's deadline, a frame's
     /// due time, a received frame's kernel timestamp where the transport has one): real drives have their own CPU; a fake that shares one may be held up, and
     /// a test can tell that apart from a defect of the master.
@@ -720,12 +725,23 @@ impl Worker {
                 counters: n.counters,
             })
             .collect();
+        let rejected = match &self.link {
+            Link::Transport(t) => {
+                let c = t.counters();
+                c.rejected + c.corrupt
+            }
+            Link::Tcp { peer, .. } => peer.as_ref().map_or(0, |p| {
+                let c = p.counters();
+                c.rejected + c.corrupt
+            }),
+        };
         let mut s = lock(&self.shared);
         s.status = FakeStatus {
             nodes,
             frames_received: self.frames_received,
             frames_sent: self.frames_sent,
             connections: self.connections,
+            rejected,
             max_lateness: self.max_lateness,
             last_error: self.last_error.clone(),
         };
