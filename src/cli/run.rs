@@ -665,7 +665,7 @@ fn drive<const B: usize, const J: usize>(
                     return Ok(ExitCode::from(130));
                 }
                 RunError::Options(why) => CliError::usage(why),
-                e => CliError::failed(e.to_string()),
+                e => CliError::failed(setup.device.explain(&e)),
             });
         }
     };

@@ -565,6 +565,20 @@ fn read_units(
     given.resolve(|o| m.sdo_read_u64(k, o.index, o.sub))
 }
 
+/// No device answers on the interface, for the generic error.
+struct NoDevicesOn<'a>(&'a str);
+
+impl core::fmt::Display for NoDevicesOn<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "no EtherCAT device answers on `{}`: no frame came back (is a segment's IN port \
+             connected to this interface?)",
+            self.0
+        )
+    }
+}
+
 /// A drive refused for its units, as the generic error describes it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UnitsRefused {
@@ -625,7 +639,14 @@ impl Driver for EthercatDrives {
         let e = |e| to_error(OP, e);
         self.origin = Instant::now();
         let mut m = Master::open(self.config.master.clone()).map_err(e)?;
-        m.scan().map_err(e)?;
+        m.scan().map_err(|error| match error {
+            EcError::NoDevices => Error::device(
+                OP,
+                "EtherCAT",
+                &NoDevicesOn(self.config.master.interface.as_str()),
+            ),
+            error => to_error(OP, error),
+        })?;
         self.names = m.devices.iter().map(|d| d.name.clone()).collect();
         self.dc = if self.config.distributed_clocks {
             m.dc_setup(self.origin, self.config.dc_static_frames)

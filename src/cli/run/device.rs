@@ -5,8 +5,9 @@
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
-use rl::controller::JointRobot;
+use rl::controller::{JointRobot, RunError};
 use rl_core::loader::LoadedModel;
+use rl_drivers::Error as DeviceError;
 use rl_drivers::EthercatDrives;
 use rl_drivers::canopen::{Cia402, Cia402Config, DeviceAddress};
 use rl_drivers::cia402::{AxisUnits, PowerState, UnitsOverride};
@@ -16,10 +17,14 @@ use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
 use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::ecat::frame::ETHERTYPE;
+use rl_drivers::transport::can::socketcan::NO_AF_CAN;
 use rl_drivers::transport::can::{CanAddress, default_local};
 use rl_drivers::transport::{PacketLink, packet};
 
 use crate::cli::CliError;
+
+/// `EAFNOSUPPORT`: the kernel lacks the address family (no `AF_CAN`).
+const EAFNOSUPPORT: i32 = nix::errno::Errno::EAFNOSUPPORT as i32;
 
 /// H7 real-time UDP port.
 const H7_PORT: u16 = 10000;
@@ -513,6 +518,78 @@ impl DeviceSpec {
                     fake: None,
                 })
             }
+        }
+    }
+}
+
+impl DeviceSpec {
+    /// What a user reads when the run could not start: the error, and for the errors a user
+    /// meets first — no CAN sockets, nothing listening at the address, nobody on the bus or
+    /// the segment — what they mean and what to do.
+    pub fn explain(&self, error: &RunError) -> String {
+        let text = error.to_string();
+        let RunError::Device {
+            stage: "open",
+            error,
+        } = error
+        else {
+            return text;
+        };
+        let refused = matches!(
+            error,
+            DeviceError::Io {
+                kind: std::io::ErrorKind::ConnectionRefused,
+                ..
+            }
+        );
+        let hint = match self {
+            Self::Cia402(address, _) => match (&address.bus, error) {
+                (
+                    CanAddress::SocketCan { .. },
+                    DeviceError::Io {
+                        kind: std::io::ErrorKind::Unsupported,
+                        ..
+                    }
+                    | DeviceError::Io {
+                        os_code: Some(EAFNOSUPPORT),
+                        ..
+                    },
+                ) => Some(NO_AF_CAN.to_owned()),
+                (
+                    CanAddress::SocketCan { interface },
+                    DeviceError::Io {
+                        kind: std::io::ErrorKind::NotFound,
+                        ..
+                    },
+                ) => Some(format!(
+                    "there is no network interface `{interface}` (see `ip link`)"
+                )),
+                (bus, DeviceError::Timeout { .. } | DeviceError::Device { .. }) if !refused => {
+                    Some(format!(
+                        "no drive answers on {bus}: is the bus powered and the gateway there? \
+                         For fake drives start `rl fake-robot canopen --bus {bus}`"
+                    ))
+                }
+                (bus, _) if refused => Some(format!(
+                    "nothing listens at {bus}; for fake drives start `rl fake-robot canopen \
+                     --bus {bus}`"
+                )),
+                _ => None,
+            },
+            Self::H7 { server, r3 } if refused => Some(format!(
+                "no H7 controller listens at {r3} (R3, TCP; real-time UDP {server}): check the \
+                 address and that the controller's R3 server is on, or start a fake with `rl \
+                 fake-robot h7 --bind {server} --r3-bind {r3}`"
+            )),
+            Self::Coach { server } if refused => Some(format!(
+                "no Coach server listens at {server}: start RL's rlCoachMdl with the model, or \
+                 `rl fake-robot coach --bind {server} --model FILE`"
+            )),
+            _ => None,
+        };
+        match hint {
+            Some(h) => format!("{text}: {h}"),
+            None => text,
         }
     }
 }
