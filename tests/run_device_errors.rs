@@ -94,3 +94,28 @@ fn an_interface_without_ethercat_devices_says_so() {
     }
     assert!(err.contains("no EtherCAT device answers on `lo`"), "{err}");
 }
+
+#[test]
+fn lost_reply_bounds_and_units_are_checked_before_anything_starts() {
+    for (args, what) in [
+        (&["--rest-after-lost", "0"][..], "--rest-after-lost 0"),
+        (
+            &["--rest-after-lost", "5", "--stop-after-lost", "4"],
+            "--rest-after-lost 5",
+        ),
+        (
+            &["--units", "cpr:4096,gear:121"],
+            "--units: only CiA 402 drives",
+        ),
+        (&["--units", "gear:121"], "`cpr` and `gear` go together"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rl"))
+            .arg("run")
+            .args(args)
+            .output()
+            .expect("rl run");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(what), "{args:?}: {err}");
+    }
+}
