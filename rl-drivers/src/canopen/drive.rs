@@ -89,7 +89,7 @@ pub struct Cia402Counters {
 }
 
 /// What `open` learned about a node.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodeReport {
     /// The node id.
     pub node: u8,
@@ -104,17 +104,6 @@ pub struct NodeReport {
     pub units: AxisUnits,
 }
 
-impl Default for NodeReport {
-    fn default() -> Self {
-        Self {
-            node: 0,
-            device_type: 0,
-            identity: [0; 4],
-            supported_modes: 0,
-            units: AxisUnits::default(),
-        }
-    }
-}
 
 #[derive(Clone, Copy, Debug)]
 struct Axis {
