@@ -104,7 +104,6 @@ pub struct NodeReport {
     pub units: AxisUnits,
 }
 
-
 #[derive(Clone, Copy, Debug)]
 struct Axis {
     node: NodeId,

@@ -412,16 +412,23 @@ mod tests {
         // its encoder and gear.
         let u = AxisUnits {
             counts_per_rev: 4096.0,
-            gear_ratio: 50.0,
+            gear_ratio: 121.0,
             feed: Some(360_000.0),
             lead_m: None,
             rated_torque_nm: 1.0,
         };
         assert_eq!(u.position_counts(core::f64::consts::PI), 180_000);
-        // The millidegree is coarser than an increment (1/204 800 rev): it sets the resolution.
+        // The millidegree is coarser than an increment (1/495 616 rev): it sets the resolution.
         assert!((u.position_resolution() - 0.5 * core::f64::consts::TAU / 360_000.0).abs() < 1e-18);
+        // With a 50:1 gear the increment (1/204 800 rev) is the coarser one.
+        let coarse = AxisUnits {
+            gear_ratio: 50.0,
+            ..u
+        };
+        let per_increment = core::f64::consts::TAU / 204_800.0;
+        assert!((coarse.position_resolution() - 0.5 * per_increment).abs() < 1e-18);
         // Torque still goes through the gear.
-        assert!((u.torque(1000) - 50.0).abs() < 1e-12);
+        assert!((u.torque(1000) - 121.0).abs() < 1e-12);
     }
 
     #[test]
