@@ -9,9 +9,13 @@
 //! a run that failed on lost replies or missed deadlines is run again (three times at most, then
 //! SKIPPED with the reports); any other failure fails the test.
 
+mod netns;
+
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
+
+use netns::{Netns, is_root};
 
 const README: &str = include_str!("../README.md");
 
@@ -217,30 +221,6 @@ fn the_coach_pair() {
     stop_fake(child);
 }
 
-fn is_root() -> bool {
-    std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
-        s.lines()
-            .find(|l| l.starts_with("Uid:"))
-            .and_then(|l| l.split_whitespace().nth(2))
-            == Some("0")
-    })
-}
-
-struct Netns(String);
-
-impl Drop for Netns {
-    fn drop(&mut self) {
-        let _ = Command::new("ip").args(["netns", "del", &self.0]).status();
-    }
-}
-
-fn ip(args: &[&str]) -> bool {
-    Command::new("ip")
-        .args(args)
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 #[test]
 fn the_ethercat_pair_in_a_namespace() {
     let _serial = serial();
@@ -253,18 +233,10 @@ fn the_ethercat_pair_in_a_namespace() {
     let run = readme_command("rl run --device ethercat://rl-ecat0");
     assert!(setup.contains(&"rl-ecat1".to_owned()));
     // The README's pair in a namespace of this test's own (the interface names are its).
-    let prefix = std::env::var("RL_NETNS_PREFIX").unwrap_or_else(|_| "rlpair".into());
-    let ns = Netns(format!("{prefix}-{}", std::process::id()));
-    assert!(ip(&["netns", "add", &ns.0]));
-    assert!(ip(&[
-        "-n", &ns.0, "link", "add", "rl-ecat0", "type", "veth", "peer", "name", "rl-ecat1"
-    ]));
-    assert!(ip(&["-n", &ns.0, "link", "set", "rl-ecat0", "up"]));
-    assert!(ip(&["-n", &ns.0, "link", "set", "rl-ecat1", "up"]));
+    let ns = Netns::with_veth("rlpair", "rl-ecat0", "rl-ecat1");
     let in_ns = |words: &[String]| {
-        let mut c = Command::new("ip");
-        c.args(["netns", "exec", &ns.0, env!("CARGO_BIN_EXE_rl")])
-            .args(&words[1..]);
+        let mut c = ns.command(env!("CARGO_BIN_EXE_rl"));
+        c.args(&words[1..]);
         c
     };
     let child = start_fake(in_ns(&fake));

@@ -500,16 +500,7 @@ impl MitsubishiH7 {
             operation,
             state: State::Closed,
         })?;
-        let map = |e: std::io::Error| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(operation, &e)
-            }
-        };
+        let map = |e: std::io::Error| r3_io_error(operation, timeout, &e);
         let disconnected = Error::Disconnected { operation };
         while let Some(stale) = link.try_recv(&mut self.r3_rx).map_err(map)? {
             if stale == 0 {
@@ -572,16 +563,8 @@ impl MitsubishiH7 {
     fn connect_r3(&mut self, operation: Operation) -> Result<(), Error> {
         let timeout = self.config.r3_timeout;
         self.r3 = None;
-        let r3 = TcpLink::connect(self.config.r3, timeout).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(operation, &e)
-            }
-        })?;
+        let r3 = TcpLink::connect(self.config.r3, timeout)
+            .map_err(|e| r3_io_error(operation, timeout, &e))?;
         self.r3 = Some(r3);
         Ok(())
     }
@@ -751,6 +734,15 @@ impl MitsubishiH7 {
             }
         }
         self.reply = Some(reply);
+    }
+}
+
+/// An R3 socket error: an expired deadline is a timeout of `waited`, anything else I/O.
+fn r3_io_error(operation: Operation, waited: Duration, e: &std::io::Error) -> Error {
+    if e.kind() == std::io::ErrorKind::TimedOut {
+        Error::Timeout { operation, waited }
+    } else {
+        Error::io(operation, e)
     }
 }
 

@@ -7,6 +7,8 @@
 //! 100:1, and one whose position unit is not the encoder count): a master that assumed units
 //! would command them a multiple of the distance.
 
+mod support;
+
 use std::time::{Duration, Instant};
 
 use rl_drivers::canopen::{Cia402, Cia402Config};
@@ -16,25 +18,7 @@ use rl_drivers::proto::canopen::nmt;
 use rl_drivers::transport::can::CanAddress;
 use rl_drivers::transport::can::bus::Bus;
 use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor};
-
-/// A 12-bit encoder behind a 121:1 gear, position unit = encoder count.
-const GEARED_121: AxisUnits = AxisUnits {
-    counts_per_rev: 4096.0,
-    gear_ratio: 121.0,
-    feed: None,
-    lead_m: None,
-    rated_torque_nm: 0.64,
-};
-
-/// A 17-bit encoder behind a 50.5:1 gear, scaled by the drive to millidegrees (0x6092 =
-/// 360 000 per joint revolution).
-const MILLIDEGREES: AxisUnits = AxisUnits {
-    counts_per_rev: 131_072.0,
-    gear_ratio: 50.5,
-    feed: Some(360_000.0),
-    lead_m: None,
-    rated_torque_nm: 2.4,
-};
+use support::{GEARED_121, MILLIDEGREES};
 
 /// Fake drives 1 and 2 with those units (2 without its unit objects if `hide`), and a master
 /// on the same in-process bus with the units `given` (20 ms cycle: behaviour, not timing).

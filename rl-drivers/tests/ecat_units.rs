@@ -15,30 +15,13 @@ use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
 use rl_drivers::proto::ecat::al::AlState;
 use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor, State};
 use support::netns::{Veth, veth_or_skip};
+use support::{GEARED_121, MILLIDEGREES};
 
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn serial() -> std::sync::MutexGuard<'static, ()> {
     SERIAL.lock().unwrap_or_else(|e| e.into_inner())
 }
-
-/// A 12-bit encoder behind a 121:1 gear, position unit = encoder count.
-const GEARED_121: AxisUnits = AxisUnits {
-    counts_per_rev: 4096.0,
-    gear_ratio: 121.0,
-    feed: None,
-    lead_m: None,
-    rated_torque_nm: 0.64,
-};
-
-/// A 17-bit encoder behind a 50.5:1 gear, scaled by the drive to millidegrees.
-const MILLIDEGREES: AxisUnits = AxisUnits {
-    counts_per_rev: 131_072.0,
-    gear_ratio: 50.5,
-    feed: Some(360_000.0),
-    lead_m: None,
-    rated_torque_nm: 2.4,
-};
 
 /// Two drives with those units (the second without its unit objects if `hide`), standing at
 /// 10 000 and -20 000 counts.
