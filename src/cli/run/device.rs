@@ -564,7 +564,10 @@ impl DeviceSpec {
                 ) => Some(format!(
                     "there is no network interface `{interface}` (see `ip link`)"
                 )),
-                (bus, DeviceError::Timeout { .. } | DeviceError::Device { .. }) if !refused => {
+                (bus, e)
+                    if matches!(e, DeviceError::Timeout { .. })
+                        || text.contains("no SDO answer in time") =>
+                {
                     Some(format!(
                         "no drive answers on {bus}: is the bus powered and the gateway there? \
                          For fake drives start `rl fake-robot canopen --bus {bus}`"

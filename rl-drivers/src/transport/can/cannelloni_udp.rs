@@ -28,8 +28,9 @@ use crate::transport::{Readiness, timestamp, wait};
 pub const MAX_DATAGRAM: usize = 1472;
 
 /// How long a serving endpoint keeps its peer after the peer's last datagram: until then a
-/// datagram from another address is rejected.
-pub const PEER_HOLD: Duration = Duration::from_secs(1);
+/// datagram from another address is rejected. A running master sends every cycle (a few ms);
+/// a quarter of a second of silence means it has ended, and the next master is taken.
+pub const PEER_HOLD: Duration = Duration::from_millis(250);
 
 /// A cannelloni UDP endpoint.
 #[derive(Debug)]
