@@ -24,30 +24,11 @@ fn the_fake_drives_serve_our_master_and_record_the_bus() {
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("bus.log");
     let model = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/rlmdl/planar3.xml");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "fake-robot",
-            "canopen",
-            "--bus",
-            "cannelloni+udp://127.0.0.1:0",
-            "--model",
-            model,
-        ])
-        .args(["--seconds", "4", "--candump"])
-        .arg(&log)
-        .stdout(Stdio::piped())
-        .spawn()
-        .expect("run rl");
-    let mut first = String::new();
-    BufReader::new(child.stdout.as_mut().unwrap())
-        .read_line(&mut first)
-        .unwrap();
+    let log_arg = log.to_str().expect("a UTF-8 path");
+    let (child, first, bus) =
+        fake_drives(&["--model", model, "--seconds", "4", "--candump", log_arg]);
     assert!(first.contains("nodes [1, 2, 3]"), "{first}");
-    let bus = first
-        .split(" on ")
-        .nth(1)
-        .and_then(|s| s.split(';').next())
-        .unwrap();
+    let bus = bus.as_str();
     let mut config = Cia402Config::new(CanAddress::parse(bus).unwrap(), &[1, 2, 3])
         .with_period(Duration::from_millis(10));
     config.sdo_timeout = Duration::from_millis(200);
@@ -109,16 +90,15 @@ fn bad_arguments_exit_with_2() {
     }
 }
 
-/// Starts `rl fake-robot canopen` on a free UDP port with `extra` flags; returns it and its bus.
-fn fake_drives(extra: &[&str]) -> (std::process::Child, String) {
+/// Starts `rl fake-robot canopen` on a free UDP port with `extra` flags; returns it, its first
+/// line and its bus.
+fn fake_drives(extra: &[&str]) -> (std::process::Child, String, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
         .args([
             "fake-robot",
             "canopen",
             "--bus",
             "cannelloni+udp://127.0.0.1:0",
-            "--seconds",
-            "60",
         ])
         .args(extra)
         .stdout(Stdio::piped())
@@ -134,7 +114,7 @@ fn fake_drives(extra: &[&str]) -> (std::process::Child, String) {
         .and_then(|s| s.split(';').next())
         .unwrap()
         .to_owned();
-    (child, bus)
+    (child, first, bus)
 }
 
 /// `rl run` against six drives on `bus` for a second, with `extra` flags.
@@ -159,18 +139,27 @@ fn run_on(bus: &str, extra: &[&str]) -> std::process::Output {
 fn rl_run_reads_the_units_the_fake_drives_are_given_or_is_refused_without_them() {
     // A 12-bit encoder behind 121:1: with units assumed (2^20, 100:1) every joint would move
     // 1/211 of its command and the run would fail on its tracking error.
-    let (mut fake, bus) = fake_drives(&["--counts-per-rev", "4096", "--gear", "121"]);
+    let (mut fake, _, bus) = fake_drives(&[
+        "--counts-per-rev",
+        "4096",
+        "--gear",
+        "121",
+        "--seconds",
+        "60",
+    ]);
     pairs::run_until_on_time("units read", 1000.0, || run_on(&bus, &[]));
     let _ = fake.kill();
     let _ = fake.wait();
 
     // Drives without 0x608F/0x6091/0x6092: refused before anything is enabled …
-    let (mut fake, bus) = fake_drives(&[
+    let (mut fake, _, bus) = fake_drives(&[
         "--counts-per-rev",
         "4096",
         "--gear",
         "121",
         "--no-unit-objects",
+        "--seconds",
+        "60",
     ]);
     let out = run_on(&bus, &[]);
     let err = String::from_utf8_lossy(&out.stderr);
