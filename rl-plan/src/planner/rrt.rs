@@ -3,7 +3,9 @@
 //!
 //! - *extend*: from the nearest vertex, one step of at most `delta` towards the target;
 //! - *connect*: steps of at most `delta` towards the target until it is reached or a step is
-//!   invalid, every step a vertex (as OMPL and VAMP add them; RL adds only the last).
+//!   invalid, every step a vertex (as OMPL and VAMP add them: [`connect`]), or only the last
+//!   valid one, joined to the nearest vertex by one edge (RL's `RrtCon::connect`:
+//!   [`connect_once`]).
 //!
 //! [`Rrt`] grows one tree from the start towards uniform samples and stops when a new vertex is
 //! within `epsilon` of the goal.
@@ -178,6 +180,68 @@ pub(crate) fn connect_with(
     buf: &mut Vec<f64>,
 ) -> Step {
     connect(ctx, tree, target, s.delta, buf)
+}
+
+/// [`connect_once`] with the settings' step.
+pub(crate) fn connect_once_with(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    s: &RrtSettings,
+    buf: &mut Vec<f64>,
+) -> Step {
+    connect_once(ctx, tree, target, s.delta, buf)
+}
+
+/// RL's connect (`RrtCon::connect`): steps of at most `delta` from the vertex nearest to
+/// `target` until it is reached or a step is invalid, then *one* vertex at the last valid step,
+/// its edge from the nearest vertex. Every step's motion is verified (the steps lie on that
+/// edge, so the edge is verified at the resolution). A tree grows by one vertex per connect, as
+/// RL's does, not by one per step.
+pub(crate) fn connect_once(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+) -> Step {
+    let Some((n, d)) = tree.nearest(ctx.space, target) else {
+        return Step::Trapped;
+    };
+    if d == 0.0 {
+        return Step::Reached(n);
+    }
+    let steps = ((d / delta).ceil() as usize).max(1);
+    let nq = ctx.space.nq();
+    // `buf`: the step being tried, the last valid step, the origin.
+    buf.resize(3 * nq, 0.0);
+    let (step, rest) = buf.split_at_mut(nq);
+    let (last, origin) = rest.split_at_mut(nq);
+    origin.copy_from_slice(tree.q(n));
+    last.copy_from_slice(origin);
+    let mut valid = 0;
+    for k in 1..=steps {
+        if k == steps {
+            step.copy_from_slice(target);
+        } else {
+            ctx.space
+                .interpolate(origin, target, k as f64 / steps as f64, step);
+        }
+        if !ctx.motion_valid(last, step, true) {
+            break;
+        }
+        last.copy_from_slice(step);
+        valid = k;
+    }
+    if valid == 0 {
+        return Step::Trapped;
+    }
+    let v = tree.add(ctx.space, last, n);
+    if valid == steps {
+        Step::Reached(v)
+    } else {
+        Step::Advanced(v)
+    }
 }
 
 /// Steps of at most `delta` from the vertex nearest to `target` until it is reached or a step
