@@ -260,3 +260,66 @@ fn fitted_spheres_free_means_meshes_free() {
     );
     assert_eq!(free, both);
 }
+
+#[test]
+fn the_hybrid_checker_refuses_only_what_the_meshes_refuse() {
+    // Issue 29: the hybrid checker's inner spheres refused UR5 starts a few mm from a
+    // self-contact that the meshes do not make. A sphere verdict is never final where the
+    // meshes may disagree: every configuration the meshes find free, the hybrid checker finds
+    // free, and a plan from it starts.
+    for name in ["ur5", "panda"] {
+        let robot = robot(name);
+        let problems = mbm::find_problems(&data().join(name).join("problems")).unwrap();
+        let mut rng = Rng::seed_from(29);
+        let mut q = vec![0.0; robot.space.nq()];
+        let (mut disputed, mut free, mut refused) = (0, 0, 0);
+        let mut disputed_example = None;
+        let raw_robot = Robot::load_urdf_with(&robot.urdf, None, None, None).unwrap();
+        for p in problems.iter().take(2) {
+            let (env, _, goal) = p.load(&robot).unwrap();
+            let mut hybrid = robot.hybrid_checker(&env).unwrap();
+            let mut exact = robot.exact_checker(env.clone()).unwrap();
+            let inner = robot.inner_spheres.clone().unwrap();
+            let mut raw = raw_robot.sphere_checker(&env).unwrap();
+            assert_eq!(inner.len(), raw.robot().sphere_count());
+            for _ in 0..250 {
+                robot.space.sample_uniform(&mut rng, &mut q);
+                let meshes = exact.is_valid(&q);
+                let h = hybrid.is_valid(&q);
+                if meshes {
+                    free += 1;
+                    assert!(h, "{name} {}: meshes free, hybrid refused {q:?}", p.name);
+                    if !raw.is_valid(&q) {
+                        disputed += 1;
+                        if exact.is_valid(&goal) {
+                            disputed_example = Some((env.clone(), q.clone(), goal.clone()));
+                        }
+                    }
+                } else {
+                    refused += 1;
+                }
+            }
+        }
+        assert!(
+            free > 100 && refused > 100,
+            "{name}: {free} free, {refused} not"
+        );
+        assert!(
+            disputed > 0,
+            "{name}: no configuration the file's spheres refuse and the meshes accept: the \
+             test would not see the old behaviour"
+        );
+        // A plan from such a start is not refused.
+        let (env, start, goal) = disputed_example.expect("a disputed start with a free goal");
+        let mut hybrid = robot.hybrid_checker(&env).unwrap();
+        let mut o = rl_plan::PlanOptions::default();
+        o.time = std::time::Duration::from_secs(5);
+        match rl_plan::plan(&robot.space, &mut hybrid, &start, &goal, &o) {
+            Ok(_) => {}
+            Err(e) => panic!("{name}: a start the meshes accept was refused: {e}"),
+        }
+        println!(
+            "{name}: {free} mesh-free samples, {disputed} of them refused by the file's spheres"
+        );
+    }
+}
