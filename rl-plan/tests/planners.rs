@@ -157,6 +157,7 @@ fn optimisers_shorten_and_stay_valid() {
     let (space, free) = wall();
     for optimizer in [
         OptimizerKind::Simple,
+        OptimizerKind::Shortcut,
         OptimizerKind::Advanced {
             length: 1.0,
             ratio: 0.1,

@@ -105,7 +105,8 @@ pub struct CommonArgs {
     /// Sampler: halton (VAMP's), uniform, gaussian, bridge.
     #[arg(long, default_value = "halton")]
     pub sampler: String,
-    /// Optimiser: simple (shortcutting), advanced (RL's), none.
+    /// Optimiser: simple (RL's shortcutting), shortcut (VAMP's greedy shortcutting), advanced
+    /// (RL's), none.
     #[arg(long, default_value = "simple")]
     pub optimizer: String,
     /// Edge check resolution, rad (largest step between checked configurations).
@@ -204,9 +205,12 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     let mut planner =
         PlannerKind::parse(&c.planner).map_err(|e| usage(format!("--planner: {e}")))?;
     if let Some(s) = planner.rrt_settings_mut() {
-        // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain.
+        // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain; the
+        // f32 k-d tree for nearest neighbours (where the space has circles or rotations, the
+        // exact structures).
         s.delta = c.range.unwrap_or(1.0);
         s.balance = true;
+        s.nn = rl_plan::nn::NnKind::Fast;
         if !c.no_dynamic_domain {
             s.dynamic_domain = Some(DynamicDomain::VAMP);
         }
@@ -224,7 +228,7 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     };
     let optimizer = OptimizerKind::parse(&c.optimizer).ok_or_else(|| {
         usage(format!(
-            "--optimizer {}: use simple, advanced or none",
+            "--optimizer {}: use simple, shortcut, advanced or none",
             c.optimizer
         ))
     })?;

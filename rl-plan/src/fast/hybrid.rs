@@ -86,7 +86,7 @@ impl Validity for HybridChecker {
     }
 
     fn lanes(&self) -> usize {
-        8
+        self.cover.batch()
     }
 
     fn segment_valid(
@@ -97,7 +97,7 @@ impl Validity for HybridChecker {
         ts: &[f64],
         _scratch: &mut Vec<f64>,
     ) -> bool {
-        for chunk in ts.chunks(8) {
+        for chunk in ts.chunks(self.cover.batch()) {
             self.checks += chunk.len() as u64;
             if !self.decide(space, a, b, chunk) {
                 return false;
