@@ -99,7 +99,13 @@ def problems(robot, tar_path, cache):
                 scenes[key] = scene_of(data)
             else:
                 requests[key] = request_of(data, joints)
-    out = {k: {**scenes[k], **requests[k]} for k in sorted(requests)}
+    # "problem" (the scenario without the robot's suffix) as VAMP's converter sets it: its
+    # problem_dict_to_vamp treats the cylinders of "box" differently (boxes, not capsules).
+    out = {
+        k: {**scenes[k], **requests[k], "problem": k.split("/")[0].replace(f"_{robot}", ""),
+            "index": int(k.split("/")[1])}
+        for k in sorted(requests)
+    }
     for p in out.values():
         env = vamp.problem_dict_to_vamp(p)
         p["valid"] = bool(module.validate(p["start"], env) and module.validate(p["goals"][0], env))
