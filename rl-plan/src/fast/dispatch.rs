@@ -23,8 +23,17 @@ impl Backend {
     /// Every backend, widest first.
     pub const ALL: [Backend; 3] = [Backend::Avx512, Backend::Avx2, Backend::Portable];
 
-    /// The best backend this CPU supports.
+    /// The best backend this CPU supports — or the one the environment variable
+    /// `RL_PLAN_BACKEND` names (`avx512`, `avx2`, `portable`; for measurements), if this CPU
+    /// supports it.
     pub fn detect() -> Self {
+        if let Some(b) = std::env::var("RL_PLAN_BACKEND")
+            .ok()
+            .and_then(|v| Self::parse(&v))
+            .filter(|b| b.is_supported())
+        {
+            return b;
+        }
         Self::ALL
             .into_iter()
             .find(|b| b.is_supported())

@@ -206,6 +206,53 @@ impl KdtreeF32 {
         }
     }
 
+    /// [`KdtreeF32::visit`] for the nearest point only, `best` = (squared distance, index),
+    /// ties to the smaller index (no closures: the hot path of the planners).
+    fn visit_one(&self, n: u32, rd: f32, q: &[f32], off: &mut [f32], best: &mut (f32, u32)) {
+        match self.nodes[n as usize] {
+            Node::Leaf(l) => {
+                let leaf = &self.leaves[l as usize];
+                let mut d2 = [0.0f32; BUCKET];
+                let block = self.nq * BUCKET;
+                for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
+                    leaf_distances(
+                        &leaf.coords[b * block..(b + 1) * block],
+                        self.nq,
+                        q,
+                        &mut d2,
+                    );
+                    for (k, &i) in index.iter().enumerate() {
+                        if d2[k] < best.0 || (d2[k] == best.0 && i < best.1) {
+                            *best = (d2[k], i);
+                        }
+                    }
+                }
+            }
+            Node::Split {
+                axis,
+                value,
+                left,
+                right,
+            } => {
+                let a = axis as usize;
+                let diff = q[a] - value;
+                let (near, far) = if diff < 0.0 {
+                    (left, right)
+                } else {
+                    (right, left)
+                };
+                self.visit_one(near, rd, q, off, best);
+                let old = off[a];
+                let rf = rd - old * old + diff * diff;
+                if rf <= best.0 {
+                    off[a] = diff;
+                    self.visit_one(far, rf, q, off, best);
+                    off[a] = old;
+                }
+            }
+        }
+    }
+
     fn neighbor(&self, space: &JointSpace, q: &[f64], i: u32) -> Neighbor {
         let i = i as usize;
         Neighbor {
@@ -247,8 +294,15 @@ impl NearestNeighbors for KdtreeF32 {
         let index = self.ids.len() as u32;
         self.points.extend_from_slice(&q[..self.nq]);
         self.ids.push(id);
-        let mut p = vec![0.0f32; self.nq];
-        self.scaled(q, &mut p);
+        let mut buf = [0.0f32; 32];
+        let mut heap = Vec::new();
+        let p: &mut [f32] = if self.nq <= buf.len() {
+            &mut buf[..self.nq]
+        } else {
+            heap.resize(self.nq, 0.0);
+            &mut heap
+        };
+        self.scaled(q, p);
         let mut n = 0usize;
         loop {
             match self.nodes[n] {
@@ -270,7 +324,7 @@ impl NearestNeighbors for KdtreeF32 {
                     if len >= BUCKET && len % BUCKET == 0 && self.split(n, l) {
                         continue;
                     }
-                    self.leaves[l].push(&p, index);
+                    self.leaves[l].push(p, index);
                     return;
                 }
             }
@@ -338,21 +392,9 @@ impl NearestNeighbors for KdtreeF32 {
             return self.nearest(space, q, 1).first().copied();
         }
         self.scaled(q, &mut qs);
-        let best = std::cell::Cell::new((f32::INFINITY, u32::MAX));
-        self.visit(
-            0,
-            0.0,
-            &qs[..self.nq],
-            &mut off[..self.nq],
-            &mut |d2, i| {
-                let (b, bi) = best.get();
-                if d2 < b || (d2 == b && i < bi) {
-                    best.set((d2, i));
-                }
-            },
-            &|| best.get().0,
-        );
-        Some(self.neighbor(space, q, best.get().1))
+        let mut best = (f32::INFINITY, u32::MAX);
+        self.visit_one(0, 0.0, &qs[..self.nq], &mut off[..self.nq], &mut best);
+        Some(self.neighbor(space, q, best.1))
     }
 
     fn len(&self) -> usize {
@@ -365,6 +407,7 @@ impl NearestNeighbors for KdtreeF32 {
         self.nodes.clear();
         self.nodes.push(Node::Leaf(0));
         self.leaves.truncate(1);
-        self.leaves[0] = Leaf::new();
+        self.leaves[0].index.clear();
+        self.leaves[0].coords.clear();
     }
 }

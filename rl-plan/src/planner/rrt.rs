@@ -120,6 +120,18 @@ pub(crate) fn extend(
     let Some((n, d)) = tree.nearest(ctx.space, target) else {
         return Step::Trapped;
     };
+    extend_from(ctx, tree, (n, d), target, delta, buf)
+}
+
+/// [`extend`] from vertex `n` at distance `d` from `target` (its nearest).
+fn extend_from(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    (n, d): (u32, f64),
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+) -> Step {
     if d == 0.0 {
         return Step::Reached(n);
     }
@@ -160,7 +172,7 @@ pub(crate) fn extend_with(
     if r < d {
         return Step::Trapped;
     }
-    let step = extend(ctx, tree, target, s.delta, buf);
+    let step = extend_from(ctx, tree, (n, d), target, s.delta, buf);
     let r = match step {
         Step::Trapped if r.is_infinite() => dd.radius,
         Step::Trapped => (r * (1.0 - dd.alpha)).max(dd.min_radius),
