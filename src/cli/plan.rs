@@ -187,6 +187,10 @@ pub struct BenchArgs {
     /// Write OMPL benchmark logs (one per problem) and RL's benchmark.csv into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write every solved problem's returned (optimised) path of run 0 as CSV into this
+    /// directory (SCENARIO_NNNN.csv, the format of `rl plan --out`), for an independent check.
+    #[arg(long)]
+    pub paths: Option<PathBuf>,
     /// Print one line per run.
     #[arg(long)]
     pub verbose: bool,
@@ -570,6 +574,15 @@ fn run_bench(b: BenchArgs) -> CliResult {
     })
     .map_err(failed)?;
     println!("{}", bench::vamp_table(&runs));
+    if let Some(dir) = &b.paths {
+        std::fs::create_dir_all(dir).map_err(|e| failed(format!("{}: {e}", dir.display())))?;
+        for r in runs.iter().filter(|r| r.run == 0) {
+            if let Some(path) = r.result.as_ref().and_then(|x| x.optimized.as_ref()) {
+                let file = dir.join(format!("{}.csv", r.problem.replace(['/', '.'], "_")));
+                write_path(&file, &robot.space, path)?;
+            }
+        }
+    }
     if let Some(out) = &b.out {
         std::fs::create_dir_all(out).map_err(|e| failed(format!("{}: {e}", out.display())))?;
         let setup = format!(

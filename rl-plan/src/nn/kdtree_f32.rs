@@ -165,22 +165,7 @@ impl KdtreeF32 {
         bound: &dyn Fn() -> f32,
     ) {
         match self.nodes[n as usize] {
-            Node::Leaf(l) => {
-                let leaf = &self.leaves[l as usize];
-                let mut d2 = [0.0f32; BUCKET];
-                let block = self.nq * BUCKET;
-                for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
-                    leaf_distances(
-                        &leaf.coords[b * block..(b + 1) * block],
-                        self.nq,
-                        q,
-                        &mut d2,
-                    );
-                    for (k, &i) in index.iter().enumerate() {
-                        found(d2[k], i);
-                    }
-                }
-            }
+            Node::Leaf(l) => self.scan(l, q, |d2, i| found(d2, i)),
             Node::Split {
                 axis,
                 value,
@@ -206,28 +191,34 @@ impl KdtreeF32 {
         }
     }
 
+    /// Every point of leaf `l` with its squared distance to `q`.
+    #[inline]
+    fn scan(&self, l: u32, q: &[f32], mut found: impl FnMut(f32, u32)) {
+        let leaf = &self.leaves[l as usize];
+        let mut d2 = [0.0f32; BUCKET];
+        let block = self.nq * BUCKET;
+        for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
+            leaf_distances(
+                &leaf.coords[b * block..(b + 1) * block],
+                self.nq,
+                q,
+                &mut d2,
+            );
+            for (k, &i) in index.iter().enumerate() {
+                found(d2[k], i);
+            }
+        }
+    }
+
     /// [`KdtreeF32::visit`] for the nearest point only, `best` = (squared distance, index),
     /// ties to the smaller index (no closures: the hot path of the planners).
     fn visit_one(&self, n: u32, rd: f32, q: &[f32], off: &mut [f32], best: &mut (f32, u32)) {
         match self.nodes[n as usize] {
-            Node::Leaf(l) => {
-                let leaf = &self.leaves[l as usize];
-                let mut d2 = [0.0f32; BUCKET];
-                let block = self.nq * BUCKET;
-                for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
-                    leaf_distances(
-                        &leaf.coords[b * block..(b + 1) * block],
-                        self.nq,
-                        q,
-                        &mut d2,
-                    );
-                    for (k, &i) in index.iter().enumerate() {
-                        if d2[k] < best.0 || (d2[k] == best.0 && i < best.1) {
-                            *best = (d2[k], i);
-                        }
-                    }
+            Node::Leaf(l) => self.scan(l, q, |d2, i| {
+                if d2 < best.0 || (d2 == best.0 && i < best.1) {
+                    *best = (d2, i);
                 }
-            }
+            }),
             Node::Split {
                 axis,
                 value,

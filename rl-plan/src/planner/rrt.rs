@@ -217,6 +217,30 @@ pub(crate) fn connect_once(
     delta: f64,
     buf: &mut Vec<f64>,
 ) -> Step {
+    connect_steps(ctx, tree, target, delta, buf, false)
+}
+
+/// Steps of at most `delta` from the vertex nearest to `target` until it is reached or a step
+/// is invalid, each step a vertex.
+pub(crate) fn connect(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+) -> Step {
+    connect_steps(ctx, tree, target, delta, buf, true)
+}
+
+/// The steps of a connect; a vertex for each valid step (`per_step`) or for the last one.
+fn connect_steps(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+    per_step: bool,
+) -> Step {
     let Some((n, d)) = tree.nearest(ctx.space, target) else {
         return Step::Trapped;
     };
@@ -231,7 +255,7 @@ pub(crate) fn connect_once(
     let (last, origin) = rest.split_at_mut(nq);
     origin.copy_from_slice(tree.q(n));
     last.copy_from_slice(origin);
-    let mut valid = 0;
+    let (mut from, mut valid) = (n, 0);
     for k in 1..=steps {
         if k == steps {
             step.copy_from_slice(target);
@@ -242,59 +266,23 @@ pub(crate) fn connect_once(
         if !ctx.motion_valid(last, step, true) {
             break;
         }
+        if per_step {
+            from = tree.add(ctx.space, step, from);
+        }
         last.copy_from_slice(step);
         valid = k;
     }
     if valid == 0 {
         return Step::Trapped;
     }
-    let v = tree.add(ctx.space, last, n);
+    if !per_step {
+        from = tree.add(ctx.space, last, n);
+    }
     if valid == steps {
-        Step::Reached(v)
+        Step::Reached(from)
     } else {
-        Step::Advanced(v)
+        Step::Advanced(from)
     }
-}
-
-/// Steps of at most `delta` from the vertex nearest to `target` until it is reached or a step
-/// is invalid.
-pub(crate) fn connect(
-    ctx: &mut Context,
-    tree: &mut Tree,
-    target: &[f64],
-    delta: f64,
-    buf: &mut Vec<f64>,
-) -> Step {
-    let Some((n, d)) = tree.nearest(ctx.space, target) else {
-        return Step::Trapped;
-    };
-    if d == 0.0 {
-        return Step::Reached(n);
-    }
-    let steps = ((d / delta).ceil() as usize).max(1);
-    let nq = ctx.space.nq();
-    // `buf` holds the origin in its second half and the step in its first.
-    buf.resize(2 * nq, 0.0);
-    let (step, origin) = buf.split_at_mut(nq);
-    origin.copy_from_slice(tree.q(n));
-    let mut from = n;
-    for k in 1..=steps {
-        if k == steps {
-            step.copy_from_slice(target);
-        } else {
-            ctx.space
-                .interpolate(origin, target, k as f64 / steps as f64, step);
-        }
-        if !ctx.motion_valid(tree.q(from), step, true) {
-            return if from == n {
-                Step::Trapped
-            } else {
-                Step::Advanced(from)
-            };
-        }
-        from = tree.add(ctx.space, step, from);
-    }
-    Step::Reached(from)
 }
 
 /// The path from the start tree's root to vertex `v` (within `epsilon` of the goal), then the
