@@ -153,19 +153,26 @@ impl KdtreeF32 {
         true
     }
 
-    /// Visits node `n` whose box is at squared distance `rd` from `q`; `bound()` is the squared
-    /// distance a subtree must reach to matter.
-    fn visit(
-        &self,
-        n: u32,
-        rd: f32,
-        q: &[f32],
-        off: &mut [f32],
-        found: &mut dyn FnMut(f32, u32),
-        bound: &dyn Fn() -> f32,
-    ) {
+    /// Visits node `n` whose box is at squared distance `rd` from `q`: every point of a leaf
+    /// goes to `v`, and a far side only when its box is within `v`'s bound.
+    fn visit<V: Visitor>(&self, n: u32, rd: f32, q: &[f32], off: &mut [f32], v: &mut V) {
         match self.nodes[n as usize] {
-            Node::Leaf(l) => self.scan(l, q, |d2, i| found(d2, i)),
+            Node::Leaf(l) => {
+                let leaf = &self.leaves[l as usize];
+                let mut d2 = [0.0f32; BUCKET];
+                let block = self.nq * BUCKET;
+                for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
+                    leaf_distances(
+                        &leaf.coords[b * block..(b + 1) * block],
+                        self.nq,
+                        q,
+                        &mut d2,
+                    );
+                    for (k, &i) in index.iter().enumerate() {
+                        v.found(d2[k], i);
+                    }
+                }
+            }
             Node::Split {
                 axis,
                 value,
@@ -179,65 +186,12 @@ impl KdtreeF32 {
                 } else {
                     (right, left)
                 };
-                self.visit(near, rd, q, off, found, bound);
+                self.visit(near, rd, q, off, v);
                 let old = off[a];
                 let rf = rd - old * old + diff * diff;
-                if rf <= bound() {
+                if rf <= v.bound() {
                     off[a] = diff;
-                    self.visit(far, rf, q, off, found, bound);
-                    off[a] = old;
-                }
-            }
-        }
-    }
-
-    /// Every point of leaf `l` with its squared distance to `q`.
-    #[inline]
-    fn scan(&self, l: u32, q: &[f32], mut found: impl FnMut(f32, u32)) {
-        let leaf = &self.leaves[l as usize];
-        let mut d2 = [0.0f32; BUCKET];
-        let block = self.nq * BUCKET;
-        for (b, index) in leaf.index.chunks(BUCKET).enumerate() {
-            leaf_distances(
-                &leaf.coords[b * block..(b + 1) * block],
-                self.nq,
-                q,
-                &mut d2,
-            );
-            for (k, &i) in index.iter().enumerate() {
-                found(d2[k], i);
-            }
-        }
-    }
-
-    /// [`KdtreeF32::visit`] for the nearest point only, `best` = (squared distance, index),
-    /// ties to the smaller index (no closures: the hot path of the planners).
-    fn visit_one(&self, n: u32, rd: f32, q: &[f32], off: &mut [f32], best: &mut (f32, u32)) {
-        match self.nodes[n as usize] {
-            Node::Leaf(l) => self.scan(l, q, |d2, i| {
-                if d2 < best.0 || (d2 == best.0 && i < best.1) {
-                    *best = (d2, i);
-                }
-            }),
-            Node::Split {
-                axis,
-                value,
-                left,
-                right,
-            } => {
-                let a = axis as usize;
-                let diff = q[a] - value;
-                let (near, far) = if diff < 0.0 {
-                    (left, right)
-                } else {
-                    (right, left)
-                };
-                self.visit_one(near, rd, q, off, best);
-                let old = off[a];
-                let rf = rd - old * old + diff * diff;
-                if rf <= best.0 {
-                    off[a] = diff;
-                    self.visit_one(far, rf, q, off, best);
+                    self.visit(far, rf, q, off, v);
                     off[a] = old;
                 }
             }
@@ -250,6 +204,56 @@ impl KdtreeF32 {
             distance: space.distance(q, &self.points[i * self.nq..(i + 1) * self.nq]),
             id: self.ids[i],
         }
+    }
+}
+
+/// What a query keeps of the points it visits.
+trait Visitor {
+    /// Point `i` at squared distance `d2`.
+    fn found(&mut self, d2: f32, i: u32);
+    /// The squared distance a subtree's box must be within to be visited.
+    fn bound(&self) -> f32;
+}
+
+/// The nearest point: (squared distance, index), ties to the smaller index.
+struct One(f32, u32);
+
+impl Visitor for One {
+    #[inline]
+    fn found(&mut self, d2: f32, i: u32) {
+        if d2 < self.0 || (d2 == self.0 && i < self.1) {
+            *self = One(d2, i);
+        }
+    }
+    #[inline]
+    fn bound(&self) -> f32 {
+        self.0
+    }
+}
+
+/// The `k` nearest points.
+struct Nearest(Best);
+
+impl Visitor for Nearest {
+    fn found(&mut self, d2: f32, i: u32) {
+        self.0.offer(f64::from(d2), i as usize);
+    }
+    fn bound(&self) -> f32 {
+        self.0.bound() as f32
+    }
+}
+
+/// Every point within a squared distance.
+struct Within(f32, Vec<u32>);
+
+impl Visitor for Within {
+    fn found(&mut self, d2: f32, i: u32) {
+        if d2 <= self.0 {
+            self.1.push(i);
+        }
+    }
+    fn bound(&self) -> f32 {
+        self.0
     }
 }
 
@@ -326,21 +330,13 @@ impl NearestNeighbors for KdtreeF32 {
         let mut qs = vec![0.0f32; self.nq];
         self.scaled(q, &mut qs);
         let mut off = vec![0.0f32; self.nq];
-        let best = std::cell::RefCell::new(Best::new(k));
-        self.visit(
-            0,
-            0.0,
-            &qs,
-            &mut off,
-            &mut |d2, i| best.borrow_mut().offer(f64::from(d2), i as usize),
-            &|| best.borrow().bound() as f32,
-        );
-        let mut out: Vec<Neighbor> = best
-            .into_inner()
-            .into_neighbors()
-            .into_iter()
-            .map(|n| self.neighbor(space, q, n.id as u32))
-            .collect();
+        let mut v = Nearest(Best::new(k));
+        self.visit(0, 0.0, &qs, &mut off, &mut v);
+        let mut out: Vec<Neighbor> =
+            v.0.into_neighbors()
+                .into_iter()
+                .map(|n| self.neighbor(space, q, n.id as u32))
+                .collect();
         out.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.id.cmp(&b.id)));
         out
     }
@@ -350,22 +346,10 @@ impl NearestNeighbors for KdtreeF32 {
         self.scaled(q, &mut qs);
         let mut off = vec![0.0f32; self.nq];
         // Candidates by the f32 distance with a little slack, decided in f64.
-        let r2 = (radius * radius) as f32 * (1.0 + 1e-5) + 1e-12;
-        let mut cand = Vec::new();
-        self.visit(
-            0,
-            0.0,
-            &qs,
-            &mut off,
-            &mut |d2, i| {
-                if d2 <= r2 {
-                    cand.push(i);
-                }
-            },
-            &|| r2,
-        );
+        let mut v = Within((radius * radius) as f32 * (1.0 + 1e-5) + 1e-12, Vec::new());
+        self.visit(0, 0.0, &qs, &mut off, &mut v);
         sorted(
-            cand.into_iter()
+            v.1.into_iter()
                 .map(|i| self.neighbor(space, q, i))
                 .filter(|n| n.distance <= radius)
                 .map(|n| (n.distance * n.distance, n.id))
@@ -383,9 +367,9 @@ impl NearestNeighbors for KdtreeF32 {
             return self.nearest(space, q, 1).first().copied();
         }
         self.scaled(q, &mut qs);
-        let mut best = (f32::INFINITY, u32::MAX);
-        self.visit_one(0, 0.0, &qs[..self.nq], &mut off[..self.nq], &mut best);
-        Some(self.neighbor(space, q, best.1))
+        let mut v = One(f32::INFINITY, u32::MAX);
+        self.visit(0, 0.0, &qs[..self.nq], &mut off[..self.nq], &mut v);
+        Some(self.neighbor(space, q, v.1))
     }
 
     fn len(&self) -> usize {

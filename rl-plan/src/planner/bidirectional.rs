@@ -5,7 +5,7 @@
 //! `balance`, the smaller one grows). The variants differ only in how each tree grows
 //! ([`Growth`]); each keeps its own file as its public face, made by [`two_tree_planner!`].
 
-use super::rrt::{RrtSettings, Step, connect_once_with, connect_with, extend, extend_with};
+use super::rrt::{RrtSettings, Step, connect_once, connect_with, extend, extend_with};
 use super::tree::{Pair, Tree};
 use super::{Context, Stats};
 use crate::error::PlanError;
@@ -36,7 +36,9 @@ impl Growth {
             Growth::Extend => |ctx, tree, target, s, buf| extend(ctx, tree, target, s.delta, buf),
             Growth::ExtendInDomain => extend_with,
             Growth::Connect => connect_with,
-            Growth::ConnectOnce => connect_once_with,
+            Growth::ConnectOnce => {
+                |ctx, tree, target, s, buf| connect_once(ctx, tree, target, s.delta, buf)
+            }
         }
     }
 }

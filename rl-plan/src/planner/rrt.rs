@@ -194,17 +194,6 @@ pub(crate) fn connect_with(
     connect(ctx, tree, target, s.delta, buf)
 }
 
-/// [`connect_once`] with the settings' step.
-pub(crate) fn connect_once_with(
-    ctx: &mut Context,
-    tree: &mut Tree,
-    target: &[f64],
-    s: &RrtSettings,
-    buf: &mut Vec<f64>,
-) -> Step {
-    connect_once(ctx, tree, target, s.delta, buf)
-}
-
 /// RL's connect (`RrtCon::connect`): steps of at most `delta` from the vertex nearest to
 /// `target` until it is reached or a step is invalid, then *one* vertex at the last valid step,
 /// its edge from the nearest vertex. Every step's motion is verified (the steps lie on that
