@@ -350,8 +350,10 @@ fn the_hybrid_checker_refuses_only_what_the_meshes_refuse() {
         // A plan from such a start is not refused.
         let (env, start, goal) = disputed_example.expect("a disputed start with a free goal");
         let mut hybrid = robot.hybrid_checker(&env).unwrap();
-        let mut o = rl_plan::PlanOptions::default();
-        o.time = std::time::Duration::from_secs(5);
+        let o = rl_plan::PlanOptions {
+            time: std::time::Duration::from_secs(5),
+            ..Default::default()
+        };
         match rl_plan::plan(&robot.space, &mut hybrid, &start, &goal, &o) {
             Ok(_) => {}
             Err(e) => panic!("{name}: a start the meshes accept was refused: {e}"),

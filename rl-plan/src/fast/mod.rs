@@ -63,14 +63,13 @@ pub fn always_touching_pairs(
             *lane = [q[j] as f32; WIDTH];
         }
         for (a, b, _) in kernel::contacts(robot, &empty, &lanes, &mut frames) {
-            if let Some(b) = b {
-                if let Some(k) = robot
+            if let Some(b) = b
+                && let Some(k) = robot
                     .self_pairs
                     .iter()
                     .position(|&(x, y)| (x as usize, y as usize) == (a, b))
-                {
-                    hits[k] += 1;
-                }
+            {
+                hits[k] += 1;
             }
         }
     }

@@ -274,7 +274,7 @@ impl Leaf {
     fn push(&mut self, p: &[f32], i: u32) {
         let nq = p.len();
         let k = self.index.len();
-        if k % BUCKET == 0 {
+        if k.is_multiple_of(BUCKET) {
             self.coords.resize(self.coords.len() + nq * BUCKET, 0.0);
         }
         for (d, &x) in p.iter().enumerate() {
@@ -316,7 +316,7 @@ impl NearestNeighbors for KdtreeF32 {
                 Node::Leaf(l) => {
                     let l = l as usize;
                     let len = self.leaves[l].index.len();
-                    if len >= BUCKET && len % BUCKET == 0 && self.split(n, l) {
+                    if len >= BUCKET && len.is_multiple_of(BUCKET) && self.split(n, l) {
                         continue;
                     }
                     self.leaves[l].push(p, index);

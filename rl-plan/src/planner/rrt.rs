@@ -329,12 +329,11 @@ pub(crate) fn solve_single(
         }
         i += 1;
         choose(ctx, &mut chosen);
-        if let Some(v) = extend(ctx, tree, &chosen, settings.delta, &mut buf).vertex() {
-            if ctx.space.distance(tree.q(v), goal) <= settings.epsilon {
-                if let Some(p) = finish_at_goal(ctx, tree, v, goal) {
-                    break Some(p);
-                }
-            }
+        if let Some(v) = extend(ctx, tree, &chosen, settings.delta, &mut buf).vertex()
+            && ctx.space.distance(tree.q(v), goal) <= settings.epsilon
+            && let Some(p) = finish_at_goal(ctx, tree, v, goal)
+        {
+            break Some(p);
         }
     };
     stats.iterations = i;
