@@ -24,9 +24,12 @@ fn options(range: f64) -> PlanOptions {
         sampler: rl_plan::sampler::SamplerKind::Halton,
         ..Default::default()
     };
+    // rl plan's settings (VAMP's): balanced trees, dynamic domain, the f32 k-d tree.
     let s = o.planner.rrt_settings_mut().unwrap();
     s.delta = range;
     s.balance = true;
+    s.dynamic_domain = Some(rl_plan::planner::DynamicDomain::VAMP);
+    s.nn = rl_plan::nn::NnKind::Fast;
     o
 }
 
