@@ -154,12 +154,8 @@ fn check(robot: &str) {
             .unwrap()
             .to_vec()
         };
-        compare_fd::<true>(&what("dqdd/dq vs FD"), &model, r.ddq_dq, &q, |x| {
-            aba(x, &v)
-        });
-        compare_fd::<false>(&what("dqdd/dv vs FD"), &model, r.ddq_dv, &v, |x| {
-            aba(&q, x)
-        });
+        compare_fd::<true>(&what("dqdd/dq vs FD"), &model, r.ddq_dq, &q, |x| aba(x, &v));
+        compare_fd::<false>(&what("dqdd/dv vs FD"), &model, r.ddq_dv, &v, |x| aba(&q, x));
     }
     assert!(with_forces >= 1, "{robot}: no state with external forces");
 }
