@@ -33,7 +33,6 @@
 //! Errors: [`Error::NotPositiveDefinite`] as [`super::aba`].
 
 use crate::error::Error;
-use crate::math::invert_spd;
 use crate::model::{Data, DerivativeData, DerivativeWorkspace, MatrixView, Model, ROOT};
 use crate::spatial::{ArticulatedBodyInertia, ForceVector, MotionVector};
 
@@ -123,7 +122,7 @@ fn run<const N: usize>(
     let n = model.nv;
     let d = &mut *deriv;
     velocities(model, data, &mut d.ws, q, qd, fext);
-    articulated(model, data, tau)?;
+    super::aba::articulated_inertias(model, data, tau)?;
     minv_backward(model, data, &mut d.minv);
     accelerations(model, data, &mut d.ws, &mut d.minv, &mut d.qdd);
     backward::<false, N>(
@@ -195,64 +194,6 @@ fn velocities<const N: usize>(
         ws.bn[i] = b_angular(&inertia, &v, &h);
         ws.hf[i] = h.force;
     }
-}
-
-/// Pass 2, leaves to root: ABA's articulated inertias, `U`, `D⁻¹`, `u` and bias forces.
-#[inline]
-fn articulated<const N: usize>(
-    model: &Model<N>,
-    data: &mut Data<N>,
-    tau: &[f64],
-) -> Result<(), Error> {
-    for i in (0..model.nbodies).rev() {
-        let sv = model.idx_v[i];
-        let nv = model.joints[i].nv();
-        let p = model.parents[i];
-        let ia = data.articulated[i];
-        let pa = data.f[i];
-        let mut d = [[0.0; 6]; 6];
-        for k in 0..nv {
-            let s = data.world_subspace[sv + k];
-            let u = ia.mul_motion(&s);
-            data.u[sv + k] = u;
-            data.u_bias[sv + k] = tau[sv + k] - s.dot(&pa);
-            for l in 0..=k {
-                let x = data.world_subspace[sv + l].dot(&u);
-                d[l][k] = x;
-                d[k][l] = x;
-            }
-        }
-        let mut d_inv = [[0.0; 6]; 6];
-        if nv == 1 {
-            if d[0][0].is_nan() || d[0][0] <= 0.0 {
-                return Err(Error::NotPositiveDefinite { dof: sv });
-            }
-            d_inv[0][0] = 1.0 / d[0][0];
-        } else if !invert_spd(&d, nv, &mut d_inv) {
-            return Err(Error::NotPositiveDefinite { dof: sv });
-        }
-        data.d_inv[i] = d_inv;
-        if p == ROOT {
-            continue;
-        }
-        // Ia = Iᴬ − U D⁻¹ Uᵀ ; pa = pᴬ + Ia c + U D⁻¹ u
-        let mut ia_child = ia;
-        let mut pa_child = pa;
-        for k in 0..nv {
-            let mut w = ForceVector::ZERO;
-            let mut coef = 0.0;
-            for l in 0..nv {
-                w += data.u[sv + l] * d_inv[k][l];
-                coef += d_inv[k][l] * data.u_bias[sv + l];
-            }
-            ia_child.sub_outer(&data.u[sv + k], &w);
-            pa_child += data.u[sv + k] * coef;
-        }
-        pa_child += ia_child.mul_motion(&data.c[i]);
-        data.articulated[p] += ia_child;
-        data.f[p] += pa_child;
-    }
-    Ok(())
 }
 
 /// The backward half of `M⁻¹` (its upper triangle; the rest zeroed): for each column `c`, ABA's
