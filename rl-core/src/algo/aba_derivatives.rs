@@ -254,6 +254,7 @@ fn accelerations<const N: usize>(
 ) {
     let n = model.nv;
     let base = MotionVector::new(glam::DVec3::ZERO, -model.gravity);
+    let mut unused = [0.0; N];
     for i in 0..model.nbodies {
         let sv = model.idx_v[i];
         let nv = model.joints[i].nv();
@@ -279,30 +280,26 @@ fn accelerations<const N: usize>(
         }
         data.a[i] = a;
         // M⁻¹_{r, c ≥ sv} −= Σ_k (D⁻¹ Uᵀ S_k)_r M⁻¹_{k, c ≥ sv} over the ancestor coordinates k.
-        let mut b = p;
-        while b != ROOT {
-            let sb = model.idx_v[b];
-            for k in sb..sb + model.joints[b].nv() {
-                let s = data.world_subspace[k];
-                let mut t = [0.0; 6];
-                for (l, t) in t.iter_mut().enumerate().take(nv) {
-                    *t = s.dot(&data.u[sv + l]);
-                }
-                let (head, tail) = minv.split_at_mut(sv);
-                let from = &head[k][sv..n];
-                for r in 0..nv {
+        let mut terms = [(0usize, 0.0, 0.0); N];
+        for r in 0..nv {
+            let mut len = 0;
+            let mut b = p;
+            while b != ROOT {
+                let sb = model.idx_v[b];
+                for k in sb..sb + model.joints[b].nv() {
+                    let s = data.world_subspace[k];
                     let mut coef = 0.0;
                     for l in 0..nv {
-                        coef += d_inv[r][l] * t[l];
+                        coef += d_inv[r][l] * s.dot(&data.u[sv + l]);
                     }
-                    if coef != 0.0 {
-                        for (x, y) in tail[r][sv..n].iter_mut().zip(from) {
-                            *x -= coef * y;
-                        }
-                    }
+                    terms[len] = (k, -coef, 0.0);
+                    len += 1;
                 }
+                b = model.parents[b];
             }
-            b = model.parents[b];
+            let (head, tail) = minv.split_at_mut(sv);
+            let row = &mut tail[r];
+            combine_rows::<false, N>(head, &terms[..len], sv, n, row, &mut unused);
         }
         for k in sv..sv + nv {
             let s = data.world_subspace[k];
@@ -312,10 +309,12 @@ fn accelerations<const N: usize>(
     }
 }
 
-/// `∂q̈/∂q = −M⁻¹ ∂τ/∂q` and `∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇` over the nonzeros of `∂τ` only (the
-/// pairs of coordinates one of which is on an ancestor of, or the same body as, the other):
-/// column `j` of the result is `Σ_k ∂τ_kj` times row `k` of the symmetric `M⁻¹`, accumulated in
-/// row `j` and transposed at the end.
+/// `∂q̈/∂q = −M⁻¹ ∂τ/∂q` and `∂q̈/∂q̇ = −M⁻¹ ∂τ/∂q̇` over the nonzeros of `∂τ` only: column
+/// `j` is nonzero on the coordinates of `j`'s ancestors, its own joint and its subtree. Column `j`
+/// of the result is `Σ_k ∂τ_kj` times row `k` of the symmetric `M⁻¹`, accumulated in row `j`
+/// ([`combine_rows`]) and transposed at the end. With the bodies in depth-first order (as the
+/// loaders number them) a subtree's coordinates are one range; otherwise each pair of related
+/// coordinates is visited from the lower body's walk up the tree.
 #[inline]
 fn multiply_minv<const N: usize>(
     model: &Model<N>,
@@ -326,41 +325,169 @@ fn multiply_minv<const N: usize>(
     out_v: &mut [[f64; N]; N],
 ) {
     let n = model.nv;
-    for j in 0..n {
-        out_q[j][..n].fill(0.0);
-        out_v[j][..n].fill(0.0);
-    }
-    let mut add = |k: usize, j: usize| {
-        let (x, y) = (dq[k][j], dv[k][j]);
-        let oq = &mut out_q[j][..n];
-        let ov = &mut out_v[j][..n];
-        for ((a, b), m) in oq.iter_mut().zip(ov.iter_mut()).zip(&minv[k][..n]) {
-            *a += x * m;
-            *b += y * m;
-        }
-    };
-    for i in 0..model.nbodies {
-        let sv = model.idx_v[i];
-        let own = sv..sv + model.joints[i].nv();
-        for x in own.clone() {
-            for y in own.clone() {
-                add(x, y);
+    let mut end = [0usize; N];
+    let depth_first = subtree_ends(model, &mut end);
+    if depth_first {
+        let mut terms = [(0usize, 0.0, 0.0); N];
+        for j in 0..n {
+            let body = model.dof_body[j];
+            let mut len = 0;
+            let mut push = |k: usize| {
+                let (x, y) = (dq[k][j], dv[k][j]);
+                if x != 0.0 || y != 0.0 {
+                    terms[len] = (k, x, y);
+                    len += 1;
+                }
+            };
+            let mut a = model.parents[body];
+            while a != ROOT {
+                let sa = model.idx_v[a];
+                for k in sa..sa + model.joints[a].nv() {
+                    push(k);
+                }
+                a = model.parents[a];
             }
+            for k in model.idx_v[body]..end[body] {
+                push(k);
+            }
+            combine_rows::<true, N>(minv, &terms[..len], 0, n, &mut out_q[j], &mut out_v[j]);
         }
-        let mut b = model.parents[i];
-        while b != ROOT {
-            let sb = model.idx_v[b];
-            for y in sb..sb + model.joints[b].nv() {
-                for x in own.clone() {
+    } else {
+        for j in 0..n {
+            out_q[j][..n].fill(0.0);
+            out_v[j][..n].fill(0.0);
+        }
+        let mut add = |k: usize, j: usize| {
+            let (x, y) = (dq[k][j], dv[k][j]);
+            let oq = &mut out_q[j][..n];
+            let ov = &mut out_v[j][..n];
+            for ((a, b), m) in oq.iter_mut().zip(ov.iter_mut()).zip(&minv[k][..n]) {
+                *a += x * m;
+                *b += y * m;
+            }
+        };
+        for i in 0..model.nbodies {
+            let sv = model.idx_v[i];
+            let own = sv..sv + model.joints[i].nv();
+            for x in own.clone() {
+                for y in own.clone() {
                     add(x, y);
-                    add(y, x);
                 }
             }
-            b = model.parents[b];
+            let mut b = model.parents[i];
+            while b != ROOT {
+                let sb = model.idx_v[b];
+                for y in sb..sb + model.joints[b].nv() {
+                    for x in own.clone() {
+                        add(x, y);
+                        add(y, x);
+                    }
+                }
+                b = model.parents[b];
+            }
         }
     }
     transpose_negate(out_q, n);
     transpose_negate(out_v, n);
+}
+
+/// One past the last coordinate of each body's subtree into `end`, assuming depth-first order;
+/// returns whether the bodies are in depth-first order (each body's parent on the path from the
+/// body before it to the root), where that assumption holds.
+fn subtree_ends<const N: usize>(model: &Model<N>, end: &mut [usize; N]) -> bool {
+    for i in 0..model.nbodies {
+        end[i] = model.idx_v[i] + model.joints[i].nv();
+        if i > 0 {
+            let p = model.parents[i];
+            let mut b = i - 1;
+            while b != ROOT && b != p {
+                b = model.parents[b];
+            }
+            if b != p {
+                return false;
+            }
+        }
+    }
+    for i in (1..model.nbodies).rev() {
+        let p = model.parents[i];
+        if p != ROOT && end[p] < end[i] {
+            end[p] = end[i];
+        }
+    }
+    true
+}
+
+/// Chunk width of [`combine_rows`]: eight doubles, one AVX-512 register or two AVX ones.
+const W: usize = 8;
+
+/// `a b + c`, fused into one instruction where the target has one and the standard library's
+/// `mul_add` can reach it (x86-64 built with FMA, e.g. `-C target-cpu=native`; every aarch64);
+/// otherwise a multiplication and an addition (`core` has no `mul_add`, and the `libm` crate's
+/// goes through a function pointer). The results differ from the unfused ones by rounding only.
+#[inline(always)]
+fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+    #[cfg(all(feature = "std", any(target_feature = "fma", target_arch = "aarch64")))]
+    {
+        a.mul_add(b, c)
+    }
+    #[cfg(not(all(feature = "std", any(target_feature = "fma", target_arch = "aarch64"))))]
+    {
+        a * b + c
+    }
+}
+
+/// `q[c] (+)= Σ_t x_t rows[k_t][c]` (and, when `TWO`, `v[c] (+)= Σ_t y_t rows[k_t][c]`) for
+/// `c` in `from..n`, over the terms `(k_t, x_t, y_t)`: `TWO` sets the outputs, otherwise `q`
+/// is updated in place. Chunks of [`W`] columns are accumulated in registers over all terms
+/// before one store, so each row element is loaded once per chunk and each output element
+/// stored once.
+#[inline(always)]
+fn combine_rows<const TWO: bool, const N: usize>(
+    rows: &[[f64; N]],
+    terms: &[(usize, f64, f64)],
+    from: usize,
+    n: usize,
+    q: &mut [f64; N],
+    v: &mut [f64; N],
+) {
+    let mut c0 = from;
+    while c0 < n {
+        let e = (n - c0).min(W);
+        match (q[c0..].first_chunk_mut::<W>(), c0 + W <= N) {
+            (Some(qc), true) => {
+                let mut aq = if TWO { [0.0; W] } else { *qc };
+                let mut av = [0.0; W];
+                for &(k, x, y) in terms {
+                    if let Some(m) = rows[k][c0..].first_chunk::<W>() {
+                        for l in 0..W {
+                            aq[l] = mul_add(x, m[l], aq[l]);
+                            if TWO {
+                                av[l] = mul_add(y, m[l], av[l]);
+                            }
+                        }
+                    }
+                }
+                qc[..e].copy_from_slice(&aq[..e]);
+                if TWO {
+                    v[c0..c0 + e].copy_from_slice(&av[..e]);
+                }
+            }
+            _ => {
+                for c in c0..c0 + e {
+                    let (mut aq, mut av) = (if TWO { 0.0 } else { q[c] }, 0.0);
+                    for &(k, x, y) in terms {
+                        aq += x * rows[k][c];
+                        av += y * rows[k][c];
+                    }
+                    q[c] = aq;
+                    if TWO {
+                        v[c] = av;
+                    }
+                }
+            }
+        }
+        c0 += W;
+    }
 }
 
 /// `m ← −mᵀ` on the leading `n × n` block.
