@@ -37,7 +37,7 @@ use crate::model::{Data, DerivativeData, DerivativeWorkspace, MatrixView, Model,
 use crate::spatial::{ArticulatedBodyInertia, ForceVector, MotionVector};
 
 use super::forward_position::world_pose;
-use super::rnea_derivatives::{b_angular, backward, check, symmetrize};
+use super::rnea_derivatives::{b_angular, backward, check, mul_add, symmetrize};
 
 /// The results of [`aba_derivatives`]: views into the [`DerivativeData`].
 #[derive(Clone, Copy, Debug)]
@@ -419,22 +419,6 @@ fn subtree_ends<const N: usize>(model: &Model<N>, end: &mut [usize; N]) -> bool 
 
 /// Chunk width of [`combine_rows`]: eight doubles, one AVX-512 register or two AVX ones.
 const W: usize = 8;
-
-/// `a b + c`, fused into one instruction where the target has one and the standard library's
-/// `mul_add` can reach it (x86-64 built with FMA, e.g. `-C target-cpu=native`; every aarch64);
-/// otherwise a multiplication and an addition (`core` has no `mul_add`, and the `libm` crate's
-/// goes through a function pointer). The results differ from the unfused ones by rounding only.
-#[inline(always)]
-fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-    #[cfg(all(feature = "std", any(target_feature = "fma", target_arch = "aarch64")))]
-    {
-        a.mul_add(b, c)
-    }
-    #[cfg(not(all(feature = "std", any(target_feature = "fma", target_arch = "aarch64"))))]
-    {
-        a * b + c
-    }
-}
 
 /// `q[c] (+)= Σ_t x_t rows[k_t][c]` (and, when `TWO`, `v[c] (+)= Σ_t y_t rows[k_t][c]`) for
 /// `c` in `from..n`, over the terms `(k_t, x_t, y_t)`: `TWO` sets the outputs, otherwise `q`

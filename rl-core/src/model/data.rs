@@ -210,6 +210,11 @@ pub(crate) struct DerivativeWorkspace<const N: usize> {
     pub(crate) dfdv: [ForceVector; N],
     /// `∂F/∂q̈ = I^c S`.
     pub(crate) dfda: [ForceVector; N],
+    /// Per coordinate `a`, packed for the pairs with its descendants' rows: `[dA_a, dAv_a]`
+    /// component by component, then `[ω(dV_a), ω(S_a)]`.
+    pub(crate) lower: [[[f64; 2]; 9]; N],
+    /// Per coordinate: its world subspace column `S` as `[angular; linear]`.
+    pub(crate) subspace: [[f64; 6]; N],
     /// Per body: the velocity-dependent force `v ×* I v − fext` (ABA derivatives).
     pub(crate) bias: [ForceVector; N],
     /// Per body: the angular block of the composite `B` operator (`∂f/∂ω` of a velocity
@@ -244,6 +249,8 @@ impl<const N: usize> DerivativeData<N> {
                 dfdq: [ForceVector::ZERO; N],
                 dfdv: [ForceVector::ZERO; N],
                 dfda: [ForceVector::ZERO; N],
+                lower: [[[0.0; 2]; 9]; N],
+                subspace: [[0.0; 6]; N],
                 bias: [ForceVector::ZERO; N],
                 bn: [DMat3::ZERO; N],
                 hf: [DVec3::ZERO; N],
