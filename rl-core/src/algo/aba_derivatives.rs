@@ -265,19 +265,8 @@ fn accelerations<const N: usize>(
             (data.v[p], data.a[p])
         };
         let d_inv = data.d_inv[i];
-        let mut a = ap + data.c[i];
-        let mut rhs = [0.0; 6];
-        for (k, r) in rhs.iter_mut().enumerate().take(nv) {
-            *r = data.u_bias[sv + k] - a.dot(&data.u[sv + k]);
-        }
-        for k in 0..nv {
-            let mut x = 0.0;
-            for (l, r) in rhs.iter().enumerate().take(nv) {
-                x += d_inv[k][l] * r;
-            }
-            qdd[sv + k] = x;
-            a += data.world_subspace[sv + k] * x;
-        }
+        let (x, a) = super::aba::joint_accelerations(model, data, i, ap + data.c[i]);
+        qdd[sv..sv + nv].copy_from_slice(&x[..nv]);
         data.a[i] = a;
         // M⁻¹_{r, c ≥ sv} −= Σ_k (D⁻¹ Uᵀ S_k)_r M⁻¹_{k, c ≥ sv} over the ancestor coordinates k.
         let mut terms = [(0usize, 0.0, 0.0); N];

@@ -121,16 +121,26 @@ pub(crate) fn check<const N: usize>(
     check_len("q", q, model.nq)?;
     check_len("qd", qd, model.nv)?;
     check_len("qdd", qdd, model.nv)?;
-    if let Some(fext) = fext {
-        if fext.len() != model.nbodies {
-            return Err(Error::Dimension {
-                argument: "fext",
-                expected: model.nbodies,
-                got: fext.len(),
-            });
-        }
+    match fext {
+        Some(fext) => check_fext(model, fext),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// `fext` has one force per body.
+pub(crate) fn check_fext<const N: usize>(
+    model: &Model<N>,
+    fext: &[ForceVector],
+) -> Result<(), Error> {
+    if fext.len() == model.nbodies {
+        Ok(())
+    } else {
+        Err(Error::Dimension {
+            argument: "fext",
+            expected: model.nbodies,
+            got: fext.len(),
+        })
+    }
 }
 
 /// RNEA derivatives on public coordinates into `deriv` (lengths checked).
@@ -470,27 +480,13 @@ pub(crate) fn backward<const WITH_M: bool, const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::joint::{Joint, Revolute};
-    use crate::model::ModelBuilder;
-    use crate::spatial::PlueckerTransform;
 
     /// The pendulum of `rnea`'s test: `τ = m l² q̈ + m g l sin q`, so `∂τ/∂q = m g l cos q`,
     /// `∂τ/∂q̇ = 0`, `M = m l²`.
     #[test]
     fn pendulum_matches_the_closed_form() {
         let (m, l, g) = (2.0, 0.5, 9.81);
-        let mut b = ModelBuilder::<1>::new();
-        b.gravity(DVec3::new(0.0, 0.0, -g));
-        b.add_body(
-            ROOT,
-            "j",
-            Joint::Revolute(Revolute::new(DVec3::Y)),
-            PlueckerTransform::IDENTITY,
-            "rod",
-            RigidBodyInertia::from_com(m, DVec3::new(0.0, 0.0, -l), DMat3::ZERO),
-        )
-        .unwrap();
-        let model = b.build();
+        let model = crate::algo::rnea::tests::pendulum(m, l, g);
         let mut data = Data::new();
         let mut deriv = DerivativeData::new();
         let (q, qd, qdd) = (0.3, 0.7, -1.1);

@@ -47,13 +47,7 @@ pub fn static_torque_derivatives_with_external_forces<'d, const N: usize>(
     fext: &[ForceVector],
 ) -> Result<MatrixView<'d, N>, Error> {
     check_len("q", q, model.nq)?;
-    if fext.len() != model.nbodies {
-        return Err(Error::Dimension {
-            argument: "fext",
-            expected: model.nbodies,
-            got: fext.len(),
-        });
-    }
+    super::rnea_derivatives::check_fext(model, fext)?;
     run(model, data, deriv, q, Some(fext));
     Ok(deriv.dtau_dq())
 }
