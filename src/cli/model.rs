@@ -851,7 +851,7 @@ pub fn bench_states<const N: usize>(
             }));
         }
         Err(e) => errln!(
-            "rl: warning: ABA and its derivatives not timed: {}",
+            "rl: warning: ABA not timed, nor its derivatives: {}",
             algo_error(model, e)
         ),
     }
