@@ -17,14 +17,11 @@ use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
 use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::ecat::frame::ETHERTYPE;
-use rl_drivers::transport::can::socketcan::NO_AF_CAN;
+use rl_drivers::transport::can::socketcan::{EAFNOSUPPORT, NO_AF_CAN};
 use rl_drivers::transport::can::{CanAddress, default_local};
 use rl_drivers::transport::{PacketLink, packet};
 
 use crate::cli::CliError;
-
-/// `EAFNOSUPPORT`: the kernel lacks the address family (no `AF_CAN`).
-const EAFNOSUPPORT: i32 = nix::errno::Errno::EAFNOSUPPORT as i32;
 
 /// H7 real-time UDP port.
 const H7_PORT: u16 = 10000;

@@ -32,6 +32,9 @@ pub struct CanFilter {
     pub mask: u32,
 }
 
+/// The OS error a kernel without CAN sockets gives (`EAFNOSUPPORT`).
+pub const EAFNOSUPPORT: i32 = libc::EAFNOSUPPORT;
+
 /// What a user does when the kernel has no CAN sockets (`EAFNOSUPPORT`, os error 97).
 pub const NO_AF_CAN: &str = "this kernel offers no CAN sockets (AF_CAN): load the modules \
      (`modprobe can-raw`), run outside a container that hides them, or reach the bus through a \
