@@ -611,12 +611,12 @@ fn drive<const B: usize, const J: usize>(
     if let Some(n) = args.stop_after_lost {
         supervision.max_consecutive_lost = n;
     }
-    // The device's own bound on failed steps one above the dead-link bound: the supervisor
-    // names the loss first.
-    let device_limit = supervision.max_consecutive_lost.saturating_add(1);
-    let opened = setup
-        .device
-        .build(&loaded, setup.period, home.as_deref(), device_limit)?;
+    let opened = setup.device.build(
+        &loaded,
+        setup.period,
+        home.as_deref(),
+        supervision.device_failure_limit(),
+    )?;
     let fake = opened.fake;
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {

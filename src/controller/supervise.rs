@@ -100,6 +100,12 @@ impl Supervision {
             ..Self::default()
         }
     }
+
+    /// The bound to give the device on its own failed steps in a row: one above the dead-link
+    /// bound, so that the supervisor names the loss first.
+    pub fn device_failure_limit(&self) -> u32 {
+        self.max_consecutive_lost.saturating_add(1)
+    }
 }
 
 /// What was wrong with a feedback value.
