@@ -202,18 +202,18 @@ impl SphereSet {
                     .filter(|r: &f64| r.is_finite() && *r > 0.0)
                     .ok_or_else(|| at(s, "radius missing or not a positive number".into()))?;
                 let mut xyz = DVec3::ZERO;
-                if let Some(o) = c.children().find(|n| n.has_tag_name("origin")) {
-                    if let Some(v) = o.attribute("xyz") {
-                        let p: Vec<f64> = v
-                            .split_whitespace()
-                            .map(str::parse)
-                            .collect::<Result<_, _>>()
-                            .map_err(|_| at(o, format!("xyz \"{v}\" is not three numbers")))?;
-                        if p.len() != 3 || !p.iter().all(|x| x.is_finite()) {
-                            return Err(at(o, format!("xyz \"{v}\" is not three numbers")));
-                        }
-                        xyz = DVec3::new(p[0], p[1], p[2]);
+                if let Some(o) = c.children().find(|n| n.has_tag_name("origin"))
+                    && let Some(v) = o.attribute("xyz")
+                {
+                    let p: Vec<f64> = v
+                        .split_whitespace()
+                        .map(str::parse)
+                        .collect::<Result<_, _>>()
+                        .map_err(|_| at(o, format!("xyz \"{v}\" is not three numbers")))?;
+                    if p.len() != 3 || !p.iter().all(|x| x.is_finite()) {
+                        return Err(at(o, format!("xyz \"{v}\" is not three numbers")));
                     }
+                    xyz = DVec3::new(p[0], p[1], p[2]);
                 }
                 spheres.push((xyz, r));
             }

@@ -146,15 +146,15 @@ fn resolve(dir: &Path, href: &str) -> PathBuf {
     if p.exists() {
         return p;
     }
-    if let (Some(parent), Some(name)) = (p.parent(), p.file_name().and_then(|n| n.to_str())) {
-        if let Ok(rd) = std::fs::read_dir(parent) {
-            for e in rd.flatten() {
-                if e.file_name()
-                    .to_str()
-                    .is_some_and(|f| f.eq_ignore_ascii_case(name))
-                {
-                    return e.path();
-                }
+    if let (Some(parent), Some(name)) = (p.parent(), p.file_name().and_then(|n| n.to_str()))
+        && let Ok(rd) = std::fs::read_dir(parent)
+    {
+        for e in rd.flatten() {
+            if e.file_name()
+                .to_str()
+                .is_some_and(|f| f.eq_ignore_ascii_case(name))
+            {
+                return e.path();
             }
         }
     }
