@@ -551,15 +551,7 @@ fn embedded_scene_robot(
         _ => load::rlsg::link_rlmdl_str(&mut model, kinematics, &k),
     };
     linked.map_err(|e| load_err(name, e))?;
-    let robot = finish_robot(
-        index,
-        k,
-        None,
-        model.clone(),
-        model,
-        Vec::new(),
-        files,
-    );
+    let robot = finish_robot(index, k, None, model.clone(), model, Vec::new(), files);
     Ok((robot, s.models()[1..].to_vec()))
 }
 
@@ -573,12 +565,9 @@ fn pick_named_state(states: &[load::srdf::NamedState]) -> Option<&load::srdf::Na
 
 /// `robot`'s start from the named state of its SRDF (joints the state does not name keep
 /// their value); notes for joints the model lacks.
-fn apply_named_state(
-    robot: &mut Robot,
-    srdf: &std::path::Path,
-) -> Result<(), ViewError> {
-    let states = load::srdf::named_states_file(srdf)
-        .map_err(|e| load_err(srdf.display().to_string(), e))?;
+fn apply_named_state(robot: &mut Robot, srdf: &std::path::Path) -> Result<(), ViewError> {
+    let states =
+        load::srdf::named_states_file(srdf).map_err(|e| load_err(srdf.display().to_string(), e))?;
     let Some(state) = pick_named_state(&states) else {
         return Ok(());
     };
@@ -671,11 +660,10 @@ fn plan_view(
             };
             Some(robot.base.transform_point(x.translation))
         };
-        let total: usize = p
-            .q
-            .windows(2)
-            .map(|w| segment_steps(&w[0], &w[1], STEP))
-            .sum();
+        let total: usize =
+            p.q.windows(2)
+                .map(|w| segment_steps(&w[0], &w[1], STEP))
+                .sum();
         let thin = total.div_ceil(MAX_POINTS).max(1);
         let mut q = vec![0.0; kin.nq()];
         trail.extend(p.q.first().and_then(|q0| tool_at(q0)));

@@ -18,12 +18,16 @@ pub fn parse_place(text: &str, flag: &str) -> Result<PlueckerTransform, CliError
         .split(',')
         .enumerate()
         .map(|(i, p)| {
-            p.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                CliError::usage(format!(
-                    "{flag}: value {i} ({:?}) is not a finite number",
-                    p.trim()
-                ))
-            })
+            p.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    CliError::usage(format!(
+                        "{flag}: value {i} ({:?}) is not a finite number",
+                        p.trim()
+                    ))
+                })
         })
         .collect::<Result<_, _>>()?;
     let (t, r) = match v.as_slice() {

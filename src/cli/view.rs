@@ -1,18 +1,100 @@
-//! `rl view MODEL... [--env SCENE] [--srdf FILE] [--path FILE] [--http ADDR] [--coach ADDR]`:
-//! the robot viewer (RL's rlCoachMdl) as a local web page. Parses the arguments, starts
-//! [`rl_view::Viewer`], prints the address and waits for Ctrl-C; the server is in rl-view.
+//! `rl view MODEL... [--env SCENE] [--srdf [I=]FILE] [--place [I=]POSE] [--path FILE] [--http
+//! ADDR] [--coach ADDR]`: the robot viewer (RL's rlCoachMdl, and rlPlanDemo's view of an rlplan
+//! scenario) as a local web page. Parses the arguments, starts [`rl_view::Viewer`], prints the
+//! address and waits for Ctrl-C; the server is in rl-view.
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use clap::Args;
 use rl_rt::StopFlag;
-use rl_view::{LoadOptions, ModelSource, Viewer, ViewerOptions};
+use rl_sg::load::EmbeddedFiles;
+use rl_view::{LoadOptions, ModelSource, RobotOptions, Viewer, ViewerOptions};
 
 use super::output::{errln, outln};
+use super::placement::{ScenarioRobot, is_scenario, parse_place, per_model};
 use super::{CliError, CliResult};
+
+/// RL's visual RV-6SL (its VRML meshes, byte for byte), compiled in: the default robot is drawn
+/// as RL draws it.
+const RV6SL_MESHES: [(&str, &str); 8] = [
+    (
+        "mitsubishi-rv6sl/mitsubishi-rv6sl.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/mitsubishi-rv6sl.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link0.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link0.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link1.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link1.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link2.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link2.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link3.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link3.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link4.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link4.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link5.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link5.wrl"),
+    ),
+    (
+        "mitsubishi-rv6sl/link6.wrl",
+        include_str!("../../tests/data/rlsg/mitsubishi-rv6sl/link6.wrl"),
+    ),
+];
+
+/// The scene of the default robot alone (RL's rlsg and VRML conventions: the robot is the
+/// scene's model `mitsubishi-rv6sl`, its bodies `link0`…`link6` as in RL's
+/// `mitsubishi-rv6sl_boxes.xml`).
+const RV6SL_SCENE_XML: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<rlsg>
+	<scene href="rv6sl.wrl">
+		<model name="mitsubishi-rv6sl">
+			<body name="link0"/><body name="link1"/><body name="link2"/><body name="link3"/>
+			<body name="link4"/><body name="link5"/><body name="link6"/>
+		</model>
+	</scene>
+</rlsg>
+"#;
+const RV6SL_SCENE_WRL: &str = r#"#VRML V2.0 utf8
+Transform {
+	children [
+		DEF mitsubishi-rv6sl Transform {
+			children [
+				Inline { url "mitsubishi-rv6sl/mitsubishi-rv6sl.wrl" }
+			]
+		}
+	]
+}
+"#;
+
+/// The embedded RV-6SL that `rl run` drives, drawn with RL's visual meshes.
+pub fn embedded_rv6sl() -> ModelSource {
+    let mut files = EmbeddedFiles::new();
+    files.add("rv6sl.xml", RV6SL_SCENE_XML);
+    files.add("rv6sl.wrl", RV6SL_SCENE_WRL);
+    for (path, text) in RV6SL_MESHES {
+        files.add(path, text);
+    }
+    ModelSource::Embedded {
+        name: "the embedded RV-6SL".into(),
+        kinematics: rl::controller::RV6SL_XML.to_string(),
+        scene: PathBuf::from("rv6sl.xml"),
+        files: Arc::new(files),
+    }
+}
 
 /// Arguments of `rl view`.
 #[derive(Args, Debug, Clone)]
@@ -24,10 +106,20 @@ pub struct ViewArgs {
     /// or .wrl) or a URDF.
     #[arg(long, value_name = "SCENE")]
     pub env: Option<PathBuf>,
-    /// Allowed collision pairs of the first model (SRDF; default: adjacent links are not
-    /// checked against each other).
-    #[arg(long, value_name = "FILE")]
-    pub srdf: Option<PathBuf>,
+    /// A robot's SRDF: its allowed collision pairs (default: adjacent links are not checked
+    /// against each other) and the named state it starts at (`home`, else `ready`, else the
+    /// first `<group_state>`). `I=FILE` for robot I; without it, the first --srdf is robot 0's,
+    /// the next robot 1's, … (repeatable).
+    #[arg(long, value_name = "[I=]FILE")]
+    pub srdf: Vec<String>,
+    /// Where a robot's world frame stands in the scene: x,y,z (m) or x,y,z,rx,ry,rz (m,
+    /// degrees about x, y, z applied as Rz·Ry·Rx, as RL's rlplan <world>); `I=POSE` for robot
+    /// I, else in order (repeatable).
+    #[arg(long, value_name = "[I=]POSE", allow_hyphen_values = true)]
+    pub place: Vec<String>,
+    /// URDF robots get a six-DOF root joint (q starts with x, y, z, qx, qy, qz, qw).
+    #[arg(long)]
+    pub floating_base: bool,
     /// A path to play back for the first model: the CSV of `rl plan --out` or
     /// `--trajectory`.
     #[arg(long, value_name = "FILE")]
@@ -55,30 +147,51 @@ pub struct ViewArgs {
     pub seconds: Option<u64>,
 }
 
-/// Runs `rl view`.
-pub fn run(args: ViewArgs) -> CliResult {
+/// `I=FILE` or `FILE` (a path whose text before `=` is not a number is a path).
+fn srdf_values(values: &[String]) -> Result<Vec<(usize, PathBuf)>, CliError> {
+    let mut out: Vec<(usize, PathBuf)> = Vec::with_capacity(values.len());
+    for (k, v) in values.iter().enumerate() {
+        let (i, file) = match v.split_once('=') {
+            Some((i, f)) if !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()) => {
+                (i.parse::<usize>().unwrap_or(usize::MAX), f)
+            }
+            _ => (k, v.as_str()),
+        };
+        if out.iter().any(|(j, _)| *j == i) {
+            return Err(CliError::usage(format!("--srdf: model {i} given twice")));
+        }
+        out.push((i, PathBuf::from(file)));
+    }
+    Ok(out)
+}
+
+/// The models, per-robot options and planning goal `args` give.
+fn load_options(args: &ViewArgs) -> Result<LoadOptions, CliError> {
+    let mut robots: Vec<RobotOptions> = Vec::new();
+    let mut goal = None;
     let models = if args.models.is_empty() {
-        vec![ModelSource::Text {
-            name: "the embedded RV-6SL".into(),
-            text: rl::controller::RV6SL_XML.to_string(),
-        }]
+        vec![embedded_rv6sl()]
     } else {
         let mut scenes = 0;
-        let models: Vec<ModelSource> = args
-            .models
-            .iter()
-            .map(|m| {
-                if rl_view::load::is_rl_scene(m) {
-                    scenes += 1;
-                    ModelSource::RlScene {
-                        scene: m.clone(),
-                        kinematics: args.kinematics.clone(),
-                    }
-                } else {
-                    ModelSource::File(m.clone())
-                }
-            })
-            .collect();
+        let mut models = Vec::with_capacity(args.models.len());
+        for m in &args.models {
+            if is_scenario(m) {
+                models.push(scenario_model(
+                    m,
+                    args.models.len(),
+                    &mut robots,
+                    &mut goal,
+                )?);
+            } else if rl_view::load::is_rl_scene(m) {
+                scenes += 1;
+                models.push(ModelSource::RlScene {
+                    scene: m.clone(),
+                    kinematics: args.kinematics.clone(),
+                });
+            } else {
+                models.push(ModelSource::File(m.clone()));
+            }
+        }
         if scenes > 1 {
             return Err(CliError::usage("give at most one RL scene (rlsg XML)"));
         }
@@ -93,14 +206,70 @@ pub fn run(args: ViewArgs) -> CliResult {
             "--kinematics goes with an RL scene (rlsg XML) among the models",
         ));
     }
+    fn robot(robots: &mut Vec<RobotOptions>, i: usize) -> &mut RobotOptions {
+        if robots.len() <= i {
+            robots.resize(i + 1, RobotOptions::default());
+        }
+        &mut robots[i]
+    }
+    for (i, x) in per_model(&args.place, "--place", |t| parse_place(t, "--place"))? {
+        let r = robot(&mut robots, i);
+        if r.place.is_some() {
+            return Err(CliError::usage(format!(
+                "--place: robot {i} comes from an RL scenario, which places it (<world>)"
+            )));
+        }
+        r.place = Some(x);
+    }
+    for (i, f) in srdf_values(&args.srdf)? {
+        robot(&mut robots, i).srdf = Some(f);
+    }
+    Ok(LoadOptions {
+        models,
+        env: args.env.clone(),
+        srdf: None,
+        path: args.path.clone(),
+        path_data: None,
+        package_dirs: args.package_dirs.clone(),
+        robots,
+        floating_base: args.floating_base,
+        goal,
+    })
+}
+
+/// An RL planning scenario among the models: the scene and kinematics rlPlanDemo shows (its
+/// viewer's model, RL's visual meshes), placed by its `<world>`, starting at its start, with
+/// its goal as a ghost. Only as the only model.
+fn scenario_model(
+    path: &Path,
+    count: usize,
+    robots: &mut Vec<RobotOptions>,
+    goal: &mut Option<Vec<f64>>,
+) -> Result<ModelSource, CliError> {
+    if count > 1 {
+        return Err(CliError::usage(format!(
+            "{}: an RL scenario is shown alone (it names its robot and scene)",
+            path.display()
+        )));
+    }
+    let s = ScenarioRobot::load(path, true)?;
+    robots.push(RobotOptions {
+        place: Some(s.place),
+        srdf: None,
+        start: Some(s.start),
+    });
+    *goal = Some(s.goal);
+    Ok(ModelSource::RlScene {
+        scene: s.scene,
+        kinematics: vec![s.kinematics],
+    })
+}
+
+/// Runs `rl view`.
+pub fn run(args: ViewArgs) -> CliResult {
+    let load = load_options(&args)?;
     let options = ViewerOptions {
-        load: LoadOptions {
-            models,
-            env: args.env.clone(),
-            srdf: args.srdf.clone(),
-            path: args.path.clone(),
-            package_dirs: args.package_dirs.clone(),
-        },
+        load,
         http: args.http,
         coach: (!args.no_coach).then_some(args.coach),
     };

@@ -98,7 +98,10 @@ impl Budget {
     }
 
     /// The same budget reading files from `files` instead of the file system.
-    pub(crate) fn with_files(mut self, files: Option<std::sync::Arc<super::EmbeddedFiles>>) -> Self {
+    pub(crate) fn with_files(
+        mut self,
+        files: Option<std::sync::Arc<super::EmbeddedFiles>>,
+    ) -> Self {
         self.files = files;
         self
     }

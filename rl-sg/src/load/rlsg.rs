@@ -77,8 +77,8 @@ pub fn scene_from_str_in(
         child(holder, "scene").ok_or_else(|| at(holder, SgError::missing("<scene>")))?;
     let href = attr(scene_node, "href")?;
     let wrl = dir_of(path).join(href);
-    let vrml = VrmlScene::load_in(&wrl, limits, files)
-        .map_err(|e| at(scene_node, SgError::nested(e)))?;
+    let vrml =
+        VrmlScene::load_in(&wrl, limits, files).map_err(|e| at(scene_node, SgError::nested(e)))?;
     let mut scene = Scene::new();
     for m in children(scene_node, "model") {
         let name = attr(m, "name")?;

@@ -6,7 +6,7 @@
 
 use std::time::Duration;
 
-use rl::controller::{RV6SL_XML, ViewHook};
+use rl::controller::ViewHook;
 use rl_rt::{StopFlag, StopLevel};
 use rl_view::ModelSource;
 
@@ -20,10 +20,8 @@ pub(super) fn start(args: &RunArgs) -> Result<Option<ViewHook>, CliError> {
     };
     let robot = match &args.model {
         Some(path) => ModelSource::File(path.clone()),
-        None => ModelSource::Text {
-            name: "the embedded RV-6SL".into(),
-            text: RV6SL_XML.into(),
-        },
+        // Drawn with RL's visual meshes.
+        None => crate::cli::view::embedded_rv6sl(),
     };
     // A planned run shows its obstacles (and the SRDF's allowed pairs) too.
     let load = rl_view::LoadOptions {
