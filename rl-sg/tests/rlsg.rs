@@ -1152,3 +1152,97 @@ fn the_tx60l_linked_through_its_rlkin_file_follows_the_dh_table_and_rls_ignores(
     }
     assert!(worst < 1e-12, "scene bodies off the DH table by {worst}");
 }
+
+/// Every vertex of every mesh of a body, in the body's frame.
+fn body_points(b: &rl_sg::Body) -> Vec<DVec3> {
+    b.shapes()
+        .iter()
+        .flat_map(|sh| {
+            let Geometry::Mesh(mesh) = sh.geometry() else {
+                panic!("{}: {} is not a mesh", b.name(), sh.geometry().kind())
+            };
+            let x = sh.local_pose();
+            mesh.vertices()
+                .iter()
+                .map(move |p| x.transform_point(*p))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The robot (model 0) of the visual scene `visual` and of the convex scene `convex`: the same
+/// body frames, each visual link inside its convex hull within `tol` (m), and each hull corner
+/// within `tol` of a visual vertex (the hull is the mesh's, not a larger one). Returns the
+/// worst of both, per link.
+fn visual_inside_convex(visual: &str, convex: &str, tol: f64) -> Vec<(f64, f64)> {
+    let visual = rlsg::load_scene(&rlsg_data().join(visual)).unwrap();
+    let convex = rlsg::load_scene(&rlsg_data().join(convex)).unwrap();
+    let (v, c) = (&visual.models()[0], &convex.models()[0]);
+    assert_eq!(v.name(), c.name());
+    assert_eq!(v.bodies().len(), c.bodies().len());
+    let mut out = Vec::new();
+    for (v, c) in v.bodies().iter().zip(c.bodies()) {
+        assert_eq!(v.name(), c.name());
+        assert!((v.pose().translation - c.pose().translation).length() < 1e-9);
+        let e = (v.pose().rotation - c.pose().rotation)
+            .abs()
+            .to_cols_array();
+        assert!(e.iter().all(|x| *x < 1e-6), "{}: {e:?}", v.name());
+        let mesh = body_points(v);
+        let (hull, hull_triangles) = body_mesh(c);
+        let planes = hull_planes(&hull, hull_triangles, tol);
+        let outside = |p: &DVec3| {
+            planes
+                .iter()
+                .map(|(n, d)| n.dot(*p) - d)
+                .fold(f64::MIN, f64::max)
+        };
+        let worst = mesh.iter().map(outside).fold(f64::MIN, f64::max);
+        let corner = hull
+            .iter()
+            .map(|h| {
+                mesh.iter()
+                    .map(|p| (*p - *h).length())
+                    .fold(f64::MAX, f64::min)
+            })
+            .fold(f64::MIN, f64::max);
+        println!(
+            "{}: {} shapes, {} vertices at most {worst:.1e} m outside the hull's {} planes; hull \
+             corners within {corner:.1e} m of a vertex",
+            v.name(),
+            v.shapes().len(),
+            mesh.len(),
+            planes.len()
+        );
+        out.push((worst, corner));
+    }
+    out
+}
+
+#[test]
+fn each_visual_rv6sl_and_tx60l_link_lies_in_its_convex_hull_which_it_spans() {
+    // RL's visual RV-6SL and TX60L (byte for byte from RL's repository, 2014) against the
+    // convex hulls RL made of them, as the Puma's above. Measured here: every vertex within
+    // 1.2e-8 m of its hull, every hull corner within 1.5e-8 m of a vertex (the files' 6 and
+    // 8 significant digits). The Puma's 2e-7 m is kept: a link moved or mistyped by more
+    // than that (a thousandth of a millimetre) fails.
+    const TOL: f64 = 2e-7;
+    for (visual, convex) in [
+        (
+            "mitsubishi-rv6sl_boxes.xml",
+            "mitsubishi-rv6sl_boxes.convex.xml",
+        ),
+        ("staeubli-tx60l_wall.xml", "staeubli-tx60l_wall.convex.xml"),
+    ] {
+        println!("{visual}");
+        let links = visual_inside_convex(visual, convex, TOL);
+        assert_eq!(links.len(), 7, "{visual}");
+        for (i, (worst, corner)) in links.into_iter().enumerate() {
+            assert!(worst <= TOL, "{visual} link{i}: a vertex {worst} m outside");
+            assert!(
+                corner <= TOL,
+                "{visual} link{i}: a hull corner {corner} m from the mesh"
+            );
+        }
+    }
+}

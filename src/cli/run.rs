@@ -672,6 +672,7 @@ fn drive<const B: usize, const J: usize>(
     for warning in run.warnings() {
         eprintln!("rl run: warning: {warning}");
     }
+    view::running(&view);
 
     // This (non-real-time) thread writes telemetry and shows progress while the loop runs.
     let mut display = ProgressDisplay::new(run.plan_duration_s());
@@ -730,6 +731,7 @@ fn drive<const B: usize, const J: usize>(
         seen.json
     });
     drop(fake);
+    view::ended(&view, &report);
     if let Some(path) = &args.plot {
         if let Err(e) = draw_plot(path, &report, &plot_rows) {
             eprintln!("rl run: warning: cannot draw {}: {e}", path.display());

@@ -13,6 +13,7 @@ import { DistanceView } from './distance.js';
 import { PathPlayer } from './path.js';
 import { LivePlot } from './plot.js';
 import { StatusLine } from './status.js';
+import { PlanView } from './plan.js';
 import * as THREE from 'three';
 
 const $ = (id) => document.getElementById(id);
@@ -31,6 +32,7 @@ const ik = new IkTarget(view, $('ik'), send);
 const distance = new DistanceView(view, $('labels'));
 const player = new PathPlayer($('path'), (model, q) => send({ type: 'set_q', model, q, source: 'path' }));
 const plot = new LivePlot($('plot'), $('plot-caption'));
+const plan = new PlanView(view);
 
 let scene = null;
 let state = null;
@@ -58,6 +60,7 @@ function changed(what) {
     const box = new THREE.Box3();
     view.scene.updateMatrixWorld(true); // Box3 reads world matrices; poses changed since the last render
     for (const m of models) box.expandByObject(m.root);
+    box.expandByObject(plan.root);
     if (env) box.expandByObject(env.root);
     view.frame(box);
   }
@@ -75,6 +78,7 @@ function onHello(msg) {
   panel.build(scene);
   ik.build(scene, models);
   player.build(scene);
+  plan.build(scene);
   plot.build(scene);
   status.setServerError(null);
   if (msg.state) onState(msg.state);
@@ -131,6 +135,10 @@ window.rlView = {
   dragTarget(model, pose) { return ik.drag(model, pose); },
   /** The live plot's tracking-error strip: {shown, max} (max |q_cmd − q|, degrees or mm). */
   plotTracking() { return plot.trackingShown(); },
+  /** What the plan shows: bodies per ghost (start, goal) and the trail's points. */
+  planShown() { return plan.shown(); },
+  /** Joint rows shown beyond their limits: [[model, joint, text], ...]. */
+  beyondLimits() { return panel.beyondLimits(); },
   /** Meshes drawn per model, and mesh file loading counts. */
   meshCounts() { return models.map((m) => m.meshCount()); },
   meshLoading() { return meshTotals(); },

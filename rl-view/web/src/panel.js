@@ -7,17 +7,27 @@ const DEG = 180 / Math.PI;
 /** Display unit of a joint: factor from SI (rad, m), label, step. */
 export function unitOf(joint) {
   if (joint.kind === 'prismatic' || joint.unit === 'm') return { k: 1000, label: 'mm', step: 0.1 };
+  // A floating base's quaternion coordinates: plain numbers.
+  if (joint.kind === 'quaternion') return { k: 1, label: '', step: 0.001 };
   return { k: DEG, label: '°', step: 0.1 };
 }
 
-function limits(joint) {
-  let lo = Number(joint.min);
-  let hi = Number(joint.max);
-  if (!Number.isFinite(lo) || !Number.isFinite(hi) || hi <= lo) {
-    if (joint.kind === 'prismatic') { lo = -1; hi = 1; } else { lo = -Math.PI; hi = Math.PI; }
-  }
-  return [lo, hi];
+/** Whether the joint has real limits (else the slider spans a default range). */
+function limited(joint) {
+  const lo = Number(joint.min);
+  const hi = Number(joint.max);
+  return joint.min !== null && joint.max !== null && Number.isFinite(lo) && Number.isFinite(hi) && hi > lo;
 }
+
+function limits(joint) {
+  if (limited(joint)) return [Number(joint.min), Number(joint.max)];
+  if (joint.kind === 'quaternion') return [-1, 1];
+  if (joint.kind === 'prismatic' || joint.unit === 'm') return [-1, 1];
+  return [-Math.PI, Math.PI];
+}
+
+/** Tolerance of the limit test: a value the server clamped to a limit is within it. */
+const LIMIT_EPS = 1e-9;
 
 export class JointPanel {
   /**
@@ -54,6 +64,15 @@ export class JointPanel {
         }
         w.append(sum, ul);
         box.appendChild(w);
+      }
+      if (m.initial_source) {
+        const init = document.createElement('div');
+        init.className = 'initial';
+        const from = m.initial_source.startsWith('srdf:')
+          ? `the SRDF's state "${m.initial_source.slice(5)}"`
+          : { start: 'the given start', home: "the model's home", neutral: 'zero (neutral)' }[m.initial_source] || m.initial_source;
+        init.textContent = `starts at ${from}`;
+        box.appendChild(init);
       }
       const source = document.createElement('div');
       source.className = 'source';
@@ -99,7 +118,7 @@ export class JointPanel {
     unit.textContent = u.label;
     row.append(name, range, num, unit);
     box.appendChild(row);
-    const r = { joint, u, lo, hi, range, num, active: false };
+    const r = { joint, u, lo, hi, range, num, row, name, active: false, beyond: false, limited: limited(joint) };
     const send = (display) => {
       const v = Math.min(hi, Math.max(lo, Number(display) / u.k));
       if (!Number.isFinite(v)) return;
@@ -130,12 +149,42 @@ export class JointPanel {
       entry.q = sm.q.slice(0, entry.rows.length);
       entry.source.textContent = `source: ${sm.source || '?'}`;
       entry.rows.forEach((r, i) => {
-        if (r.active || i >= sm.q.length) return;
+        if (i >= sm.q.length) return;
+        this.#markLimit(r, sm.q[i]);
+        if (r.active) return;
         const d = sm.q[i] * r.u.k;
         r.range.value = String(d);
-        r.num.value = d.toFixed(1);
+        r.num.value = d.toFixed(r.u.k === 1 ? 3 : 1);
       });
     }
+  }
+
+  /**
+   * A value beyond the joint's limit (sent by Coach, a path or a run: the slider cannot show
+   * it) is shown as such: the row turns red, the field keeps the true value and says which
+   * limit it passes and by how much.
+   */
+  #markLimit(r, v) {
+    const over = r.limited && (v > r.hi + LIMIT_EPS || v < r.lo - LIMIT_EPS);
+    r.beyond = over;
+    r.row.classList.toggle('beyond', over);
+    if (over) {
+      const [which, lim] = v > r.hi ? ['upper', r.hi] : ['lower', r.lo];
+      const text = `${r.joint.name}: ${(v * r.u.k).toFixed(1)} ${r.u.label} is beyond its ${which} limit `
+        + `${(lim * r.u.k).toFixed(1)} ${r.u.label} by ${(Math.abs(v - lim) * r.u.k).toFixed(1)} ${r.u.label}`;
+      r.num.title = text;
+      r.name.title = text;
+      r.beyondText = text;
+    } else {
+      r.num.title = '';
+      r.name.title = `${r.joint.name} (${r.joint.kind}) ${(r.lo * r.u.k).toFixed(1)} … ${(r.hi * r.u.k).toFixed(1)} ${r.u.label}`;
+      r.beyondText = null;
+    }
+  }
+
+  /** Test hook: [[model, joint, text], ...] of the rows shown beyond their limits. */
+  beyondLimits() {
+    return this.models.flatMap((e) => e.rows.flatMap((r, i) => (r.beyond ? [[e.desc.index, i, r.beyondText]] : [])));
   }
 
   /** Test hook: moves slider `joint` of model `model` to `value` (SI: rad or m), as a user would. */

@@ -55,6 +55,16 @@ export class PathPlayer {
     this.time.className = 'time';
     bar.append(this.button, this.slider, this.time);
     this.root.append(h, bar);
+    const tm = p.timing;
+    if (tm && tm.from === 'speed_limits') {
+      const note = document.createElement('p');
+      note.className = 'note';
+      const assumed = (tm.assumed_for || []).length
+        ? `; no limit for ${tm.assumed_for.join(', ')}: ${tm.assumed_speed} assumed`
+        : '';
+      note.textContent = `timed at the joints' speed limits (the file has no times)${assumed}`;
+      this.root.append(note);
+    }
     this.t = p.t[0];
     this.#show();
   }

@@ -50,7 +50,8 @@ export function loadMesh(url, format, manager, material, done) {
 
 /**
  * One shape of the scene JSON as an Object3D in its body's frame. Mesh shapes are filled in
- * when their file has loaded; `onMesh(err)` is called then (err null on success).
+ * when their file has loaded; `onMesh(err)` is called then (err null on success). Inline
+ * meshes (triangles in the JSON) are drawn at once and reported done just after.
  */
 export function buildShape(shape, material, manager, onMesh) {
   const holder = new THREE.Group();
@@ -89,6 +90,9 @@ export function buildShape(shape, material, manager, onMesh) {
     case 'mesh': {
       if (Array.isArray(shape.vertices) && Array.isArray(shape.triangles)) {
         holder.add(inlineMesh(shape, material));
+        // Drawn already; reported like a loaded file (the caller counted it as pending), from
+        // a task of its own as a file's load would be.
+        queueMicrotask(() => onMesh(null));
         return holder;
       }
       const format = shape.format || meshFormat(shape.url);

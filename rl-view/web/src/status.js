@@ -1,5 +1,6 @@
 // The status line: connection (connected / reconnecting), the Coach listener's counters,
-// mesh loading, and the last error the server reported for a page message.
+// mesh loading, a controller run (running; ended, and how), and the last error the server
+// reported for a page message.
 
 export class StatusLine {
   constructor(el) {
@@ -8,6 +9,7 @@ export class StatusLine {
     this.coach = null;
     this.seq = null;
     this.meshes = null;
+    this.run = null;
     this.serverError = null;
     this.render();
   }
@@ -16,6 +18,7 @@ export class StatusLine {
 
   setState(state) {
     this.coach = state.coach || null;
+    this.run = state.run || null;
     this.seq = state.seq;
     this.render();
   }
@@ -45,6 +48,11 @@ export class StatusLine {
       const m = this.meshes;
       const pend = m.pending > 0 ? `, ${m.pending} loading` : '';
       parts.push([m.failed ? 'err' : '', `meshes: ${m.loaded} loaded${pend}${m.failed ? `, ${m.failed} failed` : ''}`]);
+    }
+    if (this.run) {
+      const r = this.run;
+      const head = r.ended ? 'run ended' : 'run';
+      parts.push([r.ok ? 'ok' : 'bad', `${head}: ${r.summary}`]);
     }
     if (this.seq !== null && this.seq !== undefined) parts.push(['', `state #${this.seq}`]);
     if (this.serverError) parts.push(['err', `server: ${this.serverError}`]);

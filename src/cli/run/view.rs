@@ -47,6 +47,39 @@ pub(super) fn start(args: &RunArgs) -> Result<Option<ViewHook>, CliError> {
     Ok(Some(hook))
 }
 
+/// Tells the page how the run ended (the report's end and failure, in one line), and that it
+/// is running until then.
+pub(super) fn ended(view: &Option<ViewHook>, report: &rl::controller::RunReport) {
+    let Some(view) = view else { return };
+    let how = match (&report.failure, &report.end) {
+        (Some(why), _) => format!("failed: {why}"),
+        (None, Some(end)) => end.to_string(),
+        (None, None) => "the loop did not report how it ended".into(),
+    };
+    let ok = report.exit_code() == 0;
+    view.viewer().set_run_status(rl_view::RunStatus {
+        ended: true,
+        ok,
+        summary: format!(
+            "{how} after {:.2} s ({:.2} of {:.2} s of the trajectory), exit code {}",
+            report.wall_time_s,
+            report.trajectory_time_s,
+            report.plan_duration_s,
+            report.exit_code()
+        ),
+    });
+}
+
+/// Tells the page a run is going.
+pub(super) fn running(view: &Option<ViewHook>) {
+    let Some(view) = view else { return };
+    view.viewer().set_run_status(rl_view::RunStatus {
+        ended: false,
+        ok: true,
+        summary: "running".into(),
+    });
+}
+
 /// With `--view-hold`, keeps the viewer serving after the report until a (further) Ctrl-C;
 /// otherwise it stops with the run.
 pub(super) fn hold(view: Option<ViewHook>, hold: bool, stop: &StopFlag) {
