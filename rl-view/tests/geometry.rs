@@ -168,7 +168,11 @@ fn a_planned_path_is_in_the_scene() {
     let v = Viewer::start(&o).unwrap();
     let scene = get_json(v.http_addr(), "/api/scene");
     assert_eq!(scene["path"]["model"], 0);
-    assert_eq!(scene["path"]["t"], json!([0.0, 1.0]));
+    // No times in the file: timed at the joints' speed limits (every ur5 joint of this URDF:
+    // 0.5 rad/s), the slowest joint sets the segment: wrist_3 moves 0.6 rad, 1.2 s.
+    assert_eq!(scene["path"]["t"], json!([0.0, 0.6 / 0.5]));
+    assert_eq!(scene["path"]["timing"]["from"], "speed_limits");
+    assert_eq!(scene["path"]["timing"]["assumed_for"], json!([]));
     assert_eq!(scene["path"]["q"][1], json!([0.1, 0.2, 0.3, 0.4, 0.5, 0.6]));
     drop(v);
 

@@ -18,6 +18,14 @@
 //      drawn red (read from the three.js materials) and restored when the arm moves away; the
 //      distance line's label shows the state's distance.
 //   7. An RL XML model (no meshes) is drawn from its bodies' shapes and follows Coach too.
+//   8. The default robot (the RV-6SL with RL's visual VRML meshes): every inline mesh counts
+//      as loaded (nothing left "loading"); a Coach value beyond a joint's limit is shown as
+//      such; a Coach error is shown, and cleared by the next good line.
+//   9. An RL scenario (`rl view SCENARIO.xml --path PLAN.csv`, the path from `rl plan`): the
+//      robot at the scenario's start, start and goal ghosts and the tool's trail, shown before
+//      and while the path plays; the path's times from the joints' speed limits.
+//  10. `rl run --view`: live q and q_cmd, the tracking error plotted, and after the run the
+//      page says it has ended and how.
 // Screenshots go to --out (default <repo>/target/view-screenshots). Exit 0 when all pass.
 
 import { chromium } from 'playwright-core';
@@ -477,17 +485,104 @@ async function collisionSteps(obstacleAt) {
 }
 
 async function defaultRobotSteps() {
-  // `rl view` with no model: the embedded default robot.
+  // `rl view` with no model: the embedded default robot, with RL's visual meshes.
   const server = await startServer(['--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
   const page = await openPage(`${server.http}/`);
-  const info = await page.evaluate(() => ({ name: rlView.scene.models[0].name, joints: rlView.scene.models[0].joints.length, meshes: rlView.meshCounts() }));
-  check(info.joints > 0 && info.meshes[0] > 0, `the default robot is drawn (${JSON.stringify(info)})`);
+  const info = await page.evaluate(() => ({
+    name: rlView.scene.models[0].name, joints: rlView.scene.models[0].joints.length, meshes: rlView.meshCounts(),
+    shapes: rlView.scene.models[0].bodies.reduce((n, b) => n + b.shapes.filter((x) => x.kind === 'mesh').length, 0),
+    loading: rlView.meshLoading(), status: rlView.statusText(),
+  }));
+  check(info.joints === 6 && info.shapes >= 7 && info.meshes[0] >= info.shapes, `the default robot is drawn with its visual meshes (${JSON.stringify(info)})`);
+  check(info.loading.pending === 0 && info.loading.loaded === info.shapes && !/loading/.test(info.status),
+    `every inline mesh counts as loaded, none left loading (${JSON.stringify(info.loading)}; "${info.status}")`);
   await page.screenshot({ path: path.join(outDir, '12-default-robot.png') });
   const plotted = await page.evaluate(() => rlView.plotTracking());
   check(!plotted.shown, 'no tracking-error strip without q_cmd');
-  ok(`rl view with no model: ${info.name}, ${info.joints} joints, ${info.meshes[0]} meshes drawn; the plot shows q only`);
+  ok(`rl view with no model: ${info.name}, ${info.joints} joints, ${info.shapes} visual meshes (RL's VRML), ${info.loading.loaded} loaded, none loading; the plot shows q only`);
+
+  // A value beyond a joint's limit (Coach takes what the robot reports) is shown as such.
+  const lim = await page.evaluate(() => rlView.scene.models[0].joints.map((j) => [j.min, j.max]));
+  const beyond = [lim[0][1] + 0.2, 0.3, 1.2, 0, 0.5, 0];
+  const coach = await coachClient(server.coach);
+  coach.joints(0, beyond);
+  await waitQ(page, 0, beyond, 'coach');
+  const marked = await page.evaluate(() => ({ rows: rlView.beyondLimits(), red: document.querySelectorAll('.joint.beyond').length }));
+  check(marked.rows.length === 1 && marked.rows[0][1] === 0 && /beyond its upper limit/.test(marked.rows[0][2]) && marked.red === 1,
+    `joint 0 at its limit + 0.2 rad is marked beyond it (${JSON.stringify(marked)})`);
+  await page.screenshot({ path: path.join(outDir, '16-beyond-limit.png') });
+  coach.joints(0, [0, 0.3, 1.2, 0, 0.5, 0]);
+  await waitQ(page, 0, [0, 0.3, 1.2, 0, 0.5, 0], 'coach');
+  const cleared = await page.evaluate(() => rlView.beyondLimits().length);
+  check(cleared === 0, `back within the limits, nothing marked (${cleared})`);
+  ok(`a Coach value ${(beyond[0] * 180 / Math.PI).toFixed(1)}° beyond joint 0's ${(lim[0][1] * 180 / Math.PI).toFixed(1)}° limit is shown: "${marked.rows[0][2]}"`);
+
+  // A Coach error is shown while it is the latest word, and a good line clears it.
+  coach.raw('2 0 1 2\n');
+  await page.waitForFunction(() => /coach error:/.test(rlView.statusText()), null, { timeout: WAIT_MS });
+  const errText = await page.evaluate(() => rlView.state.coach.last_error);
+  await page.screenshot({ path: path.join(outDir, '17-coach-error.png') });
+  coach.joints(0, [0.1, 0.3, 1.2, 0, 0.5, 0]);
+  await waitQ(page, 0, [0.1, 0.3, 1.2, 0, 0.5, 0], 'coach');
+  const after = await page.evaluate(() => rlView.statusText());
+  check(!/coach error/.test(after) && /1 rejected/.test(after), `a good line clears the error shown, the count stays ("${after}")`);
+  ok(`Coach error shown ("coach error: ${errText}"), cleared by the next good line`);
+  coach.close();
   await page.close();
   server.kill();
+}
+
+async function scenarioSteps() {
+  // rlPlanDemo's view of RL's Puma scenario: the kinematic world turned 90° about z.
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'rl-view-scenario-'));
+  const scenario = data('rlplan/unimation-puma560_boxes_rrtConCon.xml');
+  const csv = path.join(dir, 'plan.csv');
+  const planned = await new Promise((resolve) => {
+    const p = spawn(rlBin, ['plan', scenario, '--time', '20s', '--out', csv], { cwd: repo, stdio: ['ignore', 'ignore', 'pipe'] });
+    let err = '';
+    p.stderr.on('data', (d) => { err += d; });
+    p.once('exit', (code) => resolve({ code, err }));
+  });
+  check(planned.code === 0, `rl plan solved the Puma scenario (exit ${planned.code}) ${planned.err}`);
+  const server = await startServer([scenario, '--path', csv, '--http', '127.0.0.1:0', '--coach', '127.0.0.1:0']);
+  const page = await openPage(`${server.http}/`);
+  const info = await page.evaluate(() => ({
+    plan: rlView.planShown(), loading: rlView.meshLoading(), status: rlView.statusText(),
+    start: rlView.scene.plan.start.q, goal: rlView.scene.plan.goal.q, q: rlView.state.models[0].q,
+    bodies: rlView.scene.models[0].bodies.length, path: rlView.scene.path,
+    joints: rlView.scene.models[0].joints, initial: document.querySelector('.initial')?.textContent,
+  }));
+  check(info.plan.start === info.bodies && info.plan.goal === info.bodies && info.plan.trail >= 2,
+    `start and goal ghosts of all ${info.bodies} bodies and a trail (${JSON.stringify(info.plan)})`);
+  check(info.loading.pending === 0 && !/loading/.test(info.status), `the VRML meshes are all in (${JSON.stringify(info.loading)})`);
+  check(info.q.every((v, i) => Math.abs(v - info.start[i]) < 1e-12), `the robot starts at the scenario's start (${info.q})`);
+  check(/starts at the given start/.test(info.initial || ''), `the panel says where it starts (${info.initial})`);
+  await checkDrawnAtState(page, 0, 'scenario at its start');
+  // Waypoints without times: each segment as long as its slowest joint needs at its limit.
+  const p = info.path;
+  check(p.timing && p.timing.from === 'speed_limits', `the path is timed from the speed limits (${JSON.stringify(p.timing)})`);
+  let worstDt = 0;
+  for (let k = 1; k < p.q.length; k++) {
+    const need = Math.max(...p.q[k].map((v, j) => Math.abs(v - p.q[k - 1][j]) / (info.joints[j].max_speed ?? p.timing.assumed_speed)));
+    worstDt = Math.max(worstDt, Math.abs((p.t[k] - p.t[k - 1]) - need));
+  }
+  check(worstDt < 1e-9, `segment times are max |Δq|/v_max (worst difference ${worstDt} s)`);
+  await page.screenshot({ path: path.join(outDir, '14-scenario-start.png') });
+  // Play: the ghosts and the trail stay while the robot moves along the path.
+  await page.click('#path button');
+  const half = p.t.at(-1) / 2;
+  await page.waitForFunction((h) => rlView.state.models[0].source === 'path' && Number(document.querySelector('#path input[type=range]').value) >= h, half, { timeout: WAIT_MS + 1000 * p.t.at(-1) });
+  const during = await page.evaluate(() => rlView.planShown());
+  await page.screenshot({ path: path.join(outDir, '15-scenario-playing.png') });
+  check(during.start === info.bodies && during.goal === info.bodies && during.trail === info.plan.trail, `ghosts and trail stay while it plays (${JSON.stringify(during)})`);
+  // The rest by the time slider (the play's second half adds nothing to check).
+  await page.$eval('#path input[type=range]', (el, v) => { el.value = String(v); el.dispatchEvent(new Event('input')); }, p.t.at(-1));
+  await waitQ(page, 0, info.goal, 'path');
+  await checkDrawnAtState(page, 0, 'scenario at its goal');
+  ok(`Puma scenario: start/goal ghosts (${info.bodies} bodies each), a trail of ${info.plan.trail} tool points; the path of ${p.q.length} waypoints takes ${p.t.at(-1).toFixed(2)} s at the speed limits plays (half of it, then the slider to the goal)`);
+  await page.close();
+  server.kill();
+  fs.rmSync(dir, { recursive: true, force: true });
 }
 
 async function runViewSteps() {
@@ -512,6 +607,14 @@ async function runViewSteps() {
     check(Date.now() < until, `rl run did not end its run in ${WAIT_MS} ms`);
     await new Promise((r) => setTimeout(r, 50));
   }
+  // The page says the run has ended, and how.
+  const page2 = await openPage(`${run.http}/`);
+  await page2.waitForFunction(() => /run ended: /.test(rlView.statusText()), null, { timeout: WAIT_MS });
+  const ended = await page2.evaluate(() => ({ text: rlView.statusText(), run: rlView.state.run }));
+  check(ended.run && ended.run.ended && /exit code \d/.test(ended.run.summary), `the state carries the run's end (${JSON.stringify(ended.run)})`);
+  await page2.screenshot({ path: path.join(outDir, '18-run-ended.png') });
+  ok(`after the run the page says: "${ended.text.match(/run ended: [^●]*?exit code \d+/)[0]}"`);
+  await page2.close();
   run.kill();
   const code = await run.exited;
   // SIGTERM ends the hold: the run's own status (0, or 1 if the run faulted: on this 2-core
@@ -663,6 +766,7 @@ try {
   await rlModelSteps();
   await formatsAndPathSteps();
   await defaultRobotSteps();
+  await scenarioSteps();
   await runViewSteps();
   console.log(`screenshots: ${outDir}`);
   console.log(`${passed} passed, 0 failed`);
