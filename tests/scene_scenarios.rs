@@ -208,3 +208,41 @@ fn rl_plan_solves_the_rv6sl_and_tx60l_scenarios() {
         assert!(v["waypoints_after"].as_u64().unwrap() >= 2, "{rel}: {v}");
     }
 }
+
+#[test]
+fn every_rl_example_model_and_scenario_loads() {
+    // RL's example files (byte for byte from RL's repository; rl-sg's tests load the rlsg
+    // and VRML ones): every kinematic model loads (but RL's one XSLT stylesheet), every
+    // planning scenario loads and builds (kinematics, scene, the robot linked and placed).
+    let mut n = 0;
+    for dir in ["rlmdl", "rlkin"] {
+        for e in std::fs::read_dir(data(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if !p.extension().is_some_and(|x| x == "xml") {
+                continue;
+            }
+            let r = rl_core::loader::load_file::<64>(&p);
+            if p.ends_with("planar2.param.xml") {
+                // An XSLT stylesheet that makes planar2 with a parameter (RL applies it with
+                // libxslt): not read yet, refused with a clear reason.
+                let e = r.map(|_| ()).unwrap_err().to_string();
+                assert!(e.contains("planar2.param.xml") && e.contains("XSLT"), "{e}");
+                continue;
+            }
+            r.unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            n += 1;
+        }
+    }
+    let mut scenarios = 0;
+    for e in std::fs::read_dir(data("rlplan")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "xml") {
+            let sc = Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            sc.build()
+                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            scenarios += 1;
+        }
+    }
+    println!("{n} kinematic models, {scenarios} scenarios");
+    assert!(n >= 14 && scenarios == 10, "{n} {scenarios}");
+}

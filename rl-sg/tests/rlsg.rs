@@ -825,46 +825,13 @@ fn each_visual_puma_link_lies_in_its_convex_hull_which_it_spans() {
     // links' ≤ 0.7 m radius). 2e-7 m covers that threefold and is below the visual files'
     // last digit: a vertex mistyped in its last place that leaves the hull is caught.
     const TOL: f64 = 2e-7;
-    let visual = rlsg::load_scene(&rlsg_data().join("unimation-puma560.xml")).unwrap();
-    let convex = rlsg::load_scene(&rlsg_data().join("unimation-puma560.convex.xml")).unwrap();
-    for (v, c) in visual.models()[0]
-        .bodies()
-        .iter()
-        .zip(convex.models()[0].bodies())
-    {
-        let (mesh, _) = body_mesh(v);
-        let (hull, hull_triangles) = body_mesh(c);
-        let planes = hull_planes(&hull, hull_triangles, TOL);
-        assert!(planes.len() + 3 >= hull_triangles.len(), "{}", v.name());
-        // Every vertex of the mesh (and so every point of it) is inside the hull.
-        let outside = |p: &DVec3| {
-            planes
-                .iter()
-                .map(|(n, d)| n.dot(*p) - d)
-                .fold(f64::MIN, f64::max)
-        };
-        let worst = mesh.iter().map(outside).fold(f64::MIN, f64::max);
-        // And the hull is the mesh's: each of its corners is a vertex of the mesh.
-        let corner = hull
-            .iter()
-            .map(|h| {
-                mesh.iter()
-                    .map(|p| (*p - *h).length())
-                    .fold(f64::MAX, f64::min)
-            })
-            .fold(f64::MIN, f64::max);
-        println!(
-            "{}: {} vertices at most {worst:.1e} m outside the hull's {} planes; hull corners \
-             within {corner:.1e} m of a vertex",
-            v.name(),
-            mesh.len(),
-            planes.len()
-        );
-        assert!(worst <= TOL, "{}: a vertex {worst} m outside", v.name());
+    let links = visual_inside_convex("unimation-puma560.xml", "unimation-puma560.convex.xml", TOL);
+    assert_eq!(links.len(), 7);
+    for (i, (worst, corner)) in links.into_iter().enumerate() {
+        assert!(worst <= TOL, "link{i}: a vertex {worst} m outside");
         assert!(
             corner <= TOL,
-            "{}: a hull corner {corner} m from the mesh",
-            v.name()
+            "link{i}: a hull corner {corner} m from the mesh"
         );
     }
 }
@@ -1244,5 +1211,109 @@ fn each_visual_rv6sl_and_tx60l_link_lies_in_its_convex_hull_which_it_spans() {
                 "{visual} link{i}: a hull corner {corner} m from the mesh"
             );
         }
+    }
+}
+
+#[test]
+fn the_visual_rv6sl_and_tx60l_collide_only_where_their_convex_hulls_do() {
+    // As the Puma's above: RL's visual scene beside its convex one, both linked to RL's rlkin
+    // model and placed as RL's scenarios place them (the TX60L 0.625 m before its wall), at 80
+    // random configurations within the joint limits each (80: 3 s here). A hull contains its mesh: a body pair
+    // the meshes collide is one the hulls collide (or, for two links of the robot, one hull
+    // wholly inside the other), a pair only the hulls collide has the meshes apart, and a mesh
+    // is never nearer an obstacle than its hull.
+    const TOL: f64 = 1e-6;
+    for (visual_file, convex_file, rlkin, x) in [
+        (
+            "mitsubishi-rv6sl_boxes.xml",
+            "mitsubishi-rv6sl_boxes.convex.xml",
+            "mitsubishi-rv6sl.xml",
+            0.0,
+        ),
+        (
+            "staeubli-tx60l_wall.xml",
+            "staeubli-tx60l_wall.convex.xml",
+            "staeubli-tx60l.xml",
+            -0.625,
+        ),
+    ] {
+        let rlkin = repo().join("tests/data/rlkin").join(rlkin);
+        let loaded = rl_core::loader::load_file::<8>(&rlkin).unwrap();
+        let load = |f: &str| {
+            let mut s = rlsg::load_scene(&rlsg_data().join(f)).unwrap();
+            let m = s.model_mut(ModelId(0)).unwrap();
+            rlsg::link_kinematics(m, &rlkin, &loaded).unwrap();
+            m.set_base(PlueckerTransform::new(
+                glam::DMat3::IDENTITY,
+                DVec3::new(x, 0.0, 0.0),
+            ))
+            .unwrap();
+            s
+        };
+        let (mut convex, mut visual) = (load(convex_file), load(visual_file));
+        let k = &loaded.model;
+        let limits: Vec<(f64, f64)> = (0..k.nq())
+            .map(|i| {
+                let l = k.limits(i);
+                (
+                    l.lower.max(-std::f64::consts::PI),
+                    l.upper.min(std::f64::consts::PI),
+                )
+            })
+            .collect();
+        let mut r = Rng::new(60);
+        let mut data = Box::new(rl_core::Data::<8>::new());
+        let (mut hits, mut hull_only, mut nearer, mut worst_gain) = (0, 0, 0, 0.0_f64);
+        for c in 0..80 {
+            let q: Vec<f64> = limits.iter().map(|(lo, hi)| r.range(*lo, *hi)).collect();
+            for s in [&mut convex, &mut visual] {
+                s.set_configuration(ModelId(0), k, &mut data, &q).unwrap();
+            }
+            let hits_c = convex.colliding_bodies(&CollisionFilter::All);
+            let hits_v = visual.colliding_bodies(&CollisionFilter::All);
+            hits += hits_v.len();
+            for h in hits_v.iter().filter(|h| !hits_c.contains(h)) {
+                let nested = h.0.model == 0 && h.1.model == 0;
+                assert!(
+                    nested,
+                    "{visual_file} config {c}: the meshes of {} and {} collide, their hulls not",
+                    visual.body_name(h.0),
+                    visual.body_name(h.1)
+                );
+            }
+            for h in hits_c.iter().filter(|h| !hits_v.contains(h)) {
+                let d = visual.body_distance(h.0, h.1).unwrap().distance;
+                assert!(d > 0.0, "{visual_file} config {c}: {h:?} {d}");
+                hull_only += 1;
+            }
+            // Each link against the obstacle body, where neither collides.
+            for body in 0..visual.models()[0].bodies().len() {
+                let a = rl_sg::BodyId { model: 0, body };
+                let b = rl_sg::BodyId { model: 1, body: 0 };
+                let (Some(dc), Some(dv)) = (convex.body_distance(a, b), visual.body_distance(a, b))
+                else {
+                    continue;
+                };
+                if dc.distance > 0.0 {
+                    assert!(
+                        dv.distance >= dc.distance - TOL,
+                        "{visual_file} config {c}: link{body}'s mesh {} m from the obstacle, its hull {} m",
+                        dv.distance,
+                        dc.distance
+                    );
+                    nearer += 1;
+                    worst_gain = worst_gain.max(dv.distance - dc.distance);
+                }
+            }
+        }
+        println!(
+            "{visual_file}: 80 configurations: {hits} colliding body pairs for the meshes, \
+             {hull_only} more for the hulls only (the meshes apart); {nearer} link–obstacle \
+             distances, the mesh at most {worst_gain:.3} m farther than its hull"
+        );
+        assert!(
+            hits > 0 && nearer > 0,
+            "{visual_file}: the test must see both cases"
+        );
     }
 }

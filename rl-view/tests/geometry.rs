@@ -3,8 +3,6 @@
 
 mod support;
 
-use std::path::PathBuf;
-
 use rl_core::algo::{forward_position, tool_pose};
 use rl_core::loader::{self, UrdfOptions};
 use rl_view::Viewer;
@@ -85,14 +83,6 @@ fn ik_reaches_a_pose_computed_by_forward_kinematics_and_reports_failures() {
             .is_some_and(|r| r.contains("quaternion"))
     });
     assert_eq!(s["ik"]["ok"], false);
-}
-
-fn temp_file(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rl-view-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
 }
 
 #[test]

@@ -10,14 +10,6 @@ use rl_view::{RobotOptions, Viewer};
 use serde_json::json;
 use support::*;
 
-fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("rl-view-scenes-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
 #[test]
 fn a_robot_starts_at_its_srdfs_named_state() {
     // ur5.srdf names "home" (shoulder_lift and wrist_1 at -1.57) for the manipulator.

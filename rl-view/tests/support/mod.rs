@@ -185,3 +185,12 @@ pub fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
         .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs()))
         .fold(0.0, f64::max)
 }
+
+/// Writes `text` to `name` in a directory of this test process and returns its path.
+pub fn temp_file(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rl-view-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
