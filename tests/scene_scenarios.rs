@@ -218,7 +218,7 @@ fn every_rl_example_model_and_scenario_loads() {
     for dir in ["rlmdl", "rlkin"] {
         for e in std::fs::read_dir(data(dir)).unwrap() {
             let p = e.unwrap().path();
-            if !p.extension().is_some_and(|x| x == "xml") {
+            if p.extension().is_none_or(|x| x != "xml") {
                 continue;
             }
             let r = rl_core::loader::load_file::<64>(&p);
