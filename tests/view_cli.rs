@@ -215,3 +215,55 @@ fn rl_run_over_coach_moves_the_robot_in_rl_view_as_it_happens() {
     let _ = view.kill();
     let _ = view.wait();
 }
+
+/// `rl view`'s per-robot flags and RL scenarios: what is refused, and why.
+#[test]
+fn view_takes_per_robot_flags_and_refuses_what_does_not_fit() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let ur5 = format!("{root}/tests/data/mbm/ur5/ur5.urdf");
+    let srdf = format!("{root}/tests/data/mbm/ur5/ur5.srdf");
+    let scenario = format!("{root}/tests/data/rlplan/unimation-puma560_boxes_rrtConCon.xml");
+    let args = ["--http", "127.0.0.1:0", "--no-coach", "--seconds", "0"];
+    let run = |extra: &[&str]| rl(&[&["view"][..], extra, &args[..]].concat());
+    // Two ur5s, the second placed and given the SRDF: loads.
+    let out = run(&[
+        &ur5,
+        &ur5,
+        "--place",
+        "1=0,1,0,0,0,90",
+        "--srdf",
+        &format!("1={srdf}"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let refused = |extra: &[&str], why: &str| {
+        let out = run(extra);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(why), "{extra:?}: {err}");
+    };
+    refused(
+        &[&ur5, "--place", "2=0,0,0"],
+        "options for 3 robots given, 1 robots loaded",
+    );
+    refused(&[&ur5, "--place", "0,0"], "--place: 2 values given");
+    refused(
+        &[&ur5, "--place", "0,0,0", "--place", "0=1,1,1"],
+        "model 0 given twice",
+    );
+    refused(
+        &[&scenario, "--place", "0=0,0,0"],
+        "comes from an RL scenario",
+    );
+    refused(&[&scenario, &ur5], "an RL scenario is shown alone");
+    // A scenario alone loads (RL's visual Puma, placed by its <world>).
+    let out = run(&[&scenario]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
