@@ -53,19 +53,7 @@ fn planner_poses(sc: &Scenario, q: &[f64]) -> Vec<[f64; 7]> {
     checker.scene().models()[robot.0]
         .bodies()
         .iter()
-        .map(|b| {
-            let x = b.pose();
-            let r = x.quaternion();
-            [
-                x.translation.x,
-                x.translation.y,
-                x.translation.z,
-                r.x,
-                r.y,
-                r.z,
-                r.w,
-            ]
-        })
+        .map(|b| rl_view::scene_json::pose7(b.pose()))
         .collect()
 }
 

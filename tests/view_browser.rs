@@ -2,8 +2,11 @@
 //! driving Debian's headless Chromium, WebGL on SwiftShader) against this build's `rl`. The
 //! script loads the page for ur5 (URDF) and an RL XML model, moves the robot with Coach joint
 //! commands, a slider and the IK target, checks collisions drawn red, the distance label and
-//! the reconnect after a server restart, and measures screenshot differences (see the script's
-//! head). Screenshots go to `target/view-screenshots/`.
+//! the reconnect after a server restart, the default robot's visual meshes all loaded, a value
+//! beyond a joint's limit and a Coach error (cleared by a good line) shown, an RL scenario's
+//! start and goal ghosts and tool trail before and while its planned path plays, and the page
+//! saying how an `rl run --view` run ended; and measures screenshot differences (see the
+//! script's head). Screenshots go to `target/view-screenshots/`.
 //!
 //! Prints `SKIPPED:` and passes when node, the npm packages (`rl-view/web/node_modules`, from
 //! `npm ci`) or Chromium (`/usr/bin/chromium`, or `$RL_CHROMIUM`) are missing: scripts/test

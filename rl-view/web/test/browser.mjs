@@ -579,7 +579,7 @@ async function scenarioSteps() {
   await page.$eval('#path input[type=range]', (el, v) => { el.value = String(v); el.dispatchEvent(new Event('input')); }, p.t.at(-1));
   await waitQ(page, 0, info.goal, 'path');
   await checkDrawnAtState(page, 0, 'scenario at its goal');
-  ok(`Puma scenario: start/goal ghosts (${info.bodies} bodies each), a trail of ${info.plan.trail} tool points; the path of ${p.q.length} waypoints takes ${p.t.at(-1).toFixed(2)} s at the speed limits plays (half of it, then the slider to the goal)`);
+  ok(`Puma scenario: start/goal ghosts (${info.bodies} bodies each), a trail of ${info.plan.trail} tool points; the path of ${p.q.length} waypoints takes ${p.t.at(-1).toFixed(2)} s at the speed limits and plays (half of it, then the slider to the goal)`);
   await page.close();
   server.kill();
   fs.rmSync(dir, { recursive: true, force: true });
