@@ -185,22 +185,32 @@ fn telemetry_csv_has_one_row_per_cycle() {
     let mut reader = csv::Reader::from_path(&path).expect("csv written");
     let headers = reader.headers().expect("header").clone();
     let _ = std::fs::remove_file(&path);
-    assert_eq!(headers.len(), 2 + 3 * 6 + 2, "{headers:?}");
+    assert_eq!(headers.len(), 2 + 3 * 6 + 3, "{headers:?}");
     assert_eq!(&headers[0], "cycle");
     assert_eq!(&headers[2], "cmd_joint0");
     assert_eq!(&headers[8], "meas_joint0");
-    assert_eq!(&headers[headers.len() - 1], "step_us");
+    assert_eq!(&headers[headers.len() - 2], "step_us");
+    assert_eq!(&headers[headers.len() - 1], "state");
     let mut rows = 0u64;
+    let mut states = Vec::new();
     for (i, record) in reader.records().enumerate() {
         let record = record.expect("row parses");
         assert_eq!(record.len(), headers.len());
         let values: Vec<f64> = record
             .iter()
-            .map(|f| f.parse().expect("every field is a number"))
+            .take(headers.len() - 1)
+            .map(|f| f.parse().expect("every field but the state is a number"))
             .collect();
         assert_eq!(values[0], i as f64, "cycle column counts up");
+        let state = record[headers.len() - 1].to_owned();
+        if states.last() != Some(&state) {
+            states.push(state);
+        }
         rows += 1;
     }
+    // A 1 s run of the tour: running, then brought to rest for the duration's end, then the
+    // last record (the device not stepped) says the run stopped.
+    assert_eq!(states, ["running", "braking", "stopped"], "state column");
     assert_eq!(rows, cycles);
     let picture = std::fs::read_to_string(&svg).expect("plot written");
     let _ = std::fs::remove_file(&svg);

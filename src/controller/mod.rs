@@ -51,6 +51,9 @@
 
 pub mod clock;
 mod control;
+mod follower;
+pub mod input;
+pub mod law;
 pub mod plan;
 #[cfg(feature = "plan")]
 pub mod planned;
@@ -64,7 +67,12 @@ pub mod tracking;
 pub mod view;
 
 pub use clock::TrajectoryClock;
-pub use control::{Controller, CycleResult, CycleTiming, RunEnd};
+pub use control::{Controller, CycleResult, CycleTiming, DEFAULT_MAX_BRAKING, FaultAt, RunEnd};
+pub use follower::TrajectoryFollower;
+pub use input::{InputError, InputSender, Target};
+pub use law::{
+    BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, Measured, Start,
+};
 pub use plan::{
     FollowTrajectory, Motion, MotionLimits, Plan, PlanBudget, PlanError, PlanTrajectory,
     default_waypoints,
@@ -73,7 +81,7 @@ pub use report::RunReport;
 pub use robot::JointRobot;
 pub use runtime::{ControlRun, Progress, RunError, RunOptions};
 pub use supervise::{Fault, Supervision};
-pub use telemetry::{CycleRecord, TelemetryFile};
+pub use telemetry::{CycleRecord, RunState, TelemetryFile};
 pub use tracking::Tracking;
 #[cfg(feature = "view")]
 pub use view::{ViewHook, ViewPublisher};

@@ -2,6 +2,7 @@
 //! on a started H7 device against an in-process fake, and the default tour.
 #![allow(dead_code)]
 
+pub mod arm;
 pub mod sim;
 
 use std::time::Duration;
