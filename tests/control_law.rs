@@ -511,7 +511,7 @@ fn a_computed_torque_law_takes_a_simulated_arm_to_a_streamed_target() {
     // law's (the gravity torque of a joint that carries the arm is far from zero).
     assert!(report.tracking_error_max < 1e-2, "{report}");
     assert!(report.peak_feed_forward[1] > 1.0, "{report}");
-    assert!(st.stopped && !st.powered);
+    assert!(st.stopped_from.is_some() && !st.powered);
 }
 
 /// Velocity commands toward a target with a speed and acceleration limit; the reference

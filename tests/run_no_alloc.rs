@@ -143,7 +143,6 @@ fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
 fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() {
     use rl::controller::law::{BrakeReason, Command, Context, ControlLaw, LawStatus, Start};
     use rl::controller::{MotionLimits, Supervision, Target, input};
-    use rl::drivers::JointPositionSensor;
 
     /// Steps toward the newest target by at most `step` per cycle.
     struct Toward {
@@ -187,9 +186,7 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
     let model = rv6sl().expect("embedded model").model;
     let dof = model.dof();
     let fake = common::immediate_fake(dof);
-    let robot = common::started_h7(&fake, dof);
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
+    let (robot, start) = common::started_h7_standing(&fake, dof);
     let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
     let (tx, rx) = input::channel::<16, 8, [f64; 3]>(&model, 64);
     let mut law = Toward {
@@ -262,7 +259,6 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
 fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     use rl::controller::plan::BLENDED_SEGMENTS;
     use rl::controller::{MotionLimits, Plan, PlanBudget, PlanTrajectory, default_waypoints};
-    use rl::drivers::JointPositionSensor;
     use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits};
     use rl_plan::validity::AlwaysValid;
     use rl_plan::{JointSpace, Path};
@@ -272,9 +268,7 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     let model = rv6sl().expect("embedded model").model;
     let dof = model.dof();
     let fake = common::immediate_fake(dof);
-    let robot = common::started_h7(&fake, dof);
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
+    let (robot, start) = common::started_h7_standing(&fake, dof);
     let mut points = vec![start.clone()];
     points.extend(default_waypoints(&model, &start));
     let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");

@@ -1,6 +1,6 @@
 //! Inputs to a running law from any other thread: targets (a position, with or without a
 //! velocity, or a velocity) and one slot of the law's own type (e.g. obstacle spheres), typed
-//! and `Copy`, through rl-rt's lock-free [`queue`](rl_rt::exchange::queue).
+//! and `Copy`, through rl-rt's lock-free [`queue`].
 //!
 //! [`channel`] makes the two ends; a [`ControlRun`](super::ControlRun) makes one for its law and
 //! hands out the sending end ([`ControlRun::inputs`](super::ControlRun::inputs)). The

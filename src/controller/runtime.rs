@@ -426,7 +426,7 @@ where
     }
 
     /// A sender of targets and of the law's own inputs to the running loop: clone it for any
-    /// number of threads (see [`input`](super::input)).
+    /// number of threads (see [`input`]).
     pub fn inputs(&self) -> InputSender<J, L::Input> {
         self.inputs.clone()
     }

@@ -11,9 +11,9 @@ use std::time::Duration;
 
 use rl::core::{Data, Model, algo};
 use rl::drivers::{
-    CyclicDevice, Device, Error, JointDevice, JointPositionActuator, JointPositionSensor,
-    JointTorqueActuator, JointTorqueSensor, JointVelocityActuator, JointVelocitySensor, Lifecycle,
-    LinkStatistics, LinkStatisticsSensor, Operation, State,
+    Error, JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
+    JointTorqueSensor, JointVelocityActuator, JointVelocitySensor, Lifecycle, LinkStatistics,
+    LinkStatisticsSensor, Operation, State,
 };
 
 /// What the simulated drives take.
@@ -32,8 +32,8 @@ pub struct ArmStatus {
     pub steps: u64,
     /// Power on (between `start` and `stop`).
     pub powered: bool,
-    /// Whether `stop()` ran.
-    pub stopped: bool,
+    /// Whether `stop()` ran (a safe state reached), and from which state.
+    pub stopped_from: Option<State>,
     /// Joint positions now.
     pub q: Vec<f64>,
     /// Joint velocities now.
@@ -58,6 +58,15 @@ pub struct SimArm {
     command: Vec<f64>,
     link: LinkStatistics,
     status: Arc<Mutex<ArmStatus>>,
+}
+
+/// The simulated model refused a state (cannot happen for the vectors of its own length).
+fn model_error<E>(_: E) -> Error {
+    Error::InvalidArgument {
+        what: "the simulated model",
+        expected: 0,
+        got: 1,
+    }
 }
 
 /// Sub-steps of the integration per period.
@@ -100,11 +109,7 @@ impl SimArm {
                 ArmMode::Torque => {
                     self.tau.copy_from_slice(&self.command);
                     let qdd = algo::aba(&self.model, &mut self.data, &self.q, &self.qd, &self.tau)
-                        .map_err(|_| Error::InvalidArgument {
-                            what: "the simulated model",
-                            expected: 0,
-                            got: 1,
-                        })?
+                        .map_err(model_error)?
                         .to_vec();
                     for k in 0..self.dof {
                         self.qd[k] += h * qdd[k];
@@ -123,11 +128,7 @@ impl SimArm {
             // The drives hold the arm against gravity: the torque they measure.
             let zero = vec![0.0; self.dof];
             self.tau = algo::rnea(&self.model, &mut self.data, &self.q, &self.qd, &zero)
-                .map_err(|_| Error::InvalidArgument {
-                    what: "the simulated model",
-                    expected: 0,
-                    got: 1,
-                })?
+                .map_err(model_error)?
                 .to_vec();
         }
         let mut st = self.status.lock().expect("status");
@@ -147,6 +148,13 @@ impl SimArm {
         })
     }
 
+    fn read(&self, from: &[f64], to: &mut [f64]) -> Result<(), Error> {
+        self.lifecycle.check(Operation::Get)?;
+        Error::check_len("joint vector length", self.dof, to.len())?;
+        to.copy_from_slice(from);
+        Ok(())
+    }
+
     fn take(&mut self, values: &[f64]) -> Result<(), Error> {
         self.lifecycle.check(Operation::Set)?;
         Error::check_len("joint vector length", self.dof, values.len())?;
@@ -156,61 +164,7 @@ impl SimArm {
     }
 }
 
-fn lifecycle(s: &mut SimArm) -> &mut Lifecycle {
-    &mut s.lifecycle
-}
-
-impl Device for SimArm {
-    type Error = Error;
-
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, |_| Ok(()))
-    }
-
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, |s| {
-            s.status.lock().expect("status").powered = true;
-            Ok(())
-        })
-    }
-
-    fn stop(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Stop, lifecycle, |s| {
-            let mut st = s.status.lock().expect("status");
-            st.powered = false;
-            st.stopped = true;
-            Ok(())
-        })
-    }
-
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |_| Ok(()))
-    }
-
-    fn state(&self) -> State {
-        self.lifecycle.state()
-    }
-
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
-
-    fn stop_description(&self) -> &'static str {
-        "simulated drives disabled"
-    }
-}
-
-impl CyclicDevice for SimArm {
-    fn step(&mut self) -> Result<(), Error> {
-        let r = Lifecycle::step(self, lifecycle, Self::exchange);
-        self.link.consecutive_failures = self.lifecycle.consecutive_failures();
-        r
-    }
-
-    fn update_period(&self) -> Duration {
-        self.period
-    }
-}
+sim_device!(SimArm);
 
 impl JointDevice for SimArm {
     fn dof(&self) -> usize {
@@ -236,28 +190,19 @@ impl JointDevice for SimArm {
 
 impl JointPositionSensor for SimArm {
     fn joint_position(&self, q: &mut [f64]) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Get)?;
-        Error::check_len("joint vector length", self.dof, q.len())?;
-        q.copy_from_slice(&self.q);
-        Ok(())
+        self.read(&self.q, q)
     }
 }
 
 impl JointVelocitySensor for SimArm {
     fn joint_velocity(&self, qd: &mut [f64]) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Get)?;
-        Error::check_len("joint vector length", self.dof, qd.len())?;
-        qd.copy_from_slice(&self.qd);
-        Ok(())
+        self.read(&self.qd, qd)
     }
 }
 
 impl JointTorqueSensor for SimArm {
     fn joint_torque(&self, tau: &mut [f64]) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Get)?;
-        Error::check_len("joint vector length", self.dof, tau.len())?;
-        tau.copy_from_slice(&self.tau);
-        Ok(())
+        self.read(&self.tau, tau)
     }
 }
 
