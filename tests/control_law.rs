@@ -462,6 +462,21 @@ impl ControlLaw<16, 8> for ComputedTorque {
         }
     }
 
+    /// The gravity torque where the arm stands: the simulated drives do not compensate it.
+    fn hold(&mut self, cx: &mut Context<'_, 16, 8, ()>, out: &mut Command<8>) {
+        let zero = [0.0; 8];
+        let dof = cx.dof;
+        if let Ok(tau) = rnea(
+            cx.model,
+            cx.data,
+            cx.measured.position,
+            &zero[..dof],
+            &zero[..dof],
+        ) {
+            out.torque[..dof].copy_from_slice(tau);
+        }
+    }
+
     fn brake(&mut self, _reason: BrakeReason) {
         self.braking = true;
     }
@@ -489,6 +504,14 @@ fn a_computed_torque_law_takes_a_simulated_arm_to_a_streamed_target() {
     let (report, rows) = finish(run);
     assert_eq!(report.end, Some(RunEnd::CycleLimit), "{report}");
     assert_eq!(report.exit_code(), 0, "{report}");
+    // The first exchange held the arm against gravity (the law's hold): it did not sag.
+    for k in 0..6 {
+        assert!(
+            (rows[0].measured[k] - start[k]).abs() < 1e-9,
+            "joint {k} moved to {} in the first exchange",
+            rows[0].measured[k]
+        );
+    }
     let i = report.inputs.clone().expect("inputs");
     assert_eq!((i.targets, i.refused_by_law), (1, 2), "{i:?}");
     let st = status.lock().expect("status");

@@ -416,7 +416,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             if self.ending.abort {
                 self.end = Some(RunEnd::Aborted);
             } else {
-                let status = self.run_law();
+                let status = self.run_law(false);
                 if status.is_over() {
                     self.end = Some(self.end_for(status));
                 } else if status == LawStatus::Braking || self.ending.braking.is_some() {
@@ -508,8 +508,9 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         }
     }
 
-    /// Runs the law for this cycle into `self.command`.
-    fn run_law(&mut self) -> LawStatus {
+    /// Runs the law for this cycle into `self.command` (with `first`, its hold command for the
+    /// device's first exchange).
+    fn run_law(&mut self, first: bool) -> LawStatus {
         let dof = self.dof;
         let f = &self.feedback;
         let mut cx = Context {
@@ -530,7 +531,12 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             braking: self.ending.braking,
         };
         self.command = Command::hold(self.setpoint);
-        self.law.cycle(&mut cx, &mut self.command)
+        if first {
+            self.law.hold(&mut cx, &mut self.command);
+            LawStatus::Running
+        } else {
+            self.law.cycle(&mut cx, &mut self.command)
+        }
     }
 
     /// How the run ends when the law says it is over.
@@ -684,10 +690,13 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         }
     }
 
-    /// The device's first exchange, before the loop: sends the hold command (the start
-    /// position, zero velocity or zero torque; no feed-forward) and steps once.
+    /// The device's first exchange, before the loop: sends the law's hold command
+    /// ([`ControlLaw::hold`]: by default the start position, zero velocity or zero torque),
+    /// checked as every command is, without feed-forward, and steps once.
     pub(super) fn first_exchange(&mut self) -> Result<(), DeviceError> {
-        self.command = Command::hold(self.setpoint);
+        self.read_feedback();
+        self.run_law(true);
+        self.check_command();
         self.send_command(None, false)
     }
 

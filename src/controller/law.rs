@@ -276,6 +276,15 @@ pub trait ControlLaw<const B: usize, const J: usize>: Send {
         Ok(())
     }
 
+    /// The command of the device's first exchange, right after it is switched on and before
+    /// the loop: the arm must stay where it stands. `out` comes prefilled with the start
+    /// position, zero velocity and zero torque, which is the default; a torque law on a device
+    /// that does not compensate gravity itself writes the torque that holds the arm (e.g.
+    /// `RNEA(q, 0, 0)`). `cx` is the state the device reported when it was switched on.
+    fn hold(&mut self, cx: &mut Context<'_, B, J, Self::Input>, out: &mut Command<J>) {
+        let _ = (cx, out);
+    }
+
     /// One cycle: writes the command into `out` (prefilled to hold the arm) and says whether
     /// the run goes on. Real-time thread: no allocation, no lock, no panic.
     fn cycle(&mut self, cx: &mut Context<'_, B, J, Self::Input>, out: &mut Command<J>)

@@ -77,7 +77,9 @@ pub struct RunOptions {
     pub speed: f64,
     /// Waypoints (one per row, a value per joint); `None`: a tour derived from the limits.
     pub waypoints: Option<Vec<Vec<f64>>>,
-    /// Stop (at rest, along the path) after this long.
+    /// Stop after this long: the trajectory follower is at rest on its path by then; another
+    /// law is asked to brake then ([`ControlLaw::limit_cycles`]) and the run ends once it is
+    /// at rest.
     pub duration: Option<Duration>,
     /// Control period; `None`: the device's update period.
     pub period: Option<Duration>,
