@@ -744,7 +744,9 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         }
         if fault.stops_at_once() {
             if self.end.is_none() {
-                self.end = Some(RunEnd::Fault(self.fault.unwrap_or(fault)));
+                self.end = Some(RunEnd::Fault(
+                    self.fault.map_or(fault, |f| f.ended_by(fault)),
+                ));
             }
         } else {
             self.brake(BrakeReason::Fault);
