@@ -9,6 +9,7 @@
 
 mod common;
 
+use std::net::{IpAddr, Ipv4Addr};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -23,8 +24,11 @@ use rl::controller::{
     Target, rv6sl,
 };
 use rl::core::algo::rnea;
+use rl::core::loader::{UrdfOptions, load_urdf_str};
 use rl::core::traj::{JerkLimited, Limits, Trajectory};
+use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl::drivers::franka::{ControlMode as FrankaMode, FrankaArm, FrankaConfig};
 use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 
 const PERIOD: Duration = Duration::from_millis(2);
@@ -87,14 +91,23 @@ fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 /// late, and gives back the first run that was on time to be checked; after three late runs
 /// prints SKIPPED with their ends and gives back `None`. Nothing is loosened: an on-time run
 /// is checked in full, and a run that fails on time fails the test.
-fn on_time<T>(name: &str, mut attempt: impl FnMut() -> (RunReport, T)) -> Option<(RunReport, T)> {
+fn on_time<T>(name: &str, attempt: impl FnMut() -> (RunReport, T)) -> Option<(RunReport, T)> {
+    retried(name, attempt, |r, _| machine_late(r))
+}
+
+/// Runs `attempt` up to three times while `again` says so of its outcome (see [`on_time`]).
+fn retried<T>(
+    name: &str,
+    mut attempt: impl FnMut() -> (RunReport, T),
+    again: impl Fn(&RunReport, &T) -> bool,
+) -> Option<(RunReport, T)> {
     let mut late = Vec::new();
     for n in 1..=3 {
         let (report, rest) = {
             let _one = one_run_at_a_time();
             attempt()
         };
-        if !machine_late(&report) {
+        if !again(&report, &rest) {
             return Some((report, rest));
         }
         println!("{name}: attempt {n}: the machine was late:\n{report}");
@@ -427,14 +440,16 @@ fn inputs_are_checked_counted_and_dropped_when_the_queue_is_full() {
 }
 
 /// Takes the arm to a position target along a jerk-limited reference with computed torques,
-/// `τ = RNEA(q, q̇, r̈ + Kp·(r − q) + Kd·(ṙ − q̇))`; takes a new target only at rest. Braking
-/// holds the reference where it is and ends once the arm is still.
+/// `τ = RNEA(q, q̇, r̈ + Kp·(r − q) + Kd·(ṙ − q̇))`, less the gravity torque `RNEA(q, 0, 0)` for
+/// a device that compensates gravity itself (a Franka arm); takes a new target only at rest.
+/// Braking holds the reference where it is and ends once the arm is still.
 struct ComputedTorque {
     reference: [f64; 8],
     limits: Limits<8>,
     pending: Option<[f64; 8]>,
     moving: Option<(JerkLimited<8>, f64)>,
     braking: bool,
+    gravity_by_device: bool,
 }
 
 impl ComputedTorque {
@@ -448,6 +463,32 @@ impl ComputedTorque {
             pending: None,
             moving: None,
             braking: false,
+            gravity_by_device: false,
+        }
+    }
+
+    /// The same for a device that adds the gravity torque to what it is given.
+    fn gravity_compensated() -> Self {
+        Self {
+            gravity_by_device: true,
+            ..Self::new()
+        }
+    }
+
+    /// Subtracts the gravity torque at `cx.measured.position` from `out.torque`.
+    fn less_gravity(cx: &mut Context<'_, 16, 8, ()>, out: &mut Command<8>) {
+        let zero = [0.0; 8];
+        let dof = cx.dof;
+        if let Ok(g) = rnea(
+            cx.model,
+            cx.data,
+            cx.measured.position,
+            &zero[..dof],
+            &zero[..dof],
+        ) {
+            for k in 0..dof {
+                out.torque[k] -= g[k];
+            }
         }
     }
 }
@@ -514,6 +555,9 @@ impl ControlLaw<16, 8> for ComputedTorque {
         if let Ok(tau) = rnea(cx.model, cx.data, q, qd, &qdd[..dof]) {
             out.torque[..dof].copy_from_slice(tau);
         }
+        if self.gravity_by_device {
+            Self::less_gravity(cx, out);
+        }
         out.position = r;
         out.velocity = rd;
         if !self.braking {
@@ -525,8 +569,11 @@ impl ControlLaw<16, 8> for ComputedTorque {
         }
     }
 
-    /// The gravity torque where the arm stands: the simulated drives do not compensate it.
+    /// The gravity torque where the arm stands, unless the device compensates it.
     fn hold(&mut self, cx: &mut Context<'_, 16, 8, ()>, out: &mut Command<8>) {
+        if self.gravity_by_device {
+            return;
+        }
         let zero = [0.0; 8];
         let dof = cx.dof;
         if let Ok(tau) = rnea(
@@ -603,6 +650,101 @@ fn a_computed_torque_law_takes_a_simulated_arm_to_a_streamed_target() {
     assert!(report.tracking_error_max < 1e-2, "{report}");
     assert!(report.peak_feed_forward[1] > 1.0, "{report}");
     assert!(st.stopped_from.is_some() && !st.powered);
+}
+
+/// The fake FR3's thread at a real-time priority above the loop's (as `rl fake-robot franka`).
+fn realtime_fake_franka() {
+    let _ = rl::rt::RtThreadBuilder::new("fake-franka")
+        .policy(rl::rt::Policy::Fifo)
+        .priority(85)
+        .best_effort(true)
+        .apply_to_current();
+}
+
+/// The computed-torque law on the fake FR3 in torque mode at its 1 kHz (FCI on loopback, the
+/// arm's dynamics integrated by the fake from the same URDF, gravity added by the robot): the
+/// law's torques reach the robot through the driver's torque capability, and a streamed target
+/// is reached and held; the robot raised no reflex (its torque-rate and limit checks, and
+/// lost commands: the loop answers every state before the next tick, which needs the phase
+/// lock's jump out of a start one state behind).
+#[test]
+fn a_torque_law_takes_the_fake_franka_to_a_streamed_target() {
+    let urdf = fr3_shaped_urdf();
+    let goal = [0.2, -0.6, 0.1, -2.2, 0.1, 1.8, 0.6];
+    // Its checks do not depend on the run's timing: a late run that ended well is checked; one
+    // that failed with the loop or the fake late (its clock slipped or woke a quarter cycle
+    // late) is tried again. Lost commands with both on time fail the test.
+    let failed_late = |r: &RunReport, (_, fake): &(Vec<CycleRecord<8>>, FakeFranka)| {
+        let f = fake.status();
+        r.exit_code() != 0
+            && (r.stats.overruns > 0
+                || r.stats.missed_deadlines > 0
+                || f.slips > 0
+                || f.max_lateness_us > 250)
+    };
+    let attempt = || {
+        let fake = FakeFranka::spawn(FakeFrankaConfig {
+            command_port: 0,
+            on_thread_start: Some(realtime_fake_franka),
+            ..FakeFrankaConfig::loopback().with_urdf(urdf.clone())
+        })
+        .expect("fake FR3");
+        let mut config =
+            FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(FrankaMode::JointTorque);
+        config.command_port = fake.addr().port();
+        let robot = FrankaArm::new(config).expect("device");
+        let model = load_urdf_str::<16>(&urdf, &UrdfOptions::default()).expect("model");
+        let run = ControlRun::start_law(
+            robot,
+            model,
+            options().duration(Duration::from_millis(2500)),
+            ComputedTorque::gravity_compensated(),
+        )
+        .expect("starts");
+        run.inputs().send_position(&goal).expect("the target");
+        let (report, rows) = finish(run);
+        (report, (rows, fake))
+    };
+    let Some((report, (rows, fake))) = retried("torque law on the fake FR3", attempt, failed_late)
+    else {
+        return;
+    };
+    assert_eq!(report.end, Some(RunEnd::CycleLimit), "{report}");
+    assert_eq!(report.exit_code(), 0, "{report}");
+    assert!((report.period_s - 0.001).abs() < 1e-9, "{report}");
+    // At rest at the target when the duration ends: the law's braking is over at once.
+    let s = states(&rows);
+    assert_eq!(s.first(), Some(&RunState::Running), "{s:?}");
+    assert_eq!(s.last(), Some(&RunState::Stopped), "{s:?}");
+    assert!(!s.contains(&RunState::Fault), "{s:?}");
+    let i = report.inputs.clone().expect("inputs");
+    assert_eq!((i.targets, i.refused_by_law), (1, 0), "{i:?}");
+    let status = fake.status();
+    assert!(
+        status.raised.is_empty(),
+        "the robot raised {:?}",
+        status.raised
+    );
+    // At the target and still (the robot's own state: it moves by the law's torques alone, as
+    // it compensates gravity itself), within the tracking bound all along.
+    for k in 0..7 {
+        assert!(
+            (status.q[k] - goal[k]).abs() < 1e-3,
+            "joint {k} at {} instead of {}",
+            status.q[k],
+            goal[k]
+        );
+        assert!(
+            status.dq[k].abs() < 1e-2,
+            "joint {k} moving: {}",
+            status.dq[k]
+        );
+    }
+    assert!(report.tracking_error_max < 1e-2, "{report}");
+    assert!(
+        report.peak_feed_forward.iter().any(|t| *t > 0.1),
+        "{report}"
+    );
 }
 
 /// Velocity commands toward a target with a speed and acceleration limit; the reference

@@ -183,6 +183,9 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
             return None;
         }
         let _ = started.send(Ok(()));
+        if let Some(l) = &mut self.lock {
+            l.late = self.controller.robot().link_statistics().late;
+        }
         // Start on the device's grid of ticks, the target fraction of a period before one.
         let looped = match &self.lock {
             Some(l) => looped.start_at(l.first_deadline(first_tick, MonoTime::now())),
@@ -225,8 +228,9 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
         record.wakeup_latency_ns = cycle.wakeup_latency_ns;
         record.step_ns = MonoTime::now().nanos_since(cycle.woke);
         if let Some(l) = &mut self.lock {
+            let late = self.controller.robot().link_statistics().late;
             if !out.finished && self.controller.failed_steps() == failed_before {
-                l.observe(record.step_ns);
+                l.observe(record.step_ns, late);
             }
         }
         self.worst_latency_ns = self.worst_latency_ns.max(cycle.wakeup_latency_ns);
@@ -261,10 +265,17 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
 /// runs its own cycle: the step's duration (wake-up to reply) is the distance to the tick; a
 /// proportional correction, at most 2 % of a period per cycle, moves the loop's grid toward the
 /// target.
+///
+/// A step that came late — the device's next reply was waiting already (its `late` count
+/// rose) and the step returned at once — woke after the tick: its duration says nothing of the
+/// distance, and a device that streams its state (a Franka arm) would have every later step
+/// answer one state behind. The grid then moves half a period earlier at once; a second such
+/// step moves it again, and the steps that wait for their tick take over.
 struct PhaseLock {
     shift: PhaseShift,
     period_ns: u64,
     target_ns: i64,
+    late: u64,
 }
 
 impl PhaseLock {
@@ -272,6 +283,8 @@ impl PhaseLock {
     const GAIN: f64 = 0.2;
     /// Largest correction per cycle, as a fraction of the period.
     const MAX_STEP: f64 = 0.02;
+    /// A step shorter than this fraction of the period returned at once.
+    const AT_ONCE: f64 = 0.05;
 
     fn new(period: Duration, target: f64) -> Self {
         let period_ns = period.as_nanos().max(1) as u64;
@@ -279,6 +292,7 @@ impl PhaseLock {
             shift: PhaseShift::new(),
             period_ns,
             target_ns: (target.clamp(0.05, 0.9) * period_ns as f64) as i64,
+            late: 0,
         }
     }
 
@@ -296,8 +310,15 @@ impl PhaseLock {
         )
     }
 
-    /// Corrects the phase from one successful step of `step_ns`.
-    fn observe(&mut self, step_ns: u64) {
+    /// Corrects the phase from one successful step of `step_ns`, with the device's count of
+    /// late replies after it.
+    fn observe(&mut self, step_ns: u64, late: u64) {
+        let came_late = late > self.late;
+        self.late = late;
+        if came_late && (step_ns as f64) < Self::AT_ONCE * self.period_ns as f64 {
+            self.shift.shift(-((self.period_ns / 2) as i64));
+            return;
+        }
         let error = step_ns as f64 - self.target_ns as f64;
         let max = Self::MAX_STEP * self.period_ns as f64;
         let correction = (error * Self::GAIN).clamp(-max, max);
