@@ -120,6 +120,18 @@ fn retried<T>(
     None
 }
 
+/// The arm's joints `q` within 1 mrad of `goal`, its velocities `qd` under 0.01 rad/s.
+fn assert_at_rest_at(q: &[f64], qd: &[f64], goal: &[f64]) {
+    for (k, g) in goal.iter().enumerate() {
+        assert!(
+            (q[k] - g).abs() < 1e-3,
+            "joint {k} at {} instead of {g}",
+            q[k]
+        );
+        assert!(qd[k].abs() < 1e-2, "joint {k} still moving: {}", qd[k]);
+    }
+}
+
 /// The states of `rows`, each run of equal states once.
 fn states(rows: &[CycleRecord<8>]) -> Vec<RunState> {
     let mut s: Vec<RunState> = rows.iter().map(|r| r.state).collect();
@@ -632,19 +644,7 @@ fn a_computed_torque_law_takes_a_simulated_arm_to_a_streamed_target() {
     let st = status.lock().expect("status");
     assert_eq!(st.refused, 0, "only torque commands were sent");
     assert!(st.commands as usize >= rows.len() - 1);
-    for k in 0..6 {
-        assert!(
-            (st.q[k] - goal[k]).abs() < 1e-3,
-            "joint {k} at {} instead of {}",
-            st.q[k],
-            goal[k]
-        );
-        assert!(
-            st.qd[k].abs() < 1e-2,
-            "joint {k} still moving: {}",
-            st.qd[k]
-        );
-    }
+    assert_at_rest_at(&st.q, &st.qd, &goal);
     // The reference tracked within the supervisor's bound all along, and the torques are the
     // law's (the gravity torque of a joint that carries the arm is far from zero).
     assert!(report.tracking_error_max < 1e-2, "{report}");
@@ -727,19 +727,7 @@ fn a_torque_law_takes_the_fake_franka_to_a_streamed_target() {
     );
     // At the target and still (the robot's own state: it moves by the law's torques alone, as
     // it compensates gravity itself), within the tracking bound all along.
-    for k in 0..7 {
-        assert!(
-            (status.q[k] - goal[k]).abs() < 1e-3,
-            "joint {k} at {} instead of {}",
-            status.q[k],
-            goal[k]
-        );
-        assert!(
-            status.dq[k].abs() < 1e-2,
-            "joint {k} moving: {}",
-            status.dq[k]
-        );
-    }
+    assert_at_rest_at(&status.q, &status.dq, &goal);
     assert!(report.tracking_error_max < 1e-2, "{report}");
     assert!(
         report.peak_feed_forward.iter().any(|t| *t > 0.1),
