@@ -9,6 +9,7 @@
 #![recursion_limit = "256"]
 
 pub mod controller;
+pub mod devices;
 // Inlined, so that `cargo doc --no-deps` documents the three crates as modules of this one and
 // every link from here lands on a page that exists.
 #[doc(inline)]

@@ -5,8 +5,8 @@
 //! The real-time loop runs in its own thread in Rust (SCHED_FIFO where the process may, else
 //! as an ordinary thread, said in the report); Python only waits (with the GIL released),
 //! drains the telemetry queue into arrays and reads the report. Devices are named as `rl run
-//! --device` names them, through the tool's own device table (`src/cli/run/device.rs`, compiled
-//! into this module unchanged), so a driver added there is reachable from Python too.
+//! --device` names them, through the library's device table ([`rl::devices`], the one `rl run`
+//! uses), so a driver added there is reachable from Python too.
 //!
 //! Extension point: streamed targets (an online trajectory generator fed from outside the
 //! loop, being built now in rl-core and the controller) become a method here that writes into
@@ -29,11 +29,7 @@ use rl_rt::{StopFlag, StopLevel};
 use crate::array::{Input, Output, shape_text};
 use crate::model::Model;
 
-#[path = "../../src/cli/run/device.rs"]
-#[allow(dead_code, clippy::all)]
-mod device;
-
-use device::{DeviceSpec, InProcessFake};
+use rl::devices::{DeviceSpec, InProcessFake};
 
 /// Telemetry drained so far, column by column.
 #[derive(Default)]
@@ -195,7 +191,13 @@ fn start<const N: usize>(
             None,
             options.supervision.device_failure_limit(),
         )
-        .map_err(|e| crate::error::RunError::new_err(e.to_string()))?;
+        .map_err(|e| {
+            if e.is_input() {
+                PyValueError::new_err(e.to_string())
+            } else {
+                crate::error::RunError::new_err(e.to_string())
+            }
+        })?;
     options.device_name = opened.name;
     let robot: Box<dyn JointRobot + Send> = opened.robot;
     let run = Run::<_, N, N>::start(robot, loaded, options).map_err(|e| match e {

@@ -17,7 +17,6 @@
 //! Python's docs are the doc comments here (PyO3 turns them into docstrings) and the stubs.
 
 mod array;
-mod cli;
 mod control;
 mod dispatch;
 mod error;

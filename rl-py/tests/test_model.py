@@ -72,7 +72,7 @@ def test_load_errors_say_what_and_where_as_the_tool(tmp_path):
     assert str(e.value) == f'{broken}:1:33: <joint "j">: reference to "nope", which does not exist'
     out = tool("model", "info", str(broken))
     assert out.returncode == 2 and str(e.value) in out.stderr, out.stderr
-    with pytest.raises(rlrs.LoadError, match="No such file"):
+    with pytest.raises(rlrs.LoadError, match="missing.urdf: no such file"):
         rlrs.load(tmp_path / "missing.urdf")
     with pytest.raises(ValueError, match="joint_order"):
         rlrs.load(PUMA, joint_order="alphabetical")

@@ -81,6 +81,16 @@ impl fmt::Display for CliError {
 }
 
 /// What a subcommand returns.
+impl From<rl::devices::SpecError> for CliError {
+    fn from(e: rl::devices::SpecError) -> Self {
+        if e.is_input() {
+            Self::usage(e.message())
+        } else {
+            Self::failed(e.message())
+        }
+    }
+}
+
 pub type CliResult = Result<std::process::ExitCode, CliError>;
 
 /// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.

@@ -21,7 +21,6 @@
 //! Exit codes: 0 done, 1 failed (device fault, limits crossed, stop failed, no path found), 2
 //! bad flags or files, 130 stopped by Ctrl-C before the end.
 
-mod device;
 mod plot;
 mod progress;
 mod view;
@@ -44,12 +43,12 @@ use rl_plan::PlanOptions;
 use rl_plan::problem::moveit::MotionRequest;
 use rl_rt::{StopFlag, StopLevel};
 
-use self::device::DeviceSpec;
 use self::progress::ProgressDisplay;
 use super::capacity::{self, WithModel};
 use super::output::{out, outln};
 use super::plan::{CommonArgs, load_robot, options as plan_options};
 use super::{CliError, CliResult};
+use rl::devices::{self as device, DeviceSpec};
 
 /// A positive duration: the shared [`super::parse_duration`] units, zero refused.
 fn parse_duration(text: &str) -> Result<Duration, String> {

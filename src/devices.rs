@@ -1,11 +1,35 @@
-//! The tool's device table: `--device` names a driver and where it is; each entry builds the
-//! device (and, for an in-process fake, the fake) for a model. This is the one place the tool
-//! names concrete drivers; the controller runtime only sees their capabilities.
+//! The device table: a text such as `fake-h7`, `h7://HOST` or `cannelloni+udp://HOST:PORT`
+//! names a driver and where it is; [`DeviceSpec::build`] opens the device (and, for an
+//! in-process fake, starts the fake) for a model, ready for [`crate::controller::ControlRun`].
+//! `rl run --device`, the Python wheel and a user's own program share it:
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use std::time::Duration;
+//! use rl::controller::{ControlRun, RunOptions, Supervision};
+//! use rl::devices::DeviceSpec;
+//! let loaded = rl::core::loader::load_file::<16>("tests/data/rlmdl/mitsubishi-rv6sl.xml")?;
+//! let opened = DeviceSpec::parse("fake-h7")?.build(
+//!     &loaded,
+//!     None,
+//!     None,
+//!     Supervision::default().device_failure_limit(),
+//! )?;
+//! let _fake = opened.fake; // an in-process fake lives as long as this value
+//! let options = RunOptions::default().duration(Duration::from_secs(2));
+//! let run = ControlRun::<_, 16, 16>::start(opened.robot, loaded, options)?;
+//! println!("{}", run.join());
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! This is the one place that names concrete drivers; the controller runtime only sees their
+//! capabilities.
 
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
-use rl::controller::{JointRobot, RunError};
+use crate::controller::{JointRobot, RunError};
 use rl_core::loader::LoadedModel;
 use rl_drivers::Error as DeviceError;
 use rl_drivers::EthercatDrives;
@@ -21,8 +45,6 @@ use rl_drivers::transport::can::socketcan::{EAFNOSUPPORT, NO_AF_CAN};
 use rl_drivers::transport::can::{CanAddress, default_local};
 use rl_drivers::transport::{PacketLink, packet};
 
-use crate::cli::CliError;
-
 /// H7 real-time UDP port.
 const H7_PORT: u16 = 10000;
 /// H7 R3 TCP port.
@@ -36,6 +58,51 @@ pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PO
 /// The form of `units=` (and `--units`), for messages.
 pub const UNITS_FORM: &str = "cpr:N,gear:G[,feed:F][,torque:NM][,lead:M], each value one number \
      for every axis or one per axis joined by `/` (e.g. gear:100/100/80/50/50/50)";
+
+/// Why a device text was refused or its device could not be opened: the message says what and
+/// where; [`SpecError::is_input`] tells the caller's input (a wrong text, model or units) from a
+/// device that failed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SpecError {
+    message: String,
+    input: bool,
+}
+
+impl SpecError {
+    /// The caller's input is wrong.
+    pub fn usage(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            input: true,
+        }
+    }
+
+    /// The device (or the fake) failed.
+    pub fn failed(message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            input: false,
+        }
+    }
+
+    /// Whether the caller's input was wrong (else the device failed).
+    pub fn is_input(&self) -> bool {
+        self.input
+    }
+
+    /// The message.
+    pub fn message(&self) -> &str {
+        &self.message
+    }
+}
+
+impl std::fmt::Display for SpecError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for SpecError {}
 
 /// Drive units the user gives (`?units=` or `--units`): they replace what the drives report in
 /// 0x608F (`cpr`), 0x6091 (`gear`), 0x6092 (`feed`) and 0x6076 (`torque`); `lead` is the travel
@@ -291,8 +358,8 @@ impl InProcessFake {
 
 impl DeviceSpec {
     /// Parses one of [`DEVICES`].
-    pub fn parse(text: &str) -> Result<Self, CliError> {
-        let bad = |why: String| CliError::usage(format!("--device {text}: {why} (use {DEVICES})"));
+    pub fn parse(text: &str) -> Result<Self, SpecError> {
+        let bad = |why: String| SpecError::usage(format!("--device {text}: {why} (use {DEVICES})"));
         if text == "fake-h7" {
             return Ok(Self::FakeH7);
         }
@@ -367,7 +434,7 @@ impl DeviceSpec {
 
     /// Gives the drives' units (`--units`); refused for a device that has none, or when the
     /// address gives them too.
-    pub fn set_units(&mut self, spec: UnitsSpec) -> Result<(), CliError> {
+    pub fn set_units(&mut self, spec: UnitsSpec) -> Result<(), SpecError> {
         match self {
             Self::Cia402(_, units @ None)
             | Self::Ethercat {
@@ -377,10 +444,10 @@ impl DeviceSpec {
                 *units = Some(spec);
                 Ok(())
             }
-            Self::Cia402(..) | Self::Ethercat { .. } => Err(CliError::usage(
+            Self::Cia402(..) | Self::Ethercat { .. } => Err(SpecError::usage(
                 "--units and the device's units= give the units twice: give them once",
             )),
-            _ => Err(CliError::usage(
+            _ => Err(SpecError::usage(
                 "--units: only CiA 402 drives (CANopen, EtherCAT) have drive units; this device \
                  reports joints",
             )),
@@ -396,18 +463,18 @@ impl DeviceSpec {
         period: Option<Duration>,
         home: Option<&[f64]>,
         failure_limit: u32,
-    ) -> Result<Opened, CliError> {
+    ) -> Result<Opened, SpecError> {
         let model = &loaded.model;
         let home = home.map_or_else(|| loaded.home_or_neutral(), <[f64]>::to_vec);
         match self {
             Self::FakeH7 => {
                 let config = fake_h7_config(loaded, &home)?;
                 let fake = spawn_fake("fake-h7-0", move || FakeH7::spawn(config))
-                    .map_err(|e| CliError::failed(format!("cannot start the fake H7: {e}")))?;
+                    .map_err(|e| SpecError::failed(format!("cannot start the fake H7: {e}")))?;
                 let mut config = MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr());
                 config.max_consecutive_failures = failure_limit;
                 let robot = MitsubishiH7::new(config)
-                    .map_err(|e| CliError::failed(format!("H7 device: {e}")))?;
+                    .map_err(|e| SpecError::failed(format!("H7 device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!(
@@ -424,7 +491,7 @@ impl DeviceSpec {
                 let mut config = MitsubishiH7Config::at(*server, *r3);
                 config.max_consecutive_failures = failure_limit;
                 let robot = MitsubishiH7::new(config)
-                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                    .map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("H7 at {server} (R3 {r3})"),
@@ -435,16 +502,16 @@ impl DeviceSpec {
                 // The fake drives' own units (a 100:1 gear carries the inverse-dynamics
                 // torques); the master reads them from the drives like any other.
                 let config = FakeCia402Config::for_model(model, &home, AxisUnits::GEARED_100)
-                    .map_err(|e| CliError::usage(format!("fake CiA 402 drives: {e}")))?;
+                    .map_err(|e| SpecError::usage(format!("fake CiA 402 drives: {e}")))?;
                 let loopback = CanAddress::parse("cannelloni+udp://127.0.0.1:0")
-                    .map_err(|e| CliError::failed(e.to_string()))?;
+                    .map_err(|e| SpecError::failed(e.to_string()))?;
                 let fake = spawn_fake("fake-cia402-0", move || {
                     FakeCia402::serve(config, &loopback)
                 })
-                .map_err(|e| CliError::failed(format!("cannot start the fake drives: {e}")))?;
+                .map_err(|e| SpecError::failed(format!("cannot start the fake drives: {e}")))?;
                 let addr = fake
                     .local_addr()
-                    .ok_or_else(|| CliError::failed("the fake drives have no address"))?;
+                    .ok_or_else(|| SpecError::failed("the fake drives have no address"))?;
                 let bus = CanAddress::CannelloniUdp {
                     remote: addr,
                     local: default_local(addr),
@@ -467,7 +534,7 @@ impl DeviceSpec {
                     .clone()
                     .unwrap_or_else(|| (1..=model.dof() as u8).collect());
                 if nodes.len() != model.dof() {
-                    return Err(CliError::usage(format!(
+                    return Err(SpecError::usage(format!(
                         "--device {}: {} nodes for a model with {} joints",
                         address.bus,
                         nodes.len(),
@@ -490,7 +557,7 @@ impl DeviceSpec {
                     } else {
                         String::new()
                     };
-                    return Err(CliError::failed(format!(
+                    return Err(SpecError::failed(format!(
                         "--device ethercat://{interface}: {e}{fix}"
                     )));
                 }
@@ -502,7 +569,7 @@ impl DeviceSpec {
                 config.units = given_units(units.as_ref(), model.dof())?;
                 config.max_consecutive_failures = failure_limit;
                 let robot = EthercatDrives::new(config)
-                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                    .map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("EtherCAT CiA 402 drives on {interface}"),
@@ -513,7 +580,7 @@ impl DeviceSpec {
                 let mut config = rl_drivers::franka::FrankaConfig::new(server.ip());
                 config.command_port = server.port();
                 let robot = rl_drivers::FrankaArm::new(config)
-                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                    .map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
@@ -528,7 +595,7 @@ impl DeviceSpec {
                     config.update_period = p;
                 }
                 let robot =
-                    Coach::new(config).map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                    Coach::new(config).map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("Coach at {server}"),
@@ -641,16 +708,16 @@ fn spawn_fake<T: Send + 'static, E: std::fmt::Display>(
 fn fake_h7_config<const B: usize>(
     loaded: &LoadedModel<B>,
     home: &[f64],
-) -> Result<FakeH7Config, CliError> {
+) -> Result<FakeH7Config, SpecError> {
     FakeH7Config::for_model(&loaded.model, home)
-        .map_err(|e| CliError::usage(format!("--model: the fake H7 cannot simulate it: {e}")))
+        .map_err(|e| SpecError::usage(format!("--model: the fake H7 cannot simulate it: {e}")))
 }
 
 /// The units given for `axes` axes (nothing given: every unit is read from the drives).
-fn given_units(spec: Option<&UnitsSpec>, axes: usize) -> Result<Vec<UnitsOverride>, CliError> {
+fn given_units(spec: Option<&UnitsSpec>, axes: usize) -> Result<Vec<UnitsOverride>, SpecError> {
     match spec {
         None => Ok(vec![UnitsOverride::NONE; axes]),
-        Some(s) => s.for_axes(axes).map_err(CliError::usage),
+        Some(s) => s.for_axes(axes).map_err(SpecError::usage),
     }
 }
 
@@ -663,7 +730,7 @@ fn cia402(
     units: &[UnitsOverride],
     period: Option<Duration>,
     failure_limit: u32,
-) -> Result<Cia402, CliError> {
+) -> Result<Cia402, SpecError> {
     let mut config = Cia402Config::new(bus, nodes);
     if let Some(p) = period {
         config = config.with_period(p);
@@ -674,13 +741,13 @@ fn cia402(
     }
     let load = config.bus_load();
     if !load.fits(config.period) {
-        return Err(CliError::usage(format!(
+        return Err(SpecError::usage(format!(
             "--rate: a {} µs cycle cannot carry {} CiA 402 axes: {load}",
             config.period.as_micros(),
             nodes.len()
         )));
     }
-    Cia402::new(config).map_err(|e| CliError::usage(format!("--device: {e}")))
+    Cia402::new(config).map_err(|e| SpecError::usage(format!("--device: {e}")))
 }
 
 /// `HOST[:PORT]` to an address (the first the resolver gives).
@@ -780,7 +847,7 @@ mod tests {
             "h7://1.2.3.4?units=cpr:1,gear:1",
         ] {
             let e = DeviceSpec::parse(bad).expect_err(bad);
-            assert_eq!(e.exit_code(), 2, "{bad}");
+            assert!(e.is_input(), "{bad}");
         }
     }
 
