@@ -185,22 +185,32 @@ fn telemetry_csv_has_one_row_per_cycle() {
     let mut reader = csv::Reader::from_path(&path).expect("csv written");
     let headers = reader.headers().expect("header").clone();
     let _ = std::fs::remove_file(&path);
-    assert_eq!(headers.len(), 2 + 3 * 6 + 2, "{headers:?}");
+    assert_eq!(headers.len(), 2 + 3 * 6 + 3, "{headers:?}");
     assert_eq!(&headers[0], "cycle");
     assert_eq!(&headers[2], "cmd_joint0");
     assert_eq!(&headers[8], "meas_joint0");
-    assert_eq!(&headers[headers.len() - 1], "step_us");
+    assert_eq!(&headers[headers.len() - 2], "step_us");
+    assert_eq!(&headers[headers.len() - 1], "state");
     let mut rows = 0u64;
+    let mut states = Vec::new();
     for (i, record) in reader.records().enumerate() {
         let record = record.expect("row parses");
         assert_eq!(record.len(), headers.len());
         let values: Vec<f64> = record
             .iter()
-            .map(|f| f.parse().expect("every field is a number"))
+            .take(headers.len() - 1)
+            .map(|f| f.parse().expect("every field but the state is a number"))
             .collect();
         assert_eq!(values[0], i as f64, "cycle column counts up");
+        let state = record[headers.len() - 1].to_owned();
+        if states.last() != Some(&state) {
+            states.push(state);
+        }
         rows += 1;
     }
+    // A 1 s run of the tour: running, then brought to rest for the duration's end, then the
+    // last record (the device not stepped) says the run stopped.
+    assert_eq!(states, ["running", "braking", "stopped"], "state column");
     assert_eq!(rows, cycles);
     let picture = std::fs::read_to_string(&svg).expect("plot written");
     let _ = std::fs::remove_file(&svg);
@@ -215,6 +225,85 @@ fn telemetry_csv_has_one_row_per_cycle() {
 }
 
 /// Bad flags and files: one clear line on standard error, exit code 2, nothing started.
+/// Issue 25's fault that hid its story: a 5 mrad tracking bound is crossed early in the tour,
+/// the arm is then brought to rest, and the run ends later. The report says when the bound was
+/// crossed (cycle and time), and the telemetry's state column turns to `fault` in that very
+/// row, where the tracking error first exceeds the bound.
+#[test]
+fn the_report_says_when_a_fault_happened_and_the_telemetry_shows_it() {
+    let _one = one_run_at_a_time();
+    let path = temp("fault-telemetry.csv");
+    let mut cmd = rl();
+    cmd.args([
+        "run",
+        "--duration",
+        "2s",
+        "--tracking-bound",
+        "0.005",
+        "--json",
+    ])
+    .arg("--telemetry")
+    .arg(&path);
+    let out = run_bounded(cmd, Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1), "a fault fails the run");
+    let v = json(&out);
+    let cycle = v["fault_cycle"].as_u64().expect("fault_cycle");
+    let time_s = v["fault_time_s"].as_f64().expect("fault_time_s");
+    let end_s = v["trajectory_time_s"].as_f64().expect("trajectory_time_s");
+    assert!(
+        time_s > 0.0 && time_s + 0.1 < end_s,
+        "fault at {time_s} s, end at {end_s} s"
+    );
+    let csv = std::fs::read_to_string(&path).expect("telemetry written");
+    let _ = std::fs::remove_file(&path);
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let state = header
+        .iter()
+        .position(|h| *h == "state")
+        .expect("state column");
+    let (cmd, meas) = (2, 2 + 6);
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let first = rows
+        .iter()
+        .position(|r| r[state] == "fault")
+        .expect("a fault row");
+    assert_eq!(rows[first][0].parse::<u64>().expect("cycle"), cycle);
+    let t: f64 = rows[first][1].parse().expect("t_s");
+    assert!((t - time_s).abs() < 1e-6, "{t} vs {time_s}");
+    assert!(rows[..first].iter().all(|r| r[state] == "running"));
+    assert!(
+        rows[first..rows.len() - 1]
+            .iter()
+            .all(|r| r[state] == "fault")
+    );
+    assert_eq!(rows[rows.len() - 1][state], "stopped");
+    // The row where the fault was found is the first whose tracking error exceeds the bound.
+    let error = |r: &Vec<&str>| {
+        (0..6)
+            .map(|k| {
+                let c: f64 = r[cmd + k].parse().expect("cmd");
+                let m: f64 = r[meas + k].parse().expect("meas");
+                (c - m).abs()
+            })
+            .fold(0.0, f64::max)
+    };
+    // (A lost reply leaves a row's measured value stale and unchecked: then only the crossing
+    // itself is checked.)
+    if v["lost_packets"] == 0 {
+        assert!(rows[..first].iter().all(|r| error(r) <= 0.005 + 1e-6));
+    }
+    assert!(error(&rows[first]) > 0.005);
+    let mut text = rl();
+    text.args(["run", "--duration", "2s", "--tracking-bound", "0.005"]);
+    let out = run_bounded(text, Duration::from_secs(60));
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        report.contains("fault found at cycle ") && report.contains("(the run ended at "),
+        "{report}"
+    );
+}
+
 #[test]
 fn bad_flags_and_files_exit_with_code_2() {
     let _run = one_run_at_a_time();

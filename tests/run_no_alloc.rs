@@ -135,6 +135,122 @@ fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
     robot.close().expect("close");
 }
 
+/// A law of one's own (position targets streamed in, a speed-limited step toward the newest
+/// one, RNEA feed-forward in the model's workspace) with its input channel: the controller's
+/// cycle around it — inputs taken, the law run, its command checked and sent, the device
+/// stepped — allocates nothing, while another thread sends targets.
+#[test]
+fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() {
+    use rl::controller::law::{BrakeReason, Command, Context, ControlLaw, LawStatus, Start};
+    use rl::controller::{MotionLimits, Supervision, Target, input};
+
+    /// Steps toward the newest target by at most `step` per cycle.
+    struct Toward {
+        step: f64,
+        at: [f64; 8],
+    }
+    impl ControlLaw<16, 8> for Toward {
+        type Input = [f64; 3];
+        fn start(&mut self, start: &Start<'_, 16, 8>) -> Result<(), rl::controller::LawError> {
+            self.at[..start.position.len()].copy_from_slice(start.position);
+            Ok(())
+        }
+        fn cycle(
+            &mut self,
+            cx: &mut Context<'_, 16, 8, [f64; 3]>,
+            out: &mut Command<8>,
+        ) -> LawStatus {
+            if let Some(Target::Position { position, .. }) = cx.inputs.target() {
+                for (at, p) in self.at.iter_mut().zip(position).take(cx.dof) {
+                    *at += (p - *at).clamp(-self.step, self.step);
+                }
+            }
+            let zero = [0.0; 8];
+            if let Ok(tau) = rl::core::algo::rnea(
+                cx.model,
+                cx.data,
+                &self.at[..cx.dof],
+                &zero[..cx.dof],
+                &zero[..cx.dof],
+            ) {
+                out.torque[..cx.dof].copy_from_slice(tau);
+            }
+            out.position = self.at;
+            LawStatus::Running
+        }
+        fn brake(&mut self, _: BrakeReason) {}
+    }
+
+    assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
+
+    let model = rv6sl().expect("embedded model").model;
+    let dof = model.dof();
+    let fake = common::immediate_fake(dof);
+    let (robot, start) = common::started_h7_standing(&fake, dof);
+    let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
+    let (tx, rx) = input::channel::<16, 8, [f64; 3]>(&model, 64);
+    let mut law = Toward {
+        step: 1e-4,
+        at: [0.0; 8],
+    };
+    law.start(&Start {
+        position: &start,
+        model: &model,
+        limits: &limits,
+        period_s: common::PERIOD.as_secs_f64(),
+        device_period_s: common::PERIOD.as_secs_f64(),
+    })
+    .expect("law starts");
+    let mut control = Box::new(
+        Controller::with_law(
+            robot,
+            model,
+            law,
+            &start,
+            &limits,
+            common::PERIOD,
+            &Supervision::default(),
+        )
+        .expect("controller"),
+    );
+    control.attach_inputs(rx);
+    control.input_timeout(std::time::Duration::from_secs(60));
+    let mut goal = start.clone();
+    goal[0] += 0.2;
+    tx.send_position(&goal).expect("target");
+    for _ in 0..50 {
+        assert!(!control.cycle().finished);
+    }
+    let sender = std::thread::spawn(move || {
+        for i in 0..200 {
+            let mut g = goal.clone();
+            g[1] += 1e-4 * f64::from(i);
+            let _ = tx.send_position(&g);
+            let _ = tx.send([0.1, 0.2, 0.3]);
+            std::thread::sleep(std::time::Duration::from_micros(200));
+        }
+    });
+    let mut finished = false;
+    let counted = allocations(|| {
+        for _ in 0..400 {
+            finished |= control.cycle().finished;
+        }
+    });
+    sender.join().expect("sender");
+    assert!(!finished);
+    assert_eq!(
+        counted, 0,
+        "allocations in 400 cycles of a user's law taking inputs"
+    );
+    let report = control.input_report().expect("inputs");
+    assert!(report.targets > 1 && report.others > 0, "{report:?}");
+    assert_eq!(control.failed_steps(), 0);
+    assert!(control.tracking().max_error() > 0.0, "the arm moved");
+    let mut robot = control.into_robot();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}
+
 /// Following a planned path blended through its waypoints (lines and sextic blends mixed with
 /// jerk-limited moves, `PlanTrajectory::Blended`): the trajectory is built before the loop,
 /// and evaluating it in the loop allocates nothing.
@@ -143,7 +259,6 @@ fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
 fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     use rl::controller::plan::BLENDED_SEGMENTS;
     use rl::controller::{MotionLimits, Plan, PlanBudget, PlanTrajectory, default_waypoints};
-    use rl::drivers::JointPositionSensor;
     use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits};
     use rl_plan::validity::AlwaysValid;
     use rl_plan::{JointSpace, Path};
@@ -153,9 +268,7 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     let model = rv6sl().expect("embedded model").model;
     let dof = model.dof();
     let fake = common::immediate_fake(dof);
-    let robot = common::started_h7(&fake, dof);
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
+    let (robot, start) = common::started_h7_standing(&fake, dof);
     let mut points = vec![start.clone()];
     points.extend(default_waypoints(&model, &start));
     let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");

@@ -108,9 +108,14 @@ fn telemetry(path: &Path, joints: usize) -> Telemetry {
         .expect("meas_ columns");
     assert_eq!(header[cmd], "cmd_panda_joint1");
     let (mut commanded, mut measured) = (Vec::new(), Vec::new());
+    let state = header
+        .iter()
+        .position(|h| *h == "state")
+        .expect("state column");
     for line in lines {
         let v: Vec<f64> = line
             .split(',')
+            .take(state)
             .map(|x| x.parse().expect("number"))
             .collect();
         commanded.push(v[cmd..cmd + joints].to_vec());

@@ -6,8 +6,8 @@ use core::time::Duration;
 
 use crate::{
     CyclicDevice, Device, JointDevice, JointLimitSensor, JointPositionActuator,
-    JointPositionSensor, JointTorqueFeedForward, JointVelocityActuator, JointVelocitySensor,
-    LinkStatistics, LinkStatisticsSensor, State,
+    JointPositionSensor, JointTorqueActuator, JointTorqueFeedForward, JointTorqueSensor,
+    JointVelocityActuator, JointVelocitySensor, LinkStatistics, LinkStatisticsSensor, State,
 };
 
 impl<D: Device + ?Sized> Device for Box<D> {
@@ -63,6 +63,22 @@ impl<D: JointDevice + ?Sized> JointDevice for Box<D> {
     fn joint_limit_sensor(&self) -> Option<&dyn JointLimitSensor<Error = Self::Error>> {
         (**self).joint_limit_sensor()
     }
+    fn joint_velocity_actuator(
+        &mut self,
+    ) -> Option<&mut dyn JointVelocityActuator<Error = Self::Error>> {
+        (**self).joint_velocity_actuator()
+    }
+    fn joint_torque_actuator(
+        &mut self,
+    ) -> Option<&mut dyn JointTorqueActuator<Error = Self::Error>> {
+        (**self).joint_torque_actuator()
+    }
+    fn joint_velocity_sensor(&self) -> Option<&dyn JointVelocitySensor<Error = Self::Error>> {
+        (**self).joint_velocity_sensor()
+    }
+    fn joint_torque_sensor(&self) -> Option<&dyn JointTorqueSensor<Error = Self::Error>> {
+        (**self).joint_torque_sensor()
+    }
 }
 
 impl<D: JointPositionSensor + ?Sized> JointPositionSensor for Box<D> {
@@ -89,6 +105,18 @@ impl<D: JointVelocitySensor + ?Sized> JointVelocitySensor for Box<D> {
 impl<D: JointVelocityActuator + ?Sized> JointVelocityActuator for Box<D> {
     fn set_joint_velocity(&mut self, qd: &[f64]) -> Result<(), Self::Error> {
         (**self).set_joint_velocity(qd)
+    }
+}
+
+impl<D: JointTorqueSensor + ?Sized> JointTorqueSensor for Box<D> {
+    fn joint_torque(&self, tau: &mut [f64]) -> Result<(), Self::Error> {
+        (**self).joint_torque(tau)
+    }
+}
+
+impl<D: JointTorqueActuator + ?Sized> JointTorqueActuator for Box<D> {
+    fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Self::Error> {
+        (**self).set_joint_torque(tau)
     }
 }
 

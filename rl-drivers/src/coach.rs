@@ -503,6 +503,14 @@ impl JointDevice for Coach {
     fn torque_feed_forward(&mut self) -> Option<&mut dyn JointTorqueFeedForward<Error = Error>> {
         Some(self)
     }
+
+    fn joint_velocity_actuator(&mut self) -> Option<&mut dyn JointVelocityActuator<Error = Error>> {
+        Some(self)
+    }
+
+    fn joint_torque_actuator(&mut self) -> Option<&mut dyn JointTorqueActuator<Error = Error>> {
+        Some(self)
+    }
 }
 
 impl JointPositionActuator for Coach {

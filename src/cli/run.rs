@@ -95,7 +95,8 @@ pub struct RunArgs {
     #[arg(long)]
     pub speed: Option<f64>,
     /// Write per-cycle telemetry as CSV: time, commanded and measured joints, feed-forward
-    /// torques, wake-up latency, step time.
+    /// torques, wake-up latency, step time, and the run's state (running, braking, fault,
+    /// stopped).
     #[arg(long, value_name = "FILE.csv")]
     pub telemetry: Option<PathBuf>,
     /// Draw joint tracking and the latency histogram as SVG.

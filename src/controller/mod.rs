@@ -1,15 +1,21 @@
-//! A complete, supervised joint-space position controller: the program behind `rl run`, as a
-//! library so tests, benchmarks and users' own programs get everything it does.
+//! A complete, supervised joint-space controller: the program behind `rl run`, as a library so
+//! tests, benchmarks and users' own programs get everything it does.
 //!
 //! [`ControlRun`] is the whole run in a few lines (see [`runtime`]): open the device, check the
-//! model against it, plan before the servo goes on, run the loop in a real-time thread, stop the
-//! device safely, report. Underneath, one control cycle ([`Controller::cycle`]) reads the
-//! measured joints from any device with the [`JointRobot`] capabilities, supervises them
-//! ([`supervise`]), evaluates a jerk-limited trajectory, computes inverse-dynamics feed-forward
-//! torques (RNEA, sent to a device that takes them), commands the next position and steps the
-//! device. It allocates nothing. Capacities are the user's choice: `Controller<R, B, J>` for up
-//! to `B` moving bodies and `J` joints. Around it:
+//! model against it, plan before the servo goes on (or let a law of one's own prepare), run the
+//! loop in a real-time thread, stop the device safely, report. Underneath, one control cycle
+//! ([`Controller::cycle`]) reads the measured joints from any device with the [`JointRobot`]
+//! capabilities, supervises them ([`supervise`]), takes the inputs other threads sent
+//! ([`input`]), runs the control law ([`law`]) and checks, sends and steps its position,
+//! velocity or torque command. The law `rl run` executes is the [`TrajectoryFollower`]: a
+//! jerk-limited trajectory with inverse-dynamics feed-forward torques (RNEA, sent to a device
+//! that takes them). It allocates nothing. Capacities are the user's choice:
+//! `Controller<R, B, J, L>` for up to `B` moving bodies and `J` joints. Around it:
 //!
+//! - [`law`]: the [`ControlLaw`] trait — what a law gets each cycle, what it commands, how it
+//!   brakes — and [`ControlRun::start_law`] to run one's own;
+//! - [`input`]: targets and a law's own inputs from other threads, lock-free, checked, counted,
+//!   with a staleness bound;
 //! - [`plan`]: limits derived from the model, default waypoints, and a [`Plan`] that is checked
 //!   against the model's position, speed and effort limits before anything moves;
 //! - [`planned`] (feature `plan`): a collision-free path from rl-plan, made a trajectory the
@@ -18,8 +24,9 @@
 //! - [`supervise`]: the per-cycle checks and the [`Fault`]s that end a run;
 //! - [`clock`]: trajectory time, slowed to rest along the path when a stop is asked for;
 //! - [`tracking`]: tracking error, feed-forward peaks and limit checks of the measured motion;
-//! - [`telemetry`]: one `Copy` record per cycle for a lock-free queue, and its CSV form;
-//! - [`report`]: the end-of-run report as text and JSON.
+//! - [`telemetry`]: one `Copy` record per cycle for a lock-free queue, and its CSV form (with
+//!   the run's state each cycle);
+//! - [`report`]: the end-of-run report as text and JSON (when a fault happened, too).
 //! - `view` (feature `view`): the run's motion and tracking error, live in rl-view's page.
 //!
 //! A caller who wants its own loop steps a [`Controller`] itself:
@@ -51,6 +58,9 @@
 
 pub mod clock;
 mod control;
+mod follower;
+pub mod input;
+pub mod law;
 pub mod plan;
 #[cfg(feature = "plan")]
 pub mod planned;
@@ -64,7 +74,12 @@ pub mod tracking;
 pub mod view;
 
 pub use clock::TrajectoryClock;
-pub use control::{Controller, CycleResult, CycleTiming, RunEnd};
+pub use control::{Controller, CycleResult, CycleTiming, DEFAULT_MAX_BRAKING, FaultAt, RunEnd};
+pub use follower::TrajectoryFollower;
+pub use input::{InputError, InputSender, Target};
+pub use law::{
+    BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, Measured, Start,
+};
 pub use plan::{
     FollowTrajectory, Motion, MotionLimits, Plan, PlanBudget, PlanError, PlanTrajectory,
     default_waypoints,
@@ -73,7 +88,7 @@ pub use report::RunReport;
 pub use robot::JointRobot;
 pub use runtime::{ControlRun, Progress, RunError, RunOptions};
 pub use supervise::{Fault, Supervision};
-pub use telemetry::{CycleRecord, TelemetryFile};
+pub use telemetry::{CycleRecord, RunState, TelemetryFile};
 pub use tracking::Tracking;
 #[cfg(feature = "view")]
 pub use view::{ViewHook, ViewPublisher};

@@ -209,6 +209,11 @@ pub enum PlanError {
         /// Axes of the device.
         device: usize,
     },
+    /// The device takes no command of the law's kind (in its configured mode).
+    CommandMode {
+        /// What the law commands.
+        mode: super::law::CommandMode,
+    },
     /// One control period's step exceeds what the joint may move in one cycle of the device:
     /// the control period is longer than the device's and the device would execute each step
     /// within its own, shorter cycle.
@@ -295,6 +300,11 @@ impl fmt::Display for PlanError {
                 f,
                 "the model has {model} joints but the device has {device} axes: refusing to \
                  drive it (an axis the model does not describe would be commanded blindly)"
+            ),
+            Self::CommandMode { mode } => write!(
+                f,
+                "the law commands joint {mode}s, which this device does not take (in its \
+                 configured mode)"
             ),
             Self::StepTooLarge {
                 joint,

@@ -9,7 +9,8 @@ use rl_drivers::LinkStatistics;
 use rl_rt::LoopStats;
 use serde_json::json;
 
-use super::control::RunEnd;
+use super::control::{FaultAt, RunEnd};
+use super::input::InputReport;
 use super::tracking::Violation;
 
 /// How the device was brought to a safe state after the loop.
@@ -58,6 +59,9 @@ pub struct RunReport {
     pub wall_time_s: f64,
     /// How the run ended (`None`: the loop itself failed, see `failure`).
     pub end: Option<RunEnd>,
+    /// When the first fault was found: its cycle and that cycle's time (the telemetry's
+    /// `t_s`), which can be well before the run ended.
+    pub fault_at: Option<FaultAt>,
     /// Loop timing: wake-up latency, step duration, overruns, missed deadlines.
     pub stats: LoopStats,
     /// The device link's counts (read after the device was closed: nothing is lost).
@@ -87,6 +91,12 @@ pub struct RunReport {
     /// The speed assumed (rad/s or m/s) for joints whose model gives no speed limit, and those
     /// joints.
     pub assumed_speed: Option<(f64, Vec<String>)>,
+    /// Cycles whose torque command was clamped to the model's effort limits (a law commanding
+    /// torques).
+    pub torque_clamped: u64,
+    /// What became of the inputs sent to the law (`None` when none were sent and no input
+    /// timeout was set).
+    pub inputs: Option<InputReport>,
     /// How the device was stopped.
     pub shutdown: Shutdown,
     /// Telemetry rows written (by the caller).
@@ -122,6 +132,7 @@ impl RunReport {
             trajectory_time_s: 0.0,
             wall_time_s: 0.0,
             end: None,
+            fault_at: None,
             stats: LoopStats::new(1, 1),
             link: LinkStatistics::default(),
             lost_packets: 0,
@@ -136,6 +147,8 @@ impl RunReport {
             first_violation: None,
             supervised: true,
             assumed_speed: None,
+            torque_clamped: 0,
+            inputs: None,
             shutdown: Shutdown::default(),
             telemetry_rows: None,
             telemetry_dropped: None,
@@ -209,8 +222,26 @@ impl RunReport {
             },
             "peak_feed_forward_torque": self.peak_feed_forward,
             "limit_violations": self.limit_violations,
+            "torque_clamped": self.torque_clamped,
+            "inputs": self.inputs.as_ref().map(|i| json!({
+                "sent": i.sent,
+                "targets": i.targets,
+                "others": i.others,
+                "refused_invalid": i.refused_invalid,
+                "first_invalid": i.first_invalid,
+                "refused_by_law": i.refused_by_law,
+                "first_law_refusal": i.first_law_refusal,
+                "dropped_full": i.dropped_full,
+                "not_taken": i.not_taken,
+                "timeout_s": i.timeout_s,
+                "max_age_s": i.max_age_s,
+                "stale": i.stale,
+                "stale_age_s": i.stale_age_s,
+            })),
             "supervised": self.supervised,
             "fault": fault.map(|f| f.describe(&self.joints)),
+            "fault_cycle": self.fault_at.map(|a| a.cycle),
+            "fault_time_s": self.fault_at.map(|a| a.time_s),
             "fault_joint": fault.and_then(|f| f.joint()).and_then(|k| self.joints.get(k)),
             "stopped_at_once": fault.map(|f| f.stops_at_once()),
             "assumed_speed": self.assumed_speed.as_ref().map(|(v, joints)| json!({
@@ -284,27 +315,37 @@ impl fmt::Display for RunReport {
                 self.trajectory_source, self.trajectory_description
             );
         }
-        let _ = writeln!(
-            out,
-            "end: {} after {:.2} s of a {:.2} s trajectory",
-            self.end.map_or_else(
-                || "loop failed".to_owned(),
-                |e| match e {
-                    RunEnd::Fault(fault) => format!(
-                        "fault ({}): {}",
-                        if fault.stops_at_once() {
-                            "stopped at once"
-                        } else {
-                            "brought to rest"
-                        },
-                        fault.describe(&self.joints)
-                    ),
-                    e => e.to_string(),
-                }
-            ),
-            self.trajectory_time_s,
-            self.plan_duration_s
+        let ended = self.end.map_or_else(
+            || "loop failed".to_owned(),
+            |e| match e {
+                RunEnd::Fault(fault) => format!(
+                    "fault ({}): {}",
+                    if fault.stops_at_once() {
+                        "stopped at once"
+                    } else {
+                        "brought to rest"
+                    },
+                    fault.describe(&self.joints)
+                ),
+                e => e.to_string(),
+            },
         );
+        let _ = if self.plan_duration_s > 0.0 {
+            writeln!(
+                out,
+                "end: {ended} after {:.2} s of a {:.2} s trajectory",
+                self.trajectory_time_s, self.plan_duration_s
+            )
+        } else {
+            writeln!(out, "end: {ended} after {:.2} s", self.trajectory_time_s)
+        };
+        if let Some(at) = self.fault_at {
+            let _ = writeln!(
+                out,
+                "fault found at cycle {}, t = {:.3} s (the run ended at {:.3} s)",
+                at.cycle, at.time_s, self.trajectory_time_s
+            );
+        }
         let _ = writeln!(
             out,
             "cycles {}  overruns {}  missed deadlines {}  lost packets {}  late {}  rejected {}  \
@@ -385,6 +426,40 @@ impl fmt::Display for RunReport {
                 "; supervision OFF"
             }
         );
+        if self.torque_clamped > 0 {
+            let _ = writeln!(
+                out,
+                "torque commands clamped to the effort limits in {} cycles",
+                self.torque_clamped
+            );
+        }
+        if let Some(i) = &self.inputs {
+            let _ = writeln!(
+                out,
+                "inputs: {} sent, {} targets and {} others taken, refused {} invalid and {} by \
+                 the law, {} dropped (queue full), longest gap {:.3} s{}",
+                i.sent,
+                i.targets,
+                i.others,
+                i.refused_invalid,
+                i.refused_by_law,
+                i.dropped_full,
+                i.max_age_s,
+                match (i.timeout_s, i.stale_age_s) {
+                    (Some(t), Some(age)) => {
+                        format!("; stale at {age:.3} s without one (timeout {t:.3} s)")
+                    }
+                    (Some(t), None) => format!(" (timeout {t:.3} s)"),
+                    _ => String::new(),
+                }
+            );
+            if let Some(why) = &i.first_invalid {
+                let _ = writeln!(out, "first invalid input: {why}");
+            }
+            if let Some(why) = i.first_law_refusal {
+                let _ = writeln!(out, "first input the law refused: {why}");
+            }
+        }
         if let Some(v) = self.first_violation {
             let _ = writeln!(
                 out,

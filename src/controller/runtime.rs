@@ -1,15 +1,22 @@
 //! The whole program `rl run` is, as a library: [`ControlRun`] opens the device, checks the
-//! model against it, reads where the arm stands, plans and checks the motion — all before the
-//! device is started (servo on), in bounded time, cancellable — then starts the device, checks
-//! the first reply, and runs the supervised [`Controller`] in a real-time thread on absolute
-//! deadlines. While it runs the caller reads progress and drains telemetry; [`ControlRun::join`]
-//! ends it, brings the device to a safe state (from a fault too) and returns the
-//! [`RunReport`].
+//! model against it, reads where the arm stands, plans and checks the motion (or has the
+//! user's [`ControlLaw`] prepare itself) — all before the device is started (servo on), in
+//! bounded time, cancellable — then starts the device, checks the first reply, and runs the
+//! supervised [`Controller`](super::Controller) with the law in a real-time thread on absolute deadlines. While it
+//! runs the caller reads progress, drains telemetry and sends the law inputs
+//! ([`ControlRun::inputs`]); [`ControlRun::join`] ends it, brings the device to a safe state
+//! (from a fault too) and returns the [`RunReport`].
 //!
-//! Stopping is two-level, through rl-rt's [`StopFlag`]: the first request brings the arm to
-//! rest along its path, the second ends the run at once. The real-time set-up is best effort
-//! (rl-rt's own fallback): without the right to SCHED_FIFO or to lock memory the run goes on at
-//! normal priority and the report says what was refused and how to fix it.
+//! The run is three phases, one file each: the checks and the plan before anything moves
+//! (`prepare.rs`), the real-time thread's body (`rt_loop.rs`: the device's start, the phase
+//! lock to a device on its own cycle, one controller cycle per period, telemetry, progress),
+//! and the report after it (`finish.rs`: the device stopped and closed, the numbers gathered).
+//!
+//! Stopping is two-level, through rl-rt's [`StopFlag`]: the first request has the law bring the
+//! arm to rest (the trajectory follower: along its path), the second ends the run at once. The
+//! real-time set-up is best effort (rl-rt's own fallback): without the right to SCHED_FIFO or
+//! to lock memory the run goes on at normal priority and the report says what was refused and
+//! how to fix it.
 //!
 //! ```no_run
 //! use std::time::Duration;
@@ -31,27 +38,30 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod finish;
+mod prepare;
+mod rt_loop;
+
 use std::fmt;
-use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
 use rl_core::loader::LoadedModel;
-use rl_drivers::{DeviceError as _, Error as DeviceError, ErrorKind};
-use rl_rt::exchange::{MailboxReader, QueueReceiver, QueueSender, mailbox, queue};
-use rl_rt::{
-    CyclicLoop, LoopStats, MonoTime, OverrunPolicy, PhaseShift, Policy, RtThread, RtThreadBuilder,
-};
-use rl_rt::{StopFlag, StopLevel, ThreadError};
+use rl_drivers::Error as DeviceError;
+use rl_rt::exchange::{MailboxReader, QueueReceiver};
+use rl_rt::{RtThread, StopFlag, StopLevel, ThreadError};
 
-use super::control::{Controller, CycleTiming, RunEnd, supervision_bounds};
-use super::plan::{
-    DEFAULT_MAX_PLAN_DURATION, Motion, MotionLimits, Plan, PlanBudget, PlanError, UNKNOWN_SPEED,
-    default_waypoints, joint_name,
-};
-use super::report::{RunReport, Shutdown};
+use super::control::DEFAULT_MAX_BRAKING;
+use super::follower::TrajectoryFollower;
+use super::input::{self, InputSender};
+use super::law::ControlLaw;
+use super::plan::{DEFAULT_MAX_PLAN_DURATION, Motion, PlanError};
+use super::report::RunReport;
 use super::robot::JointRobot;
 use super::supervise::Supervision;
 use super::telemetry::CycleRecord;
+
+use self::prepare::Prepared;
+use self::rt_loop::LoopOutcome;
 
 /// Default real-time priority of the control thread.
 pub const DEFAULT_PRIORITY: i32 = 80;
@@ -67,7 +77,9 @@ pub struct RunOptions {
     pub speed: f64,
     /// Waypoints (one per row, a value per joint); `None`: a tour derived from the limits.
     pub waypoints: Option<Vec<Vec<f64>>>,
-    /// Stop (at rest, along the path) after this long.
+    /// Stop after this long: the trajectory follower is at rest on its path by then; another
+    /// law is asked to brake then ([`ControlLaw::limit_cycles`]) and the run ends once it is
+    /// at rest.
     pub duration: Option<Duration>,
     /// Control period; `None`: the device's update period.
     pub period: Option<Duration>,
@@ -93,6 +105,14 @@ pub struct RunOptions {
     pub model_name: String,
     /// Name of the device for the report.
     pub device_name: String,
+    /// Inputs the run's queue holds ([`ControlRun::inputs`]).
+    pub input_capacity: usize,
+    /// Bring the arm to rest (through the law) once no input has come for this long, counted
+    /// from the loop's start until the first input; the run then ends with
+    /// [`RunEnd::InputsStale`](super::RunEnd::InputsStale). `None`: inputs never go stale.
+    pub input_timeout: Option<Duration>,
+    /// End the run at once if the law has not come to rest this long after braking began.
+    pub max_braking: Duration,
     /// Show the motion in this viewer: the loop publishes every cycle's measured and
     /// commanded positions through its lock-free mailbox (feature `view`).
     #[cfg(feature = "view")]
@@ -116,6 +136,9 @@ impl Default for RunOptions {
             stop: StopFlag::new(),
             model_name: String::new(),
             device_name: String::new(),
+            input_capacity: input::DEFAULT_CAPACITY,
+            input_timeout: None,
+            max_braking: DEFAULT_MAX_BRAKING,
             #[cfg(feature = "view")]
             view: None,
         }
@@ -144,6 +167,12 @@ impl RunOptions {
     /// Keeps per-cycle records for [`ControlRun::drain_telemetry`].
     pub fn telemetry(mut self, on: bool) -> Self {
         self.telemetry = on;
+        self
+    }
+
+    /// Brings the arm to rest once no input has come for `timeout`.
+    pub fn input_timeout(mut self, timeout: Duration) -> Self {
+        self.input_timeout = Some(timeout);
         self
     }
 }
@@ -186,6 +215,8 @@ pub enum RunError {
         /// The tolerance (the tracking bound and the device's resolution).
         tolerance: f64,
     },
+    /// The law refused to start ([`ControlLaw::start`]).
+    Law(String),
     /// A stop was requested before the loop started.
     Cancelled,
     /// The real-time thread could not be started.
@@ -234,6 +265,7 @@ impl fmt::Display for RunError {
                  trajectory starts (tolerance {tolerance:.2e}); bring the robot to the start \
                  first"
             ),
+            RunError::Law(why) => write!(f, "refusing to move: the law refused to start: {why}"),
             RunError::Cancelled => f.write_str("stopped on request before the motion started"),
             RunError::Thread(e) => write!(f, "cannot start the control thread: {e}"),
             RunError::Loop(e) => write!(f, "control loop: {e}"),
@@ -273,13 +305,6 @@ pub struct Progress {
     pub stop: StopLevel,
 }
 
-/// What the control thread hands back.
-struct LoopOutcome<R, const B: usize, const J: usize> {
-    controller: Box<Controller<R, B, J>>,
-    stats: LoopStats,
-    loop_error: Option<String>,
-}
-
 /// What is known about a run before its loop starts, for the report.
 #[derive(Clone, Debug)]
 struct RunInfo {
@@ -298,17 +323,24 @@ struct RunInfo {
     started: Instant,
 }
 
-/// A running controller: a real-time thread stepping a [`Controller`] for a model of up to `B`
-/// bodies and `J` joints on the device `R`.
-pub struct ControlRun<R, const B: usize, const J: usize> {
-    thread: RtThread<Option<LoopOutcome<R, B, J>>>,
+/// A running controller: a real-time thread stepping a [`Controller`](super::Controller) with the law `L` (by
+/// default the [`TrajectoryFollower`]) for a model of up to `B` bodies and `J` joints on the
+/// device `R`.
+pub struct ControlRun<R, const B: usize, const J: usize, L = TrajectoryFollower<J>>
+where
+    L: ControlLaw<B, J>,
+{
+    thread: RtThread<Option<LoopOutcome<R, B, J, L>>>,
     telemetry: Option<QueueReceiver<CycleRecord<J>>>,
     progress: MailboxReader<Progress>,
+    inputs: InputSender<J, L::Input>,
     stop: StopFlag,
     info: RunInfo,
 }
 
-impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<R, B, J> {
+impl<R: JointRobot + Send + 'static, const B: usize, const J: usize>
+    ControlRun<R, B, J, TrajectoryFollower<J>>
+{
     /// Opens `robot`, checks `model` against it, reads the start, plans and checks the motion
     /// (a tour through [`RunOptions::waypoints`] and back), starts the device, checks its first
     /// reply and starts the real-time loop. On an error nothing has moved and the device is
@@ -323,350 +355,82 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
     /// and the arm must stand at its start before the device starts: otherwise
     /// [`RunError::NotAtStart`], and nothing moves.
     pub fn start_with(
-        mut robot: R,
+        robot: R,
         loaded: LoadedModel<B>,
         options: RunOptions,
         motion: Motion<J>,
     ) -> Result<Self, RunError> {
-        let model = loaded.model;
-        if !(options.speed > 0.0 && options.speed <= 1.0) {
-            return Err(RunError::Options(format!(
-                "speed fraction {} must be above 0 and at most 1 (of the model's speed limits)",
-                options.speed
-            )));
-        }
-        let limits = MotionLimits::<J>::from_model(&model, options.speed)?;
-        let mut builder = RtThreadBuilder::new("rl-control")
-            .policy(Policy::Fifo)
-            .priority(options.priority)
-            .lock_memory(options.lock_memory)
-            .best_effort(true);
-        if !options.cpus.is_empty() {
-            builder = builder.cpus(options.cpus.iter().copied());
-        }
-        // Try the scheduling on a throw-away thread before anything starts: a bad priority or
-        // CPU is refused here; a missing privilege is degraded (best effort) and reported.
-        let probe = builder
-            .clone()
-            .lock_memory(false)
-            .spawn(|| ())
-            .map_err(|e| RunError::Options(format!("priority/CPU: {e}")))?;
-        // The probe thread does nothing; its end cannot fail.
-        let _ = probe.join();
-        let dof = model.dof();
-        let joints: Vec<String> = (0..dof).map(|k| joint_name(&model, k)).collect();
-        let stop = options.stop.clone();
-        #[cfg(feature = "view")]
-        let mut view = options.view.as_ref().map(|v| v.attach(dof)).transpose()?;
+        Self::launch(robot, loaded, options, |prepared, options| {
+            prepared.plan(motion, options)
+        })
+    }
+}
 
-        robot.open().map_err(|error| RunError::Device {
-            stage: "open",
-            error,
-        })?;
-        // From here on, every error path closes the device again.
-        let planned = (|| -> Result<_, RunError> {
-            if robot.dof() != dof {
-                return Err(RunError::Plan(PlanError::DeviceJoints {
-                    model: dof,
-                    device: robot.dof(),
-                }));
-            }
-            let mut start = vec![0.0; dof];
-            robot
-                .joint_position(&mut start)
-                .map_err(|error| RunError::Device {
-                    stage: "read the start position",
-                    error,
-                })?;
-            // A joint standing on its limit may be reported a rounding beyond it.
-            for (k, q) in start.iter_mut().enumerate() {
-                let l = model.limits(k);
-                let tolerance = robot.joint_position_resolution(*q);
-                if !l.wraparound && q.is_finite() {
-                    if *q < l.lower && *q >= l.lower - tolerance {
-                        *q = l.lower;
-                    } else if *q > l.upper && *q <= l.upper + tolerance {
-                        *q = l.upper;
-                    }
-                }
-            }
-            let device_period = robot.update_period();
-            let period = options.period.unwrap_or(device_period);
-            if period.is_zero() {
-                return Err(RunError::Options(
-                    "the control period must be positive".into(),
-                ));
-            }
-            if period < device_period {
-                return Err(RunError::Options(format!(
-                    "a control period of {:.3} ms is shorter than the device's cycle of {:.3} ms: \
-                     the device cannot answer more often",
-                    period.as_secs_f64() * 1e3,
-                    device_period.as_secs_f64() * 1e3
-                )));
-            }
-            let budget = PlanBudget {
-                max_duration: options.max_plan_duration,
-                stop: Some(stop.clone()),
-            };
-            let (plan, source, description) = match motion {
-                Motion::Tour => {
-                    let waypoints = options
-                        .waypoints
-                        .clone()
-                        .unwrap_or_else(|| default_waypoints(&model, &start));
-                    let n = waypoints.len();
-                    let plan =
-                        Plan::<J>::with_budget(&model, &start, &waypoints, &limits, &budget)?;
-                    let description = format!(
-                        "tour through {n} waypoint{} and back to the start",
-                        if n == 1 { "" } else { "s" }
-                    );
-                    (plan, "tour".to_owned(), description)
-                }
-                Motion::Trajectory(follow) => {
-                    let plan =
-                        Plan::<J>::from_trajectory(&model, follow.trajectory, &limits, &budget)?;
-                    // The arm must stand where the trajectory starts, within the tracking
-                    // bound the run supervises.
-                    let bounds = supervision_bounds(
-                        &model,
-                        &plan,
-                        &options.supervision,
-                        period.as_secs_f64(),
-                        device_period,
-                    );
-                    for (k, (&measured, &planned)) in start.iter().zip(plan.start()).enumerate() {
-                        let tolerance =
-                            bounds.tracking[k] + robot.joint_position_resolution(planned);
-                        let off = (measured - planned).abs();
-                        if off.is_nan() || off > tolerance {
-                            return Err(RunError::NotAtStart {
-                                joint: joints[k].clone(),
-                                start: planned,
-                                measured,
-                                tolerance,
-                            });
-                        }
-                    }
-                    start.copy_from_slice(plan.start());
-                    (plan, follow.source, follow.description)
-                }
-            };
-            plan.check_step(&model, period, device_period)?;
-            Ok((start, plan, period, device_period, source, description))
-        })();
-        let (start, plan, period, device_period, trajectory_source, trajectory_description) =
-            match planned {
-                Ok(p) => p,
-                Err(e) => {
-                    let _ = robot.close();
-                    return Err(e);
-                }
-            };
-        let plan_duration_s = plan.duration_s();
-        let assumed_speed: Vec<String> = (0..dof)
-            .filter(|&k| limits.assumed_speed[k])
-            .map(|k| joints[k].clone())
-            .collect();
-        let looped = match CyclicLoop::new(period) {
-            Ok(l) => l.overrun_policy(OverrunPolicy::Skip),
-            Err(e) => {
-                let _ = robot.close();
-                return Err(RunError::Loop(e.to_string()));
-            }
-        };
-        if stop.is_stop_requested() {
-            let _ = robot.close();
-            return Err(RunError::Cancelled);
-        }
+impl<R, const B: usize, const J: usize, L> ControlRun<R, B, J, L>
+where
+    R: JointRobot + Send + 'static,
+    L: ControlLaw<B, J> + 'static,
+{
+    /// Runs `law` instead of a trajectory: opens `robot`, checks `model` against it, reads
+    /// the start, lets the law prepare itself ([`ControlLaw::start`]), checks that the device
+    /// takes the law's [`CommandMode`](super::law::CommandMode), starts the device, checks its
+    /// first reply and starts the real-time loop. On an error nothing has moved and the device
+    /// is stopped and closed.
+    pub fn start_law(
+        robot: R,
+        loaded: LoadedModel<B>,
+        options: RunOptions,
+        law: L,
+    ) -> Result<Self, RunError> {
+        Self::launch(robot, loaded, options, |prepared, _| {
+            prepared.start_law(law)
+        })
+    }
 
-        let mut controller = match Controller::<R, B, J>::with_supervision(
-            robot,
-            model,
-            plan,
-            period,
-            &options.supervision,
-        ) {
-            Ok(c) => Box::new(c),
-            // Dropping the opened device closes its connections.
-            Err(e) => return Err(e.into()),
+    /// The three phases: checks and plan (`make` makes the law), the real-time thread, and
+    /// what is known for the report.
+    fn launch(
+        robot: R,
+        loaded: LoadedModel<B>,
+        options: RunOptions,
+        make: impl FnOnce(&mut Prepared<R, B, J>, &RunOptions) -> Result<L, RunError>,
+    ) -> Result<Self, RunError> {
+        let mut prepared = Prepared::open(robot, loaded.model, &options)?;
+        let law = match make(&mut prepared, &options) {
+            Ok(law) => law,
+            Err(e) => return Err(prepared.abandon(e)),
         };
-        if let Some(d) = options.duration {
-            controller.limit_cycles((d.as_secs_f64() / period.as_secs_f64()).round() as u64);
-        }
-
-        let (mut tx, rx) = if options.telemetry {
-            let records = (TELEMETRY_BYTES / size_of::<CycleRecord<J>>()).max(256);
-            let (tx, rx) = queue::<CycleRecord<J>>(records);
-            (Some(tx), Some(rx))
-        } else {
-            (None, None)
-        };
-        let (mut progress_tx, progress_rx) = mailbox(Progress::default());
-        let stop_rt = stop.clone();
-        let joints_rt = joints.clone();
-        let lock = controller
-            .robot()
-            .runs_own_cycle()
-            .then(|| PhaseLock::new(period, options.phase_target));
-        let looped = match &lock {
-            Some(l) => looped.phase_shift(&l.shift),
-            None => looped,
-        };
-        let period_ns = period.as_nanos().min(u128::from(u64::MAX)) as u64;
-        // The device is switched on in the real-time thread, once memory is locked and the
-        // thread runs at its priority, right before the loop: a drive that faults when its
-        // cycle stops (a CiA 402 SYNC watchdog) sees no gap. The start's outcome comes back
-        // through this channel.
-        let (started_tx, started_rx) = std::sync::mpsc::sync_channel::<Result<(), RunError>>(1);
-        let spawned = builder.spawn(move || {
-            let mut controller = controller;
-            let mut lock = lock;
-            let started = if stop_rt.is_stop_requested() {
-                Err(RunError::Cancelled)
-            } else {
-                start_device(&mut controller, &start, &joints_rt)
-            };
-            // For a device on its own cycle, the first reply came at one of its ticks.
-            let first_tick = MonoTime::now();
-            if let Err(e) = started {
-                let robot = controller.robot_mut();
-                let _ = robot.stop();
-                let _ = robot.close();
-                let _ = started_tx.send(Err(e));
-                return None;
-            }
-            let _ = started_tx.send(Ok(()));
-            // Start on the device's grid of ticks, the target fraction of a period before one.
-            let looped = match &lock {
-                Some(l) => looped.start_at(l.first_deadline(first_tick, MonoTime::now())),
-                None => looped,
-            };
-            let mut stats = looped.new_stats();
-            let mut worst_latency_ns = 0u64;
-            let mut halted = false;
-            let result = looped.run_into(&mut stats, |cycle| {
-                let level = stop_rt.level();
-                match level {
-                    StopLevel::None => {}
-                    StopLevel::Rest => {
-                        if !halted {
-                            controller.request_halt();
-                            halted = true;
-                        }
-                    }
-                    StopLevel::Now => controller.abort(),
-                }
-                let failed_before = controller.failed_steps();
-                // Leave a tenth of the period after the device's step for the rest of the cycle.
-                let next = cycle.deadline.as_nanos() + period_ns;
-                let budget_ns = next
-                    .saturating_sub(MonoTime::now().as_nanos())
-                    .saturating_sub(period_ns / 10);
-                let out = controller.cycle_timed(CycleTiming {
-                    skipped_deadlines: cycle.skipped_before,
-                    overran: cycle.skipped_before > 0,
-                    step_budget: Some(Duration::from_nanos(budget_ns)),
-                });
-                let mut record = out.record;
-                record.wakeup_latency_ns = cycle.wakeup_latency_ns;
-                record.step_ns = MonoTime::now().nanos_since(cycle.woke);
-                if let Some(l) = &mut lock {
-                    if !out.finished && controller.failed_steps() == failed_before {
-                        l.observe(record.step_ns);
-                    }
-                }
-                worst_latency_ns = worst_latency_ns.max(cycle.wakeup_latency_ns);
-                if let Some(tx) = &mut tx {
-                    // A full queue hands the record back and counts the drop.
-                    let _ = QueueSender::try_send(tx, record);
-                }
-                progress_tx.publish(Progress {
-                    cycle: record.cycle,
-                    time_s: record.time_s,
-                    error_max_rad: controller.tracking().max_error(),
-                    worst_latency_ns,
-                    lost: controller.failed_steps(),
-                    halting: controller.clock().halting().is_some(),
-                    faulted: controller.fault().is_some(),
-                    stop: level,
-                });
-                #[cfg(feature = "view")]
-                if let Some(v) = &mut view {
-                    v.show(&record);
-                }
-                if out.finished {
-                    ControlFlow::Break(())
-                } else {
-                    ControlFlow::Continue(())
-                }
-            });
-            drop(tx);
-            Some(LoopOutcome {
-                controller,
-                stats,
-                loop_error: result.err().map(|e| e.to_string()),
-            })
-        });
-        let thread = spawned.map_err(RunError::Thread)?;
-        match started_rx.recv() {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => {
-                let _ = thread.join();
-                return Err(e);
-            }
-            Err(_) => {
-                return Err(RunError::Loop(
-                    "the control thread ended before starting the device".into(),
-                ));
-            }
-        }
-        let granted = thread.granted();
-        let scheduling = match (granted.policy, thread.degraded().is_empty()) {
-            (Some(p), _) if p.is_realtime() => format!(
-                "{p} priority {} on CPUs {:?}",
-                granted.priority, granted.cpus
-            ),
-            (Some(p), _) => format!("{p} on CPUs {:?} (not real-time)", granted.cpus),
-            (None, _) => "unknown scheduling".to_owned(),
-        };
-        let warnings: Vec<String> = thread
-            .degraded()
-            .iter()
-            .map(|e| match e {
-                ThreadError::Memory(_) => {
-                    format!("{e}; running without locked memory (or pass --no-mlock)")
-                }
-                e => format!("{e}; running the loop at SCHED_OTHER, so its latency is not bounded"),
-            })
-            .collect();
-        let memory_locked = options.lock_memory
-            && !thread
-                .degraded()
-                .iter()
-                .any(|e| matches!(e, ThreadError::Memory(_)));
+        let (law_info, controller, setup) = prepared.into_controller(law, &options)?;
+        let (inputs_tx, inputs_rx) = input::channel(controller.model(), options.input_capacity);
+        let spawned = rt_loop::spawn(controller, inputs_rx, setup, &options)?;
         Ok(Self {
-            thread,
-            telemetry: rx,
-            progress: progress_rx,
-            stop,
+            thread: spawned.thread,
+            telemetry: spawned.telemetry,
+            progress: spawned.progress,
+            inputs: inputs_tx,
+            stop: options.stop.clone(),
             info: RunInfo {
                 model: options.model_name,
                 device: options.device_name,
-                joints,
-                period,
-                device_period,
-                scheduling,
-                warnings,
-                memory_locked,
-                plan_duration_s,
-                trajectory_source,
-                trajectory_description,
-                assumed_speed,
+                joints: law_info.joints,
+                period: law_info.period,
+                device_period: law_info.device_period,
+                scheduling: spawned.scheduling,
+                warnings: spawned.warnings,
+                memory_locked: spawned.memory_locked,
+                plan_duration_s: law_info.duration_s,
+                trajectory_source: law_info.source,
+                trajectory_description: law_info.description,
+                assumed_speed: law_info.assumed_speed,
                 started: Instant::now(),
             },
         })
+    }
+
+    /// A sender of targets and of the law's own inputs to the running loop: clone it for any
+    /// number of threads (see [`input`]).
+    pub fn inputs(&self) -> InputSender<J, L::Input> {
+        self.inputs.clone()
     }
 
     /// Waits up to `max_wait` and returns the latest progress, or `None` once the loop has
@@ -708,7 +472,7 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
         &self.info.warnings
     }
 
-    /// The planned trajectory's duration, s.
+    /// The planned trajectory's duration (the law's, if it knows one; else 0), s.
     pub fn plan_duration_s(&self) -> f64 {
         self.info.plan_duration_s
     }
@@ -741,210 +505,6 @@ impl<R: JointRobot + Send + 'static, const B: usize, const J: usize> ControlRun<
         }
         self.drain_telemetry(&mut sink);
         let dropped = self.telemetry.as_ref().map(QueueReceiver::dropped);
-        let info = self.info;
-        let outcome = match self.thread.join() {
-            Ok(Some(o)) => o,
-            Ok(None) | Err(_) => {
-                let mut report = RunReport::failed_early(
-                    info.model,
-                    info.device,
-                    info.joints,
-                    "the control thread panicked; the device was not stopped by the run",
-                );
-                report.trajectory_source = info.trajectory_source;
-                report.trajectory_description = info.trajectory_description;
-                return report;
-            }
-        };
-        let LoopOutcome {
-            mut controller,
-            stats,
-            loop_error,
-        } = outcome;
-        let fault_before_stop = controller.robot().fault().map(|e| e.to_string());
-        let robot = controller.robot_mut();
-        let mut shutdown = Shutdown {
-            description: robot.stop_description().to_owned(),
-            fault_before_stop,
-            ..Shutdown::default()
-        };
-        match robot.stop() {
-            Ok(()) => shutdown.stopped = true,
-            Err(e) => shutdown.error = Some(e.to_string()),
-        }
-        if let Err(e) = robot.close() {
-            shutdown.error.get_or_insert(e.to_string());
-        }
-        let end = controller.end();
-        let mut failure = loop_error.map(|e| format!("control loop: {e}"));
-        if let Some(RunEnd::Fault(f)) = end {
-            failure.get_or_insert(f.describe(&info.joints));
-        }
-        if !shutdown.stopped {
-            failure.get_or_insert(format!(
-                "the device did not stop cleanly: {}",
-                shutdown.error.as_deref().unwrap_or("unknown")
-            ));
-        }
-        let tracking = controller.tracking();
-        let bounds = controller.supervisor().bounds();
-        let dof = info.joints.len();
-        let assumed =
-            (!info.assumed_speed.is_empty()).then_some((UNKNOWN_SPEED, info.assumed_speed));
-        RunReport {
-            model: info.model,
-            device: info.device,
-            joints: info.joints,
-            period_s: info.period.as_secs_f64(),
-            device_period_s: info.device_period.as_secs_f64(),
-            scheduling: info.scheduling,
-            warnings: info.warnings,
-            memory_locked: info.memory_locked,
-            plan_duration_s: info.plan_duration_s,
-            trajectory_source: info.trajectory_source,
-            trajectory_description: info.trajectory_description,
-            trajectory_time_s: controller.clock().time_s(),
-            wall_time_s: info.started.elapsed().as_secs_f64(),
-            end,
-            stats,
-            link: controller.link_statistics(),
-            lost_packets: controller.failed_steps(),
-            tracking_max: tracking.max_per_joint().to_vec(),
-            tracking_rms: tracking.rms_per_joint()[..dof].to_vec(),
-            tracking_final: tracking.last_error().to_vec(),
-            tracking_bound: bounds.tracking[..dof].to_vec(),
-            peak_feed_forward: tracking.peak_feed_forward().to_vec(),
-            tracking_error_max: tracking.max_error(),
-            tracking_error_rms: tracking.rms_error(),
-            limit_violations: tracking.violations(),
-            first_violation: tracking.first_violation(),
-            supervised: controller.supervisor().is_enabled(),
-            assumed_speed: assumed,
-            shutdown,
-            telemetry_rows: None,
-            telemetry_dropped: dropped,
-            notes: Vec::new(),
-            failure,
-        }
+        finish::report(self.thread.join(), self.info, dropped)
     }
-}
-
-/// Exchanges tried before the first reply counts as missing.
-const FIRST_EXCHANGE_TRIES: u32 = 5;
-
-/// Keeps the loop's deadlines a fixed fraction of a period ahead of the ticks of a device that
-/// runs its own cycle: the step's duration (wake-up to reply) is the distance to the tick; a
-/// proportional correction, at most 2 % of a period per cycle, moves the loop's grid toward the
-/// target.
-struct PhaseLock {
-    shift: PhaseShift,
-    period_ns: u64,
-    target_ns: i64,
-}
-
-impl PhaseLock {
-    /// Correction applied per cycle, as a fraction of the error.
-    const GAIN: f64 = 0.2;
-    /// Largest correction per cycle, as a fraction of the period.
-    const MAX_STEP: f64 = 0.02;
-
-    fn new(period: Duration, target: f64) -> Self {
-        let period_ns = period.as_nanos().max(1) as u64;
-        Self {
-            shift: PhaseShift::new(),
-            period_ns,
-            target_ns: (target.clamp(0.05, 0.9) * period_ns as f64) as i64,
-        }
-    }
-
-    /// The first deadline after `now` on the grid of ticks through `tick`, the target ahead of
-    /// a tick (with one period of room for the thread to start).
-    fn first_deadline(&self, tick: MonoTime, now: MonoTime) -> MonoTime {
-        let p = self.period_ns;
-        let ahead = p - (self.target_ns as u64).min(p);
-        let elapsed = now.nanos_since(tick);
-        let n = elapsed / p + 2;
-        MonoTime::from_nanos(
-            tick.as_nanos()
-                .saturating_add(n * p)
-                .saturating_sub(p - ahead),
-        )
-    }
-
-    /// Corrects the phase from one successful step of `step_ns`.
-    fn observe(&mut self, step_ns: u64) {
-        let error = step_ns as f64 - self.target_ns as f64;
-        let max = Self::MAX_STEP * self.period_ns as f64;
-        let correction = (error * Self::GAIN).clamp(-max, max);
-        self.shift.shift(correction as i64);
-    }
-}
-
-/// Switches the device on (`start`: for a robot controller, servo on) and checks its first
-/// reply.
-fn start_device<R: JointRobot, const B: usize, const J: usize>(
-    controller: &mut Controller<R, B, J>,
-    start: &[f64],
-    joints: &[String],
-) -> Result<(), RunError> {
-    controller
-        .robot_mut()
-        .start()
-        .map_err(|error| RunError::Device {
-            stage: "start",
-            error,
-        })?;
-    first_exchange(controller, start, joints)
-}
-
-/// Commands the plan's start once and checks that the device reports the arm there.
-fn first_exchange<R: JointRobot, const B: usize, const J: usize>(
-    controller: &mut Controller<R, B, J>,
-    start: &[f64],
-    joints: &[String],
-) -> Result<(), RunError> {
-    let dof = start.len();
-    let tolerance: Vec<f64> = controller.supervisor().bounds().tracking[..dof].to_vec();
-    let robot = controller.robot_mut();
-    // A device on its own cycle may let the first request wait past a reply timeout while its
-    // cycle settles: a few tries, each after the device has had time to answer the last one,
-    // before giving up.
-    let mut tries = 0;
-    loop {
-        tries += 1;
-        match robot.set_joint_position(start).and_then(|()| robot.step()) {
-            Ok(()) => break,
-            Err(e) if tries < FIRST_EXCHANGE_TRIES && e.kind() == ErrorKind::Timeout => {
-                // Let a device that answers on its own cycle work off the request before the
-                // next one, so no second request waits in its queue.
-                std::thread::sleep(2 * robot.update_period());
-            }
-            Err(error) => {
-                return Err(RunError::Device {
-                    stage: "complete the first exchange",
-                    error,
-                });
-            }
-        }
-    }
-    let mut measured = vec![0.0; dof];
-    robot
-        .joint_position(&mut measured)
-        .map_err(|error| RunError::Device {
-            stage: "report the joints after starting",
-            error,
-        })?;
-    for k in 0..dof {
-        let tol = tolerance[k] + robot.joint_position_resolution(start[k]);
-        let off = (measured[k] - start[k]).abs();
-        if off.is_nan() || off > tol {
-            return Err(RunError::Moved {
-                joint: joints[k].clone(),
-                planned: start[k],
-                measured: measured[k],
-                tolerance: tol,
-            });
-        }
-    }
-    Ok(())
 }

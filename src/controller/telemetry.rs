@@ -9,24 +9,55 @@ use std::path::{Path, PathBuf};
 
 use super::DEFAULT_JOINTS;
 
+/// What the run was doing in a cycle (the CSV's `state` column).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum RunState {
+    /// Running the law.
+    #[default]
+    Running,
+    /// Bringing the arm to rest (a stop request, the end of the duration, stale inputs).
+    Braking,
+    /// A fault was found in this cycle or before: coming to rest, or ending at once.
+    Fault,
+    /// The run ended: the device was not stepped in this cycle.
+    Stopped,
+}
+
+impl RunState {
+    /// The CSV value: `running`, `braking`, `fault` or `stopped`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Running => "running",
+            Self::Braking => "braking",
+            Self::Fault => "fault",
+            Self::Stopped => "stopped",
+        }
+    }
+}
+
 /// What one control cycle saw and did, for up to `J` joints.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CycleRecord<const J: usize = DEFAULT_JOINTS> {
     /// Cycle index.
     pub cycle: u64,
-    /// Trajectory time of the cycle, s.
+    /// Time of the cycle, s: the law's (trajectory time for the trajectory follower, which
+    /// slows down while it brakes) or the run's.
     pub time_s: f64,
-    /// The position commanded for this time (sent one cycle earlier).
+    /// The position commanded for this time (sent one cycle earlier); for a law commanding
+    /// velocities or torques, its reference position.
     pub commanded: [f64; J],
     /// The measured position (the device's last reply).
     pub measured: [f64; J],
-    /// Inverse-dynamics feed-forward torque for the position commanded in this cycle.
+    /// The torques sent in this cycle: inverse-dynamics feed-forward for the position
+    /// commanded (the trajectory follower), or a torque law's command.
     pub feed_forward: [f64; J],
     /// How late the cycle woke after its deadline, ns (filled by the loop).
     pub wakeup_latency_ns: u64,
     /// From wake-up to the end of the control step, device exchange included, ns (filled by
     /// the loop).
     pub step_ns: u64,
+    /// What the run was doing.
+    pub state: RunState,
 }
 
 impl<const J: usize> CycleRecord<J> {
@@ -39,10 +70,12 @@ impl<const J: usize> CycleRecord<J> {
         feed_forward: [0.0; J],
         wakeup_latency_ns: 0,
         step_ns: 0,
+        state: RunState::Running,
     };
 }
 
-/// Writes the CSV header: `cycle,t_s,cmd_<joint>…,meas_<joint>…,ff_<joint>…,latency_us,step_us`.
+/// Writes the CSV header:
+/// `cycle,t_s,cmd_<joint>…,meas_<joint>…,ff_<joint>…,latency_us,step_us,state`.
 pub fn write_header<W: Write>(mut w: W, joints: &[String]) -> io::Result<()> {
     write!(w, "cycle,t_s")?;
     for prefix in ["cmd", "meas", "ff"] {
@@ -50,7 +83,7 @@ pub fn write_header<W: Write>(mut w: W, joints: &[String]) -> io::Result<()> {
             write!(w, ",{prefix}_{}", sanitize(j))?;
         }
     }
-    writeln!(w, ",latency_us,step_us")
+    writeln!(w, ",latency_us,step_us,state")
 }
 
 /// Writes one record as a CSV row for `dof` joints.
@@ -70,9 +103,10 @@ pub fn write_row<W: Write, const J: usize>(
     }
     writeln!(
         w,
-        ",{:.3},{:.3}",
+        ",{:.3},{:.3},{}",
         r.wakeup_latency_ns as f64 / 1e3,
-        r.step_ns as f64 / 1e3
+        r.step_ns as f64 / 1e3,
+        r.state.as_str()
     )
 }
 

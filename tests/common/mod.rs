@@ -2,6 +2,94 @@
 //! on a started H7 device against an in-process fake, and the default tour.
 #![allow(dead_code)]
 
+/// `Device` and `CyclicDevice` for a simulated device in this process: RL's life cycle through
+/// rl-drivers' `Lifecycle` (field `lifecycle`), power and the state it was stopped from recorded
+/// in its status (field `status`: `powered`, `stopped_from`), one `exchange` per step, the link's
+/// failures in a row (field `link`) and its `period`.
+macro_rules! sim_device {
+    ($device:ty) => {
+        impl $device {
+            fn lifecycle_of(s: &mut Self) -> &mut rl::drivers::Lifecycle {
+                &mut s.lifecycle
+            }
+        }
+
+        impl rl::drivers::Device for $device {
+            type Error = rl::drivers::Error;
+
+            fn open(&mut self) -> Result<(), Self::Error> {
+                rl::drivers::Lifecycle::transition(
+                    self,
+                    rl::drivers::Operation::Open,
+                    Self::lifecycle_of,
+                    |_| Ok(()),
+                )
+            }
+
+            fn start(&mut self) -> Result<(), Self::Error> {
+                rl::drivers::Lifecycle::transition(
+                    self,
+                    rl::drivers::Operation::Start,
+                    Self::lifecycle_of,
+                    |s| {
+                        s.status.lock().expect("status").powered = true;
+                        Ok(())
+                    },
+                )
+            }
+
+            fn stop(&mut self) -> Result<(), Self::Error> {
+                let from = self.lifecycle.state();
+                rl::drivers::Lifecycle::transition(
+                    self,
+                    rl::drivers::Operation::Stop,
+                    Self::lifecycle_of,
+                    |s| {
+                        let mut st = s.status.lock().expect("status");
+                        st.powered = false;
+                        st.stopped_from = Some(from);
+                        Ok(())
+                    },
+                )
+            }
+
+            fn close(&mut self) -> Result<(), Self::Error> {
+                rl::drivers::Lifecycle::transition(
+                    self,
+                    rl::drivers::Operation::Close,
+                    Self::lifecycle_of,
+                    |_| Ok(()),
+                )
+            }
+
+            fn state(&self) -> rl::drivers::State {
+                self.lifecycle.state()
+            }
+
+            fn fault(&self) -> Option<Self::Error> {
+                self.lifecycle.fault()
+            }
+
+            fn stop_description(&self) -> &'static str {
+                "simulated drives disabled"
+            }
+        }
+
+        impl rl::drivers::CyclicDevice for $device {
+            fn step(&mut self) -> Result<(), Self::Error> {
+                let r = rl::drivers::Lifecycle::step(self, Self::lifecycle_of, Self::exchange);
+                self.link.consecutive_failures = self.lifecycle.consecutive_failures();
+                r
+            }
+
+            fn update_period(&self) -> std::time::Duration {
+                self.period
+            }
+        }
+    };
+}
+
+pub mod arm;
 pub mod sim;
 
 use std::time::Duration;
@@ -32,14 +120,19 @@ pub fn started_h7(fake: &FakeH7, dof: usize) -> MitsubishiH7 {
     robot
 }
 
+/// [`started_h7`] and where it reports the arm.
+pub fn started_h7_standing(fake: &FakeH7, dof: usize) -> (MitsubishiH7, Vec<f64>) {
+    let robot = started_h7(fake, dof);
+    let mut start = vec![0.0; dof];
+    robot.joint_position(&mut start).expect("joints");
+    (robot, start)
+}
+
 /// The default tour at 25 % of the model's speed limits, from where the arm stands, on a
 /// started H7 against `fake`.
 pub fn demo_controller(fake: &FakeH7) -> Controller<MitsubishiH7> {
     let model = rv6sl().expect("embedded model").model;
-    let dof = model.dof();
-    let robot = started_h7(fake, dof);
-    let mut start = vec![0.0; dof];
-    robot.joint_position(&mut start).expect("joints");
+    let (robot, start) = started_h7_standing(fake, model.dof());
     let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
     let plan =
         Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");

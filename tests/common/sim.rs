@@ -9,8 +9,8 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use rl::drivers::{
-    CyclicDevice, Device, Error, JointDevice, JointLimitSensor, JointPositionActuator,
-    JointPositionSensor, Lifecycle, LinkStatistics, LinkStatisticsSensor, Operation, State,
+    Error, JointDevice, JointLimitSensor, JointPositionActuator, JointPositionSensor, Lifecycle,
+    LinkStatistics, LinkStatisticsSensor, Operation, State,
 };
 
 /// What the simulated robot does wrong, from which step on.
@@ -180,62 +180,7 @@ impl SimRobot {
     }
 }
 
-fn lifecycle(s: &mut SimRobot) -> &mut Lifecycle {
-    &mut s.lifecycle
-}
-
-impl Device for SimRobot {
-    type Error = Error;
-
-    fn open(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Open, lifecycle, |_| Ok(()))
-    }
-
-    fn start(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Start, lifecycle, |s| {
-            s.status.lock().expect("status").powered = true;
-            Ok(())
-        })
-    }
-
-    fn stop(&mut self) -> Result<(), Error> {
-        let from = self.lifecycle.state();
-        Lifecycle::transition(self, Operation::Stop, lifecycle, |s| {
-            let mut st = s.status.lock().expect("status");
-            st.powered = false;
-            st.stopped_from = Some(from);
-            Ok(())
-        })
-    }
-
-    fn close(&mut self) -> Result<(), Error> {
-        Lifecycle::transition(self, Operation::Close, lifecycle, |_| Ok(()))
-    }
-
-    fn state(&self) -> State {
-        self.lifecycle.state()
-    }
-
-    fn fault(&self) -> Option<Error> {
-        self.lifecycle.fault()
-    }
-
-    fn stop_description(&self) -> &'static str {
-        "simulated drives disabled"
-    }
-}
-
-impl CyclicDevice for SimRobot {
-    fn step(&mut self) -> Result<(), Error> {
-        let r = Lifecycle::step(self, lifecycle, Self::exchange);
-        self.link.consecutive_failures = self.lifecycle.consecutive_failures();
-        r
-    }
-
-    fn update_period(&self) -> Duration {
-        self.period
-    }
-}
+sim_device!(SimRobot);
 
 impl JointDevice for SimRobot {
     fn dof(&self) -> usize {

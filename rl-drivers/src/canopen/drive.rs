@@ -1343,6 +1343,22 @@ impl JointDevice for Cia402 {
     fn joint_limit_sensor(&self) -> Option<&dyn JointLimitSensor<Error = Error>> {
         Some(self)
     }
+
+    fn joint_velocity_actuator(&mut self) -> Option<&mut dyn JointVelocityActuator<Error = Error>> {
+        (self.config.mode == Mode::CyclicVelocity).then_some(self as _)
+    }
+
+    fn joint_torque_actuator(&mut self) -> Option<&mut dyn JointTorqueActuator<Error = Error>> {
+        (self.config.mode == Mode::CyclicTorque).then_some(self as _)
+    }
+
+    fn joint_velocity_sensor(&self) -> Option<&dyn JointVelocitySensor<Error = Error>> {
+        self.layout.velocity.is_some().then_some(self as _)
+    }
+
+    fn joint_torque_sensor(&self) -> Option<&dyn JointTorqueSensor<Error = Error>> {
+        self.layout.torque.is_some().then_some(self as _)
+    }
 }
 
 impl JointPositionSensor for Cia402 {

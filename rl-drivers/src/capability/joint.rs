@@ -1,4 +1,7 @@
-use crate::{Device, JointLimitSensor, JointTorqueFeedForward};
+use crate::{
+    Device, JointLimitSensor, JointTorqueActuator, JointTorqueFeedForward, JointTorqueSensor,
+    JointVelocityActuator, JointVelocitySensor,
+};
 
 /// A device with joints (RL's `rl::hal::Joint`): the length every joint vector must have.
 ///
@@ -17,6 +20,30 @@ pub trait JointDevice: Device {
 
     /// The device's report of joints stopped at a limit, if it gives one.
     fn joint_limit_sensor(&self) -> Option<&dyn JointLimitSensor<Error = Self::Error>> {
+        None
+    }
+
+    /// The device's joint velocity command, if it takes one (in its configured mode).
+    fn joint_velocity_actuator(
+        &mut self,
+    ) -> Option<&mut dyn JointVelocityActuator<Error = Self::Error>> {
+        None
+    }
+
+    /// The device's joint torque command, if it takes one (in its configured mode).
+    fn joint_torque_actuator(
+        &mut self,
+    ) -> Option<&mut dyn JointTorqueActuator<Error = Self::Error>> {
+        None
+    }
+
+    /// The device's measured joint velocities, if it reports them.
+    fn joint_velocity_sensor(&self) -> Option<&dyn JointVelocitySensor<Error = Self::Error>> {
+        None
+    }
+
+    /// The device's measured joint torques, if it reports them.
+    fn joint_torque_sensor(&self) -> Option<&dyn JointTorqueSensor<Error = Self::Error>> {
         None
     }
 }

@@ -1031,6 +1031,32 @@ impl JointDevice for EthercatDrives {
     fn joint_limit_sensor(&self) -> Option<&dyn JointLimitSensor<Error = Error>> {
         Some(self)
     }
+
+    fn joint_velocity_actuator(&mut self) -> Option<&mut dyn JointVelocityActuator<Error = Error>> {
+        (self.config.mode == Mode::CyclicVelocity
+            && self.drives.iter().all(|d| d.at.target_velocity.is_some()))
+        .then_some(self as _)
+    }
+
+    fn joint_torque_actuator(&mut self) -> Option<&mut dyn JointTorqueActuator<Error = Error>> {
+        (self.config.mode == Mode::CyclicTorque
+            && self.drives.iter().all(|d| d.at.target_torque.is_some()))
+        .then_some(self as _)
+    }
+
+    fn joint_velocity_sensor(&self) -> Option<&dyn JointVelocitySensor<Error = Error>> {
+        self.drives
+            .iter()
+            .all(|d| d.at.velocity.is_some())
+            .then_some(self as _)
+    }
+
+    fn joint_torque_sensor(&self) -> Option<&dyn JointTorqueSensor<Error = Error>> {
+        self.drives
+            .iter()
+            .all(|d| d.at.torque.is_some())
+            .then_some(self as _)
+    }
 }
 
 impl JointPositionSensor for EthercatDrives {

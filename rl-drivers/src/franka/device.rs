@@ -1093,6 +1093,22 @@ impl JointDevice for FrankaArm {
     fn dof(&self) -> usize {
         DOF
     }
+
+    fn joint_velocity_actuator(&mut self) -> Option<&mut dyn JointVelocityActuator<Error = Error>> {
+        (self.config.mode == ControlMode::JointVelocity).then_some(self as _)
+    }
+
+    fn joint_torque_actuator(&mut self) -> Option<&mut dyn JointTorqueActuator<Error = Error>> {
+        (self.config.mode == ControlMode::JointTorque).then_some(self as _)
+    }
+
+    fn joint_velocity_sensor(&self) -> Option<&dyn JointVelocitySensor<Error = Error>> {
+        Some(self)
+    }
+
+    fn joint_torque_sensor(&self) -> Option<&dyn JointTorqueSensor<Error = Error>> {
+        Some(self)
+    }
 }
 
 impl JointPositionSensor for FrankaArm {
