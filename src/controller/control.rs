@@ -808,6 +808,12 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         self.ending.braking_cycles > 0 || self.ending.braking.is_some()
     }
 
+    /// Whether this cycle's measurement is fresh (the device answered; a lost reply leaves the
+    /// last measurement in place, which the tracking statistics skip).
+    pub fn feedback_fresh(&self) -> bool {
+        self.feedback.fresh
+    }
+
     /// Cycles run (the law was called and the device stepped).
     pub fn cycles(&self) -> u64 {
         self.cycle

@@ -249,9 +249,13 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
             faulted: c.fault().is_some(),
             stop: level,
         });
+        // A lost reply's stale measurement is not shown: the page's tracking error is the
+        // statistics' (which skip it), and the view keeps the last fresh pose.
         #[cfg(feature = "view")]
         if let Some(v) = &mut self.view {
-            v.show(&record);
+            if self.controller.feedback_fresh() {
+                v.show(&record);
+            }
         }
         if out.finished {
             ControlFlow::Break(())
