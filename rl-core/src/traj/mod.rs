@@ -47,6 +47,7 @@ mod cartesian;
 mod circular;
 mod error;
 mod jerk_limited;
+pub mod otg;
 mod piecewise;
 mod polynomial;
 mod quaternion_spline;
