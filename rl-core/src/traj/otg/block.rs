@@ -163,18 +163,20 @@ impl Axis {
         n_blocked: 0,
     };
 
-    /// Braking, then the extremal profiles and blocked intervals of one axis.
+    /// Braking, then the extremal profiles and blocked intervals of one axis (in place: the
+    /// state is large and the real-time path copies nothing it need not).
     ///
     /// `p`, `v`, `a`: start; `pf`, `vf`, `af`: target (`pf` unused for a velocity target);
     /// `b`: limits in the axis' frame.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    pub fn init(
+        &mut self,
         axis: usize,
         velocity_target: bool,
         [p, v, a]: [f64; 3],
         [pf, vf, af]: [f64; 3],
         b: Bounds,
-    ) -> Result<Self, OtgError> {
+    ) -> Result<(), OtgError> {
         let jerk_free = b.j.is_infinite();
         let acc_free = b.a_max.is_infinite() || b.a_min.is_infinite();
         let kind = if velocity_target {
@@ -222,18 +224,14 @@ impl Axis {
             vf,
             af,
         };
-        let mut axis_state = Self {
-            kind,
-            brake,
-            ends,
-            bounds: b,
-            extremals: Extremals::new(),
-            t_min: 0.0,
-            blocked: [(0.0, 0.0); MAX_BLOCKED],
-            n_blocked: 0,
-        };
-        axis_state.step1(axis)?;
-        Ok(axis_state)
+        self.kind = kind;
+        self.brake = brake;
+        self.ends = ends;
+        self.bounds = b;
+        self.extremals.len = 0;
+        self.t_min = 0.0;
+        self.n_blocked = 0;
+        self.step1(axis)
     }
 
     fn step1(&mut self, axis: usize) -> Result<(), OtgError> {
@@ -262,8 +260,7 @@ impl Axis {
                     dir: Direction::Up,
                     duration: t,
                 });
-                moving_single_step =
-                    libm::fabs(e.v0) > f64::EPSILON || libm::fabs(e.a0) > f64::EPSILON;
+                moving_single_step = e.v0.abs() > f64::EPSILON || e.a0.abs() > f64::EPSILON;
             }
         }
         if found.len == 0 {
@@ -370,7 +367,7 @@ impl Axis {
         let duration = t - brake_time;
         let tol = 4.0 * f64::EPSILON * (1.0 + t);
         for x in self.extremals.as_slice() {
-            if libm::fabs(x.duration - duration) <= tol {
+            if (x.duration - duration).abs() <= tol {
                 return Ok(Plan::One(shape_of(self.kind, x, &self.bounds, &self.ends)));
             }
         }
@@ -412,7 +409,7 @@ impl Axis {
                 let weight = ((target - lo) / span).clamp(0.0, 1.0);
                 Ok(Plan::Blend(shape(&xu), shape(&xd), weight))
             }
-            (Some((x, m)), None) | (None, Some((x, m))) if libm::fabs(m - target) <= tol => {
+            (Some((x, m)), None) | (None, Some((x, m))) if (m - target).abs() <= tol => {
                 Ok(Plan::One(shape(&x)))
             }
             _ => Err(fail),

@@ -73,17 +73,17 @@ fn velocity_brake(v0: f64, a0: f64, v_max: f64, v_min: f64, a_min: f64, j: f64) 
         ..Brake::default()
     };
     let t_to_a_min = (a0 - a_min) / j;
-    let t_to_v_max = a0 / j + libm::sqrt(a0 * a0 + 2.0 * j * (v0 - v_max)) / libm::fabs(j);
-    let t_to_v_min = a0 / j + libm::sqrt(0.5 * a0 * a0 + j * (v0 - v_min)) / libm::fabs(j);
-    let t_to_limit = libm::fmin(t_to_v_max, t_to_v_min);
+    let t_to_v_max = a0 / j + libm::sqrt(a0 * a0 + 2.0 * j * (v0 - v_max)) / j.abs();
+    let t_to_v_min = a0 / j + libm::sqrt(0.5 * a0 * a0 + j * (v0 - v_min)) / j.abs();
+    let t_to_limit = f64::min(t_to_v_max, t_to_v_min);
     if t_to_a_min < t_to_limit {
         let v_at_a_min = v_after(v0, a0, -j, t_to_a_min);
         let hold_to_v_max = -(v_at_a_min - v_max) / a_min;
         let hold_to_v_min = a_min / (2.0 * j) - (v_at_a_min - v_min) / a_min;
-        b.t[0] = libm::fmax(t_to_a_min - EPS, 0.0);
-        b.t[1] = libm::fmax(libm::fmin(hold_to_v_max, hold_to_v_min), 0.0);
+        b.t[0] = f64::max(t_to_a_min - EPS, 0.0);
+        b.t[1] = f64::max(f64::min(hold_to_v_max, hold_to_v_min), 0.0);
     } else {
-        b.t[0] = libm::fmax(t_to_limit - EPS, 0.0);
+        b.t[0] = f64::max(t_to_limit - EPS, 0.0);
     }
     b
 }
@@ -117,7 +117,7 @@ fn acceleration_brake(
         let hold_to_v_min = -(v_at_a_max - v_min) / a_max;
         let hold_to_v_max = -a_max / (2.0 * j) - (v_at_a_max - v_max) / a_max;
         b.t[0] = t_to_a_max + EPS;
-        b.t[1] = libm::fmax(libm::fmin(hold_to_v_min, hold_to_v_max - EPS), 0.0);
+        b.t[1] = f64::max(f64::min(hold_to_v_min, hold_to_v_max - EPS), 0.0);
     } else {
         b.t[0] = t_to_a_max + EPS;
     }

@@ -40,10 +40,10 @@ impl End {
     /// As [`Self::reaches`] with every tolerance times `factor`.
     #[inline]
     pub fn reaches_within(&self, p: f64, v: f64, a: f64, factor: f64) -> bool {
-        let tol = |precision: f64, scale: f64| factor * libm::fmax(precision, ROUNDING * scale);
-        (p.is_nan() || libm::fabs(self.p - p) < tol(P_PRECISION, self.scale[0]))
-            && libm::fabs(self.v - v) < tol(V_PRECISION, self.scale[1])
-            && libm::fabs(self.a - a) < tol(A_PRECISION, self.scale[2])
+        let tol = |precision: f64, scale: f64| factor * f64::max(precision, ROUNDING * scale);
+        (p.is_nan() || (self.p - p).abs() < tol(P_PRECISION, self.scale[0]))
+            && (self.v - v).abs() < tol(V_PRECISION, self.scale[1])
+            && (self.a - a).abs() < tol(A_PRECISION, self.scale[2])
     }
 }
 
@@ -56,7 +56,7 @@ pub(crate) const A_EPS: f64 = 1e-12;
 /// `[v_min, v_max, a_min, a_max]` widened by the rounding slack.
 #[inline]
 pub(crate) fn slack(b: &Bounds) -> [f64; 4] {
-    let widen = |x: f64, eps: f64| eps * libm::fmax(1.0, libm::fabs(x));
+    let widen = |x: f64, eps: f64| eps * f64::max(1.0, x.abs());
     [
         b.v_min - widen(b.v_min, V_EPS),
         b.v_max + widen(b.v_max, V_EPS),
@@ -198,7 +198,7 @@ pub(crate) fn clean_times(t: &mut [f64; 7]) -> bool {
 pub(crate) fn integrate_checked(t: &[f64; 7], v0: f64, a0: f64, b: &Bounds) -> Option<End> {
     let [v_lo, v_hi, a_lo, a_hi] = slack(b);
     let (mut p, mut v, mut a) = (0.0, v0, a0);
-    let mut scale = [0.0, libm::fabs(v0), libm::fabs(a0)];
+    let mut scale = [0.0, v0.abs(), a0.abs()];
     let holds = holds(b);
     for i in 0..7 {
         let ti = t[i];
@@ -231,9 +231,9 @@ pub(crate) fn integrate_checked(t: &[f64; 7], v0: f64, a0: f64, b: &Bounds) -> O
         if (2..6).contains(&i) && (v > v_hi || v < v_lo) {
             return None;
         }
-        scale[0] = libm::fmax(scale[0], libm::fabs(p));
-        scale[1] = libm::fmax(scale[1], libm::fabs(v));
-        scale[2] = libm::fmax(scale[2], libm::fabs(a));
+        scale[0] = f64::max(scale[0], p.abs());
+        scale[1] = f64::max(scale[1], v.abs());
+        scale[2] = f64::max(scale[2], a.abs());
     }
     Some(End { p, v, a, scale })
 }

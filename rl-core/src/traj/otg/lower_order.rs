@@ -24,7 +24,7 @@ fn integrate_second(t: &[f64; 7], v0: f64, b: &Bounds) -> Option<End> {
     let acc = second_order_accelerations(b);
     let [v_lo, v_hi, ..] = super::frame::slack(b);
     let (mut p, mut v) = (0.0, v0);
-    let mut scale = [0.0, libm::fabs(v0), 0.0];
+    let mut scale = [0.0, v0.abs(), 0.0];
     for i in 0..3 {
         let ti = t[i];
         if ti < 0.0 {
@@ -35,8 +35,8 @@ fn integrate_second(t: &[f64; 7], v0: f64, b: &Bounds) -> Option<End> {
         if v > v_hi || v < v_lo {
             return None;
         }
-        scale[0] = libm::fmax(scale[0], libm::fabs(p));
-        scale[1] = libm::fmax(scale[1], libm::fabs(v));
+        scale[0] = f64::max(scale[0], p.abs());
+        scale[1] = f64::max(scale[1], v.abs());
     }
     Some(End {
         p,
@@ -178,8 +178,7 @@ pub(crate) fn first_order_extremal(e: &Ends, b: &Bounds, found: &mut Extremals) 
     if e.pd > 0.0 {
         t[3] = e.pd / b.v_max;
     }
-    if t[3].is_finite() && t[3] >= 0.0 && libm::fabs(t[3] * b.v_max - e.pd) < P_PRECISION
-        || e.pd == 0.0
+    if t[3].is_finite() && t[3] >= 0.0 && (t[3] * b.v_max - e.pd).abs() < P_PRECISION || e.pd == 0.0
     {
         found.push(Extremal {
             t,
@@ -213,7 +212,7 @@ pub(crate) fn velocity_second_extremal(e: &Ends, b: &Bounds, found: &mut Extrema
     if vd > 0.0 {
         t[1] = vd / b.a_max;
     }
-    if t[1].is_finite() && (vd == 0.0 || libm::fabs(t[1] * b.a_max - vd) < V_PRECISION) {
+    if t[1].is_finite() && (vd == 0.0 || (t[1] * b.a_max - vd).abs() < V_PRECISION) {
         found.push(Extremal {
             t,
             dir,
@@ -236,7 +235,7 @@ pub(crate) fn velocity_second_max(e: &Ends, b: &Bounds, duration: f64) -> Option
 /// limit is zero): its duration if it reaches the target, `None` otherwise. Velocity limits
 /// are checked at the end.
 pub(crate) fn constant_acceleration(e: &Ends, b: &Bounds) -> Option<f64> {
-    if libm::fabs(e.af - e.a0) > f64::EPSILON {
+    if (e.af - e.a0).abs() > f64::EPSILON {
         return None;
     }
     let reaches = |t: f64| {
@@ -246,18 +245,18 @@ pub(crate) fn constant_acceleration(e: &Ends, b: &Bounds) -> Option<f64> {
         let t = t.max(0.0);
         let p = t * (e.v0 + 0.5 * t * e.a0);
         let v = e.v0 + t * e.a0;
-        libm::fabs(p - e.pd) < P_PRECISION
-            && libm::fabs(v - e.vf) < V_PRECISION
+        (p - e.pd).abs() < P_PRECISION
+            && (v - e.vf).abs() < V_PRECISION
             && v <= b.v_max + V_EPS
             && v >= b.v_min - V_EPS
     };
     let mut candidates = [f64::NAN; 2];
-    if libm::fabs(e.a0) > f64::EPSILON {
+    if e.a0.abs() > f64::EPSILON {
         let q = libm::sqrt(2.0 * e.a0 * e.pd + e.v0 * e.v0);
         candidates = [(-e.v0 + q) / e.a0, -(e.v0 + q) / e.a0];
-    } else if libm::fabs(e.v0) > f64::EPSILON {
+    } else if e.v0.abs() > f64::EPSILON {
         candidates[0] = e.pd / e.v0;
-    } else if libm::fabs(e.pd) < f64::EPSILON {
+    } else if e.pd.abs() < f64::EPSILON {
         candidates[0] = 0.0;
     }
     candidates
@@ -268,14 +267,14 @@ pub(crate) fn constant_acceleration(e: &Ends, b: &Bounds) -> Option<f64> {
 
 /// The velocity interface's single phase of constant acceleration (zero jerk limit).
 pub(crate) fn constant_acceleration_velocity(e: &Ends) -> Option<f64> {
-    if libm::fabs(e.af - e.a0) > f64::EPSILON {
+    if (e.af - e.a0).abs() > f64::EPSILON {
         return None;
     }
     let vd = e.vf - e.v0;
-    if libm::fabs(e.a0) > f64::EPSILON {
+    if e.a0.abs() > f64::EPSILON {
         let t = vd / e.a0;
         (t >= 0.0).then_some(t)
-    } else if libm::fabs(vd) < f64::EPSILON {
+    } else if vd.abs() < f64::EPSILON {
         Some(0.0)
     } else {
         None

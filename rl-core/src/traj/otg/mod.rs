@@ -95,12 +95,11 @@ fn bounds<const N: usize>(limits: &Limits<N>, axis: usize) -> Bounds {
     }
 }
 
-/// Step 1 for every axis.
-fn axes<const N: usize>(input: &Input<N>) -> Result<[Axis; N], OtgError> {
+/// Step 1 for every axis, into `axes`.
+fn step1<const N: usize>(input: &Input<N>, axes: &mut [Axis; N]) -> Result<(), OtgError> {
     let velocity = input.interface == Interface::Velocity;
-    let mut axes = [Axis::IDLE; N];
     for (i, axis) in axes.iter_mut().enumerate() {
-        *axis = Axis::new(
+        axis.init(
             i,
             velocity,
             [
@@ -116,21 +115,33 @@ fn axes<const N: usize>(input: &Input<N>) -> Result<[Axis; N], OtgError> {
             bounds(&input.limits, i),
         )?;
     }
-    Ok(axes)
+    Ok(())
 }
 
 /// The time-optimal trajectory from `input.current` to `input.target` (see the module docs).
 ///
 /// Does not allocate. Errors name what is wrong and on which axis.
 pub fn calculate<const N: usize>(input: &Input<N>) -> Result<OtgTrajectory<N>, OtgError> {
+    let mut trajectory = OtgTrajectory::hold([0.0; N], [0.0; N], [0.0; N]);
+    calculate_into(input, &mut trajectory)?;
+    Ok(trajectory)
+}
+
+/// As [`calculate`], writing into `trajectory` (a trajectory of 7 axes is about 5.5 KB: a
+/// control loop keeps one and lets the generator overwrite it). On error `trajectory` is left
+/// in an unspecified but valid state.
+pub fn calculate_into<const N: usize>(
+    input: &Input<N>,
+    trajectory: &mut OtgTrajectory<N>,
+) -> Result<(), OtgError> {
     input.validate()?;
     if !input.waypoints.is_empty() && input.interface == Interface::Position {
         return Err(OtgError::WaypointsUnsupported);
     }
-    let axes = axes(input)?;
-    let trajectory = sync::synchronize(input, &axes)?;
-    check_end(input, &trajectory)?;
-    Ok(trajectory)
+    let mut axes = [Axis::IDLE; N];
+    step1(input, &mut axes)?;
+    sync::synchronize(input, &axes, trajectory)?;
+    check_end(input, trajectory)
 }
 
 /// Every axis ends in its target state (within the profile tolerances) and nothing is NaN.

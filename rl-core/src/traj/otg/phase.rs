@@ -53,7 +53,7 @@ pub(crate) fn scaled<const N: usize>(
         let scale = libm::sqrt(d.iter().map(|x| x * x).sum::<f64>()).max(norm);
         if d.iter()
             .zip(&reference)
-            .any(|(a, b)| libm::fabs(a - ratio * b) > COLLINEAR * scale)
+            .any(|(a, b)| (a - ratio * b).abs() > COLLINEAR * scale)
         {
             return None;
         }
@@ -88,7 +88,7 @@ fn keeps_limits(s: &Shape, axis: &Axis) -> bool {
         if t == 0.0 {
             continue;
         }
-        if libm::fabs(j) > b.j * (1.0 + 1e-12) + 1e-12 {
+        if j.abs() > b.j * (1.0 + 1e-12) + 1e-12 {
             return false;
         }
         let a1 = a + t * j;

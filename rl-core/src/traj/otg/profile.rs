@@ -108,6 +108,16 @@ impl AxisProfile {
         }
     }
 
+    /// Empties the profile: at rest at `(p, v, a)` from time 0 (segments are overwritten, not
+    /// cleared).
+    #[inline]
+    pub(crate) fn reset(&mut self, p: f64, v: f64, a: f64) {
+        self.len = 0;
+        self.brake_end = 0.0;
+        self.duration = 0.0;
+        self.end = [p, v, a];
+    }
+
     /// Appends `t` seconds of jerk `j` from the current end state.
     #[inline]
     pub(crate) fn push_jerk(&mut self, t: f64, j: f64) {
@@ -279,11 +289,11 @@ impl AxisProfile {
     /// The largest magnitudes of position, velocity and acceleration at the segment starts and
     /// the end (the scale of the rounding in the end state).
     pub(crate) fn scale(&self) -> [f64; 3] {
-        let mut m = self.end.map(libm::fabs);
+        let mut m = self.end.map(f64::abs);
         for s in &self.segments[..self.len] {
-            m[0] = libm::fmax(m[0], libm::fabs(s.p));
-            m[1] = libm::fmax(m[1], libm::fabs(s.v));
-            m[2] = libm::fmax(m[2], libm::fabs(s.a));
+            m[0] = f64::max(m[0], s.p.abs());
+            m[1] = f64::max(m[1], s.v.abs());
+            m[2] = f64::max(m[2], s.a.abs());
         }
         m
     }

@@ -62,8 +62,8 @@ pub(crate) fn common_duration<const N: usize>(
 }
 
 /// The profile of one axis from its start: braking, then `plan`.
-pub(crate) fn build_axis(axis: &Axis, start: [f64; 3], plan: &Plan) -> AxisProfile {
-    let mut profile = AxisProfile::at_rest(start[0], start[1], start[2]);
+pub(crate) fn build_axis(profile: &mut AxisProfile, axis: &Axis, start: [f64; 3], plan: &Plan) {
+    profile.reset(start[0], start[1], start[2]);
     let b = &axis.brake;
     if b.second_order {
         profile.push_acceleration(b.t[0], b.a);
@@ -76,7 +76,6 @@ pub(crate) fn build_axis(axis: &Axis, start: [f64; 3], plan: &Plan) -> AxisProfi
         Plan::One(shape) => profile.push_shape(shape),
         Plan::Blend(first, second, weight) => profile.push_blend(first, second, *weight),
     }
-    profile
 }
 
 /// Step 2 and assembly for inputs without waypoints: the common duration, each axis' plan
@@ -84,7 +83,8 @@ pub(crate) fn build_axis(axis: &Axis, start: [f64; 3], plan: &Plan) -> AxisProfi
 pub(crate) fn synchronize<const N: usize>(
     input: &Input<N>,
     axes: &[Axis; N],
-) -> Result<OtgTrajectory<N>, OtgError> {
+    trajectory: &mut OtgTrajectory<N>,
+) -> Result<(), OtgError> {
     let mode = input.synchronization;
     let synced = [mode != Synchronization::None; N];
     let min_durations: [f64; N] = core::array::from_fn(|i| axes[i].t_min);
@@ -95,18 +95,19 @@ pub(crate) fn synchronize<const N: usize>(
             input.current.acceleration[i],
         ]
     });
-    let mut trajectory = OtgTrajectory {
-        axes: [AxisProfile::at_rest(0.0, 0.0, 0.0); N],
-        duration: 0.0,
-        min_durations,
-    };
+    trajectory.min_durations = min_durations;
 
     if mode == Synchronization::None {
         for i in 0..N {
-            trajectory.axes[i] = build_axis(&axes[i], starts[i], &Plan::One(axes[i].fastest()));
+            build_axis(
+                &mut trajectory.axes[i],
+                &axes[i],
+                starts[i],
+                &Plan::One(axes[i].fastest()),
+            );
         }
         trajectory.duration = min_durations.iter().fold(0.0, |d: f64, &t| d.max(t));
-        return Ok(trajectory);
+        return Ok(());
     }
 
     let (duration, limiting) = common_duration(axes, &synced, input.minimum_duration)?;
@@ -117,9 +118,14 @@ pub(crate) fn synchronize<const N: usize>(
         && let Some(shapes) = phase::scaled(axes, limiting, duration)
     {
         for i in 0..N {
-            trajectory.axes[i] = build_axis(&axes[i], starts[i], &Plan::One(shapes[i]));
+            build_axis(
+                &mut trajectory.axes[i],
+                &axes[i],
+                starts[i],
+                &Plan::One(shapes[i]),
+            );
         }
-        return Ok(trajectory);
+        return Ok(());
     }
 
     for i in 0..N {
@@ -129,7 +135,7 @@ pub(crate) fn synchronize<const N: usize>(
         } else {
             axes[i].plan(i, duration)?
         };
-        trajectory.axes[i] = build_axis(&axes[i], starts[i], &plan);
+        build_axis(&mut trajectory.axes[i], &axes[i], starts[i], &plan);
     }
-    Ok(trajectory)
+    Ok(())
 }

@@ -160,20 +160,117 @@ fn cruise(e: &Ends, b: &Bounds) -> Option<[f64; 7]> {
     Some(t)
 }
 
-/// A search interval `[lo, hi]` for a root, widened a little so that roots on the border
-/// (a phase of zero length) survive rounding, and made finite with Cauchy's bound on the
-/// roots of the monic polynomial `q`.
+/// Cauchy's bound on the roots of the monic quartic `q`.
 #[inline]
-fn interval(lo: f64, hi: f64, q: &[f64; 5]) -> (f64, f64) {
-    let bound = 1.0
-        + libm::fmax(
-            libm::fmax(libm::fabs(q[0]), libm::fabs(q[1])),
-            libm::fmax(libm::fabs(q[2]), libm::fabs(q[3])),
-        );
-    let lo = libm::fmax(lo, -bound);
-    let hi = libm::fmin(hi, bound);
-    let widen = 1e-9 * (libm::fabs(lo) + libm::fabs(hi)) + f64::MIN_POSITIVE;
-    (lo - widen, hi + widen)
+fn cauchy(q: &[f64; 5]) -> f64 {
+    1.0 + f64::max(
+        f64::max(q[0].abs(), q[1].abs()),
+        f64::max(q[2].abs(), q[3].abs()),
+    )
+}
+
+/// Where a profile type's unknown may lie: an interval minus up to three open intervals,
+/// from the constraints of the type written as quadratic inequalities in the unknown. Solving
+/// only there keeps the root finder off roots that the profile check would reject anyway.
+#[derive(Clone, Copy)]
+struct Pieces {
+    lo: [f64; 4],
+    hi: [f64; 4],
+    n: usize,
+}
+
+impl Pieces {
+    fn new(lo: f64, hi: f64) -> Self {
+        Self {
+            lo: [lo, 0.0, 0.0, 0.0],
+            hi: [hi, 0.0, 0.0, 0.0],
+            n: usize::from(lo <= hi),
+        }
+    }
+
+    /// Keeps `u² + b u + c ≤ 0` (nothing if it has no real root).
+    fn keep_below(&mut self, b: f64, c: f64) {
+        let mut r = [0.0; 2];
+        if quadratic(1.0, b, c, &mut r) < 2 {
+            // No real roots (or a double root): the quadratic is positive nearly everywhere;
+            // keep the double root's neighbourhood only through the widening below.
+            if r[0].is_finite() && b * b - 4.0 * c == 0.0 {
+                self.clip(r[0], r[0]);
+            } else {
+                self.n = 0;
+            }
+            return;
+        }
+        self.clip(r[0], r[1]);
+    }
+
+    fn clip(&mut self, lo: f64, hi: f64) {
+        let mut k = 0;
+        for i in 0..self.n {
+            let (l, h) = (f64::max(self.lo[i], lo), f64::min(self.hi[i], hi));
+            if l <= h {
+                self.lo[k] = l;
+                self.hi[k] = h;
+                k += 1;
+            }
+        }
+        self.n = k;
+    }
+
+    /// Keeps `u² + b u + c ≥ 0`: removes the open interval between its roots.
+    fn keep_above(&mut self, b: f64, c: f64) {
+        let mut r = [0.0; 2];
+        if quadratic(1.0, b, c, &mut r) < 2 {
+            return;
+        }
+        let (cut_lo, cut_hi) = (r[0], r[1]);
+        let mut lo = [0.0; 4];
+        let mut hi = [0.0; 4];
+        let mut k = 0;
+        for i in 0..self.n {
+            let (l, h) = (self.lo[i], self.hi[i]);
+            if h <= cut_lo || l >= cut_hi {
+                lo[k] = l;
+                hi[k] = h;
+                k += 1;
+                continue;
+            }
+            if l < cut_lo && k < 4 {
+                lo[k] = l;
+                hi[k] = cut_lo;
+                k += 1;
+            }
+            if h > cut_hi && k < 4 {
+                lo[k] = cut_hi;
+                hi[k] = h;
+                k += 1;
+            }
+        }
+        self.lo = lo;
+        self.hi = hi;
+        self.n = k;
+    }
+
+    /// Roots of the monic quartic `q` in the pieces, each piece widened a little so that roots
+    /// on a border (a phase of zero length) survive rounding, and bounded by Cauchy's bound.
+    fn roots(&self, q: &[f64; 5], out: &mut [f64; 4]) -> usize {
+        let bound = cauchy(q);
+        let mut n = 0;
+        for i in 0..self.n {
+            let lo = f64::max(self.lo[i], -bound);
+            let hi = f64::min(self.hi[i], bound);
+            let widen = 1e-9 * (lo.abs() + hi.abs()) + f64::MIN_POSITIVE;
+            let mut found = [0.0; 4];
+            let m = quartic_in(q, lo - widen, hi + widen, &mut found);
+            for &r in &found[..m] {
+                if n < out.len() {
+                    out[n] = r;
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
 }
 
 /// `NONE`: no hold, no cruise. Roots `s = x + y` of the depressed quartic.
@@ -191,10 +288,20 @@ fn none(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only:
         0.0,
         1.0,
     ];
-    let (lo, hi) = interval(libm::fmax(a0 - af, 0.0), b.a_max - b.a_min, &q);
-    let mut roots = [0.0; 4];
-    let n = quartic_in(&q, libm::fmax(lo, 0.0), hi, &mut roots);
     let c = 0.5 * h;
+    // With x = (s + c/s)/2 and y = (s − c/s)/2 (s > 0): x ≤ a_max, y ≤ −a_min, x ≥ a0
+    // (t0 ≥ 0) and y ≥ −af (t6 ≥ 0), each a quadratic inequality in s.
+    let mut pieces = Pieces::new(f64::max(a0 - af, 0.0), b.a_max - b.a_min);
+    if b.a_max.is_finite() {
+        pieces.keep_below(-2.0 * b.a_max, c);
+    }
+    if b.a_min.is_finite() {
+        pieces.keep_below(2.0 * b.a_min, -c);
+    }
+    pieces.keep_above(-2.0 * a0, c);
+    pieces.keep_above(2.0 * af, -c);
+    let mut roots = [0.0; 4];
+    let n = pieces.roots(&q, &mut roots);
     for &s in &roots[..n] {
         if !(s > 0.0) {
             continue;
@@ -235,9 +342,11 @@ fn acc0(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only:
         2.0 * am,
         1.0,
     ];
-    let (lo, hi) = interval(libm::fmax(-af, -am), -b.a_min, &q);
+    // y in [max(−af, −a_max), −a_min], and the hold t1 ≥ 0: y² ≥ a_max² − (2J·vd + a0² − af²)/2.
+    let mut pieces = Pieces::new(f64::max(-af, -am), -b.a_min);
+    pieces.keep_above(0.0, 0.5 * (2.0 * j * vd + a0 * a0 - af_2) - am * am);
     let mut roots = [0.0; 4];
-    let n = quartic_in(&q, lo, hi, &mut roots);
+    let n = pieces.roots(&q, &mut roots);
     for &y in &roots[..n] {
         if accept(times(y), e, b, dir, found) && first_only {
             return;
@@ -272,9 +381,11 @@ fn acc1(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only:
         -2.0 * an,
         1.0,
     ];
-    let (lo, hi) = interval(libm::fmax(a0, an), b.a_max, &q);
+    // x in [max(a0, a_min), a_max], and the hold t5 ≥ 0: x² ≥ a_min² + (a0² − af²)/2 + J·vd.
+    let mut pieces = Pieces::new(f64::max(a0, an), b.a_max);
+    pieces.keep_above(0.0, -(an * an + 0.5 * (a0_2 - af * af) + j * vd));
     let mut roots = [0.0; 4];
-    let n = quartic_in(&q, lo, hi, &mut roots);
+    let n = pieces.roots(&q, &mut roots);
     for &x in &roots[..n] {
         if accept(times(x), e, b, dir, found) && first_only {
             return;
@@ -320,11 +431,18 @@ fn extremals_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals,
     let b = b.toward(dir);
     let before = found.len;
     let done = |found: &Extremals| first_only && found.len > before;
+    // Closed forms first (with `first_only` the search stops at the first profile found).
     if let Some(t) = cruise(&e, &b)
         && accept(t, &e, &b, dir, found)
         && first_only
     {
         return;
+    }
+    if b.a_max.is_finite() && b.a_min.is_finite() {
+        acc0_acc1(&e, &b, dir, found, first_only);
+        if done(found) {
+            return;
+        }
     }
     none(&e, &b, dir, found, first_only);
     if done(found) {
@@ -338,12 +456,6 @@ fn extremals_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals,
     }
     if b.a_min.is_finite() {
         acc1(&e, &b, dir, found, first_only);
-        if done(found) {
-            return;
-        }
-    }
-    if b.a_max.is_finite() && b.a_min.is_finite() {
-        acc0_acc1(&e, &b, dir, found, first_only);
     }
 }
 
@@ -419,6 +531,12 @@ pub(crate) fn max_displacement(e: &Ends, b: &Bounds, duration: f64) -> Option<([
         let cruise = duration - (t0 + t1 + t2 + t4 + t5 + t6);
         if cruise >= 0.0 {
             better([t0, t1, t2, cruise, t4, t5, t6], e, b, &mut best);
+            if best.is_some() {
+                // The fastest rise to v_max, the cruise and the latest fall bound the velocity
+                // of every profile of this duration from above at every instant: nothing has
+                // more displacement.
+                return best;
+            }
         }
     }
 

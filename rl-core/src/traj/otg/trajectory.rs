@@ -138,7 +138,7 @@ impl<const N: usize> OtgTrajectory<N> {
     ) -> Option<LimitViolation> {
         let mut worst: Option<(f64, LimitViolation)> = None;
         let mut note = |excess: f64, v: LimitViolation| {
-            if excess > tolerance * libm::fmax(1.0, libm::fabs(v.limit))
+            if excess > tolerance * f64::max(1.0, v.limit.abs())
                 && worst.is_none_or(|(w, _)| excess > w)
             {
                 worst = Some((excess, v));
@@ -175,7 +175,7 @@ impl<const N: usize> OtgTrajectory<N> {
                         note(a - a_max, mk(Derivative::Acceleration, a, a_max));
                         note(a_min - a, mk(Derivative::Acceleration, a, a_min));
                     }
-                    note(libm::fabs(j) - j_max, mk(Derivative::Jerk, j, j_max));
+                    note(j.abs() - j_max, mk(Derivative::Jerk, j, j_max));
                 };
             for s in &profile.segments[..profile.len] {
                 let length = s.length;
