@@ -134,9 +134,9 @@ fn shape_of(kind: Kind, x: &Extremal, b: &Bounds, e: &Ends) -> Shape {
 }
 
 impl Axis {
-    /// A placeholder (an axis at rest with nothing to do).
+    /// A placeholder (all bits zero, so an array of them is a memset).
     pub const IDLE: Self = Self {
-        kind: Kind::PositionConstant,
+        kind: Kind::PositionJerk,
         brake: Brake {
             t: [0.0; 2],
             j: [0.0; 2],

@@ -30,7 +30,8 @@
 //! principle gives its shape: the costate of the acceleration is a convex parabola, so the
 //! jerk is `+J, -J, +J` with holds where a limit is active.
 
-use super::frame::{Bounds, Direction, Ends, UDDU, clean_times, integrate_checked, total};
+use super::frame::{Bounds, Direction, Ends, P_PRECISION, UDDU, V_PRECISION};
+use super::frame::{clean_times, integrate_checked, total};
 use super::roots::{quadratic, quartic_in};
 
 /// An extremal profile of one axis: phase durations in the frame of its direction.
@@ -444,18 +445,60 @@ fn extremals_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals,
             return;
         }
     }
-    none(&e, &b, dir, found, first_only);
-    if done(found) {
-        return;
-    }
-    if b.a_max.is_finite() {
-        acc0(&e, &b, dir, found, first_only);
+    // The quartic types, the likeliest first.
+    let order = if first_only && e.vf == 0.0 && e.af == 0.0 {
+        rest_order(&e, &b)
+    } else {
+        [Quartic::None, Quartic::Acc0, Quartic::Acc1]
+    };
+    for kind in order {
+        match kind {
+            Quartic::None => none(&e, &b, dir, found, first_only),
+            Quartic::Acc0 if b.a_max.is_finite() => acc0(&e, &b, dir, found, first_only),
+            Quartic::Acc1 if b.a_min.is_finite() => acc1(&e, &b, dir, found, first_only),
+            _ => {}
+        }
         if done(found) {
             return;
         }
     }
-    if b.a_min.is_finite() {
-        acc1(&e, &b, dir, found, first_only);
+}
+
+/// The profile types solved by a quartic.
+#[derive(Clone, Copy)]
+enum Quartic {
+    None,
+    Acc0,
+    Acc1,
+}
+
+/// For a target at rest (up frame), the quartic types in the order to try them: the profile
+/// whose acceleration crosses zero at peak velocity `v` has a displacement increasing with `v`,
+/// and its rise holds at `a_max` from `v_a = v0 + (a_max² − a0²/2)/J` on, its fall at `a_min`
+/// from `v_b = a_min²/J` on; comparing the target displacement with those two profiles' tells
+/// the type (all are still tried if it is not found, so this only orders the search).
+fn rest_order(e: &Ends, b: &Bounds) -> [Quartic; 3] {
+    let j = b.j;
+    let v_low = f64::max(e.v0 + e.a0 * e.a0.abs() / (2.0 * j), 0.0);
+    let reaches = |v: f64| {
+        if !(v >= v_low && v < b.v_max) {
+            return false;
+        }
+        let (Some([t0, t1, t2]), Some([t4, t5, t6])) = (
+            rise(e.v0, e.a0, v, b.a_max, j),
+            fall(v, 0.0, 0.0, b.a_min, j),
+        ) else {
+            return false;
+        };
+        let [p, _, _] = integrate(&[t0, t1, t2, 0.0, t4, t5, t6], e.v0, e.a0, j);
+        e.pd >= p
+    };
+    if b.a_max.is_finite() && reaches(e.v0 + (b.a_max * b.a_max - 0.5 * e.a0 * e.a0) / j) {
+        [Quartic::Acc0, Quartic::None, Quartic::Acc1]
+    } else if b.a_min.is_finite() && reaches(b.a_min * b.a_min / j) {
+        [Quartic::Acc1, Quartic::None, Quartic::Acc0]
+    } else {
+        [Quartic::None, Quartic::Acc1, Quartic::Acc0]
     }
 }
 
@@ -467,7 +510,9 @@ fn extremals_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals,
 /// collected (up to five, the borders of the blocked intervals).
 pub(crate) fn extremals(e: &Ends, b: &Bounds, found: &mut Extremals) {
     // Already there: the profile of zero duration (the only one for a target at rest).
-    let there = accept([0.0; 7], e, b, Direction::Up, found);
+    let there = e.pd.abs() < 1e3 * P_PRECISION
+        && (e.v0 - e.vf).abs() < V_PRECISION
+        && accept([0.0; 7], e, b, Direction::Up, found);
     if e.vf == 0.0 && e.af == 0.0 {
         if there {
             return;
