@@ -69,7 +69,7 @@ pub(crate) const T_EPS: f64 = 1e-12;
 
 /// The direction of a profile: the sign of its first non-zero jerk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Direction {
+pub(crate) enum Direction {
     /// First jerk positive.
     Up,
     /// First jerk negative.

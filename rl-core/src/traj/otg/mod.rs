@@ -65,6 +65,7 @@ pub(crate) mod block;
 pub(crate) mod brake;
 mod error;
 pub(crate) mod frame;
+mod generator;
 mod input;
 pub(crate) mod lower_order;
 pub(crate) mod phase;
@@ -76,7 +77,7 @@ mod trajectory;
 pub(crate) mod velocity;
 
 pub use error::{Limit, OtgError, Quantity};
-pub use frame::Direction;
+pub use generator::{Otg, Output, braking};
 pub use input::{Input, Interface, Limits, MAX_WAYPOINTS, State, Synchronization, Waypoints};
 pub use profile::AxisProfile;
 pub use trajectory::{Derivative, LimitViolation, OtgTrajectory};
