@@ -69,6 +69,7 @@ mod generator;
 mod input;
 pub(crate) mod lower_order;
 pub(crate) mod phase;
+mod position_limits;
 mod profile;
 pub(crate) mod roots;
 pub(crate) mod sync;
@@ -142,6 +143,14 @@ pub fn calculate_into<const N: usize>(
     let mut axes = [Axis::IDLE; N];
     step1(input, &mut axes)?;
     sync::synchronize(input, &axes, trajectory)?;
+    let l = &input.limits;
+    if l.min_position
+        .iter()
+        .chain(&l.max_position)
+        .any(|p| p.is_finite())
+    {
+        position_limits::enforce(input, &axes, trajectory)?;
+    }
     check_end(input, trajectory)
 }
 

@@ -64,6 +64,11 @@ pub(crate) fn common_duration<const N: usize>(
 /// The profile of one axis from its start: braking, then `plan`.
 pub(crate) fn build_axis(profile: &mut AxisProfile, axis: &Axis, start: [f64; 3], plan: &Plan) {
     profile.reset(start[0], start[1], start[2]);
+    append_axis(profile, axis, plan);
+}
+
+/// Appends to `profile` the braking of `axis`, then `plan`.
+pub(crate) fn append_axis(profile: &mut AxisProfile, axis: &Axis, plan: &Plan) {
     let b = &axis.brake;
     if b.second_order {
         profile.push_acceleration(b.t[0], b.a);
