@@ -40,7 +40,7 @@ fn stop_range(p: f64, v: f64, a: f64, l: &Limits<3>, axis: usize) -> (f64, f64) 
 
 #[test]
 fn trajectories_stay_inside_and_refusals_are_justified() {
-    let mut rng = Rng(0x5eed_0f_0ff5e7);
+    let mut rng = Rng(0x5eed_0f0f_f5e7);
     let (mut inside, mut detoured, mut cannot_stop, mut unreachable) = (0, 0, 0, 0);
     for k in 0..4000 {
         let mut l = Limits::<3>::new(
