@@ -9,7 +9,8 @@
 //! be the strings `"inf"` and `"-inf"` (an unlimited derivative). Keys `ruckig` and `meta` are
 //! ignored (the fixtures carry Ruckig's answer there); any other key is an error.
 //!
-//! Output per job: `{"result": "ok", "duration": s, "min_durations": [..]}`, or
+//! Output per job: `{"result": "ok", "duration": s, "min_durations": [..]}` (with waypoints
+//! `"sections": [..]`, the duration of each section, instead of `min_durations`), or
 //! `{"result": "error", "error": KIND, "axis": i, "message": text}` for an input the generator
 //! refuses (a typed error: what and which axis), or `{"result": "invalid", "message": text}`
 //! for a line that is not a job. With `--samples DT`: `"samples": {"t": [..], "p": [[per axis],
@@ -26,9 +27,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
-use rl_core::traj::otg::{
-    self, Input, Interface, Limits, OtgError, OtgTrajectory, State, Synchronization,
-};
+use rl_core::traj::Sample;
+use rl_core::traj::otg::{self, Input, Interface, Limits, OtgError, State, Synchronization};
 use serde_json::{Map, Value, json};
 
 use super::output::write_error;
@@ -146,29 +146,50 @@ const KEYS: [&str; 15] = [
 
 fn solve<const N: usize>(job: &Value, samples: Option<f64>, verify: bool) -> Result<Value, String> {
     let input = input::<N>(job)?;
-    let trajectory = match otg::calculate(&input) {
-        Ok(t) => t,
-        Err(e) => return Ok(error_answer(&e)),
-    };
     let mut answer = Map::new();
     answer.insert("result".into(), "ok".into());
-    answer.insert("duration".into(), trajectory.duration().into());
-    answer.insert(
-        "min_durations".into(),
-        trajectory.min_durations().to_vec().into(),
-    );
-    if verify {
+    let (duration, violation, sampled) = if input.waypoints.is_empty() {
+        let trajectory = match otg::calculate(&input) {
+            Ok(t) => t,
+            Err(e) => return Ok(error_answer(&e)),
+        };
+        answer.insert(
+            "min_durations".into(),
+            trajectory.min_durations().to_vec().into(),
+        );
         let free = input.interface == Interface::Velocity;
-        let violation = trajectory
-            .limit_violation(&input.limits, VERIFY_TOLERANCE, free)
-            .map(|v| {
-                json!({"axis": v.axis, "derivative": format!("{:?}", v.derivative).to_lowercase(),
-                       "time": v.time, "value": v.value, "limit": v.limit})
-            });
+        let violation = verify
+            .then(|| trajectory.limit_violation(&input.limits, VERIFY_TOLERANCE, free))
+            .flatten();
+        let sampled = samples
+            .map(|dt| sample(trajectory.duration(), dt, |t| trajectory.at_time(t)))
+            .transpose()?;
+        (trajectory.duration(), violation, sampled)
+    } else {
+        let trajectory = match otg::calculate_waypoints(&input) {
+            Ok(t) => t,
+            Err(e) => return Ok(error_answer(&e)),
+        };
+        let sections: Vec<f64> = trajectory.sections().iter().map(|s| s.duration()).collect();
+        answer.insert("sections".into(), sections.into());
+        let violation = verify
+            .then(|| trajectory.limit_violation(&input.limits, VERIFY_TOLERANCE))
+            .flatten();
+        let sampled = samples
+            .map(|dt| sample(trajectory.duration(), dt, |t| trajectory.at_time(t)))
+            .transpose()?;
+        (trajectory.duration(), violation, sampled)
+    };
+    answer.insert("duration".into(), duration.into());
+    if verify {
+        let violation = violation.map(|v| {
+            json!({"axis": v.axis, "derivative": format!("{:?}", v.derivative).to_lowercase(),
+                   "time": v.time, "value": v.value, "limit": v.limit})
+        });
         answer.insert("violation".into(), violation.unwrap_or(Value::Null));
     }
-    if let Some(dt) = samples {
-        answer.insert("samples".into(), sample(&trajectory, dt)?);
+    if let Some(samples) = sampled {
+        answer.insert("samples".into(), samples);
     }
     Ok(Value::Object(answer))
 }
@@ -197,8 +218,11 @@ fn error_answer(e: &OtgError) -> Value {
 }
 
 /// Samples at `0, dt, 2·dt, ...` and at the duration.
-fn sample<const N: usize>(trajectory: &OtgTrajectory<N>, dt: f64) -> Result<Value, String> {
-    let duration = trajectory.duration();
+fn sample<const N: usize>(
+    duration: f64,
+    dt: f64,
+    at: impl Fn(f64) -> Sample<N>,
+) -> Result<Value, String> {
     let count = (duration / dt).floor();
     if count > MAX_SAMPLES {
         return Err(format!(
@@ -210,9 +234,8 @@ fn sample<const N: usize>(trajectory: &OtgTrajectory<N>, dt: f64) -> Result<Valu
         times.push(duration);
     }
     let (mut p, mut v, mut a, mut j) = (vec![], vec![], vec![], vec![]);
-    let mut cursor = [0; N];
     for &t in &times {
-        let s = trajectory.at_time_from(t, &mut cursor);
+        let s = at(t);
         p.push(s.position.to_vec());
         v.push(s.velocity.to_vec());
         a.push(s.acceleration.to_vec());

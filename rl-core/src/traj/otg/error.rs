@@ -114,7 +114,8 @@ pub enum OtgError {
         /// Capacity.
         capacity: usize,
     },
-    /// Waypoints need the position interface and finite jerk limits.
+    /// Waypoints are for [`super::calculate_waypoints`] (not [`super::calculate`] nor the
+    /// online [`super::Otg`]), with the position interface and no minimum duration.
     WaypointsUnsupported,
     /// The duration is not finite (limits too small for the distance).
     DurationNotFinite,
@@ -190,7 +191,7 @@ impl fmt::Display for OtgError {
                 write!(f, "more than {capacity} intermediate waypoints")
             }
             Self::WaypointsUnsupported => f.write_str(
-                "waypoints need the position interface and finite, non-zero jerk limits",
+                "waypoints need calculate_waypoints, the position interface and no minimum duration",
             ),
             Self::DurationNotFinite => f.write_str("the trajectory duration is not finite"),
         }
