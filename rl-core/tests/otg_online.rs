@@ -13,16 +13,8 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 
 const DT: f64 = 0.001;
 
-/// A small deterministic generator (xorshift), uniform in [lo, hi).
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+mod otg_support;
+use otg_support::Rng;
 
 fn limits() -> Limits<6> {
     let mut l = Limits::new(

@@ -7,18 +7,11 @@
 
 use rl_core::traj::otg::{self, Input, Interface, Limits, OtgError, State, Synchronization};
 
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+mod otg_support;
+use otg_support::Rng;
 
-/// Where the time-optimal stop of one axis from `(p, v, a)` reaches, lowest and highest.
-fn stop_range(p: f64, v: f64, a: f64, l: &Limits<3>, axis: usize) -> (f64, f64) {
+/// Whether the time-optimal stop of one axis alone from `(p, v, a)` leaves its position limits.
+fn stop_leaves(p: f64, v: f64, a: f64, l: &Limits<3>, axis: usize) -> bool {
     let one = Limits::<1> {
         max_velocity: [l.max_velocity[axis]],
         min_velocity: [l.min_velocity[axis]],
@@ -35,7 +28,7 @@ fn stop_range(p: f64, v: f64, a: f64, l: &Limits<3>, axis: usize) -> (f64, f64) 
     };
     let stop = otg::braking(&state, &one, Synchronization::None).expect("a stop");
     let [[min, max, ..]] = stop.position_extrema();
-    (min, max)
+    min < l.min_position[axis] || max > l.max_position[axis]
 }
 
 #[test]
@@ -122,30 +115,26 @@ fn trajectories_stay_inside_and_refusals_are_justified() {
                 }
             }
             Err(OtgError::CannotStopBeforePositionLimit { axis }) => {
-                let (lo, hi) = stop_range(
+                let (p, v, a) = (
                     current.position[axis],
                     current.velocity[axis],
                     current.acceleration[axis],
-                    &l,
-                    axis,
                 );
                 assert!(
-                    lo < l.min_position[axis] || hi > l.max_position[axis],
+                    stop_leaves(p, v, a, &l, axis),
                     "stop stays inside: {input:?}"
                 );
                 cannot_stop += 1;
             }
             Err(OtgError::PositionLimitsUnreachable { axis }) => {
                 // Backwards in time the target state moves with velocity −vf, acceleration af.
-                let (lo, hi) = stop_range(
+                let (p, v, a) = (
                     target.position[axis],
                     -target.velocity[axis],
                     target.acceleration[axis],
-                    &l,
-                    axis,
                 );
                 assert!(
-                    lo < l.min_position[axis] || hi > l.max_position[axis],
+                    stop_leaves(p, v, a, &l, axis),
                     "target approachable: {input:?}"
                 );
                 unreachable += 1;

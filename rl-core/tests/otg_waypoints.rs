@@ -5,15 +5,8 @@
 
 use rl_core::traj::otg::{self, Input, Interface, Limits, OtgError, State, Waypoints};
 
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+mod otg_support;
+use otg_support::Rng;
 
 /// The duration when every waypoint is passed at rest (a chain of rest-to-rest moves).
 fn stopping_everywhere<const N: usize>(input: &Input<N>) -> f64 {
@@ -78,8 +71,8 @@ fn check<const N: usize>(rng: &mut Rng, count: usize) -> (f64, f64) {
         }
     }
     let end = t.at_time(t.duration());
-    for i in 0..N {
-        assert!((end.position[i] - target[i]).abs() < 1e-8 && end.velocity[i].abs() < 1e-8);
+    for ((p, v), goal) in end.position.iter().zip(&end.velocity).zip(&target) {
+        assert!((p - goal).abs() < 1e-8 && v.abs() < 1e-8);
     }
     let stops = stopping_everywhere(&input);
     assert!(

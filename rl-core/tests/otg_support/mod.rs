@@ -8,6 +8,18 @@ use rl_core::traj::otg::{
 };
 use serde_json::Value;
 
+/// A small deterministic generator for the tests (xorshift64), uniform in `[lo, hi)`.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
 /// A number, or the strings "inf" / "-inf".
 pub fn number(v: &Value) -> f64 {
     match v {

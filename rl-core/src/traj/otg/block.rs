@@ -203,9 +203,7 @@ impl Axis {
             Kind::PositionVelocity
         };
         let brake = match kind {
-            Kind::PositionJerk => {
-                brake::position_third(v, a, b.v_max, b.v_min, b.a_max, b.a_min, b.j)
-            }
+            Kind::PositionJerk => brake::position_third(v, a, &b),
             Kind::PositionAcceleration => {
                 brake::position_second(v, b.v_max, b.v_min, b.a_max, b.a_min)
             }

@@ -8,6 +8,8 @@
 //! acceleration limit while the velocity comes back. The profile then starts from the braked
 //! state. During braking the limits the start already broke stay broken; nothing else does.
 
+use super::frame::Bounds;
+
 /// Safety margin added to braking times so the braked state is inside, not on, the limits.
 const EPS: f64 = 2.2e-14;
 
@@ -66,9 +68,17 @@ fn v_at_zero_acceleration(v: f64, a: f64, j: f64) -> f64 {
 }
 
 /// Velocity beyond `v_max` (in the direction of `j`'s sign): jerk against it until the velocity
-/// is back at `v_max`, holding `a_min` if reached, without undershooting `v_min`.
-fn velocity_brake(v0: f64, a0: f64, v_max: f64, v_min: f64, a_min: f64, j: f64) -> Brake {
-    let mut b = Brake {
+/// is back at `v_max`, holding `a_min` if reached, without undershooting `v_min`. `b` holds the
+/// limits as seen in that direction (the jerk `b.j` may be negative).
+fn velocity_brake(v0: f64, a0: f64, b: &Bounds) -> Brake {
+    let Bounds {
+        v_max,
+        v_min,
+        a_min,
+        j,
+        ..
+    } = *b;
+    let mut brake = Brake {
         j: [-j, 0.0],
         ..Brake::default()
     };
@@ -80,27 +90,25 @@ fn velocity_brake(v0: f64, a0: f64, v_max: f64, v_min: f64, a_min: f64, j: f64) 
         let v_at_a_min = v_after(v0, a0, -j, t_to_a_min);
         let hold_to_v_max = -(v_at_a_min - v_max) / a_min;
         let hold_to_v_min = a_min / (2.0 * j) - (v_at_a_min - v_min) / a_min;
-        b.t[0] = f64::max(t_to_a_min - EPS, 0.0);
-        b.t[1] = f64::max(f64::min(hold_to_v_max, hold_to_v_min), 0.0);
+        brake.t[0] = f64::max(t_to_a_min - EPS, 0.0);
+        brake.t[1] = f64::max(f64::min(hold_to_v_max, hold_to_v_min), 0.0);
     } else {
-        b.t[0] = f64::max(t_to_limit - EPS, 0.0);
+        brake.t[0] = f64::max(t_to_limit - EPS, 0.0);
     }
-    b
+    brake
 }
 
 /// Acceleration beyond `a_max` (in the direction of `j`'s sign): jerk against it down to
 /// `a_max`, then either the velocity brake (if the velocity would overshoot `v_max` anyway) or a
 /// hold at `a_max` while the velocity climbs back from below `v_min`.
-#[allow(clippy::too_many_arguments)]
-fn acceleration_brake(
-    v0: f64,
-    a0: f64,
-    v_max: f64,
-    v_min: f64,
-    a_max: f64,
-    a_min: f64,
-    j: f64,
-) -> Brake {
+fn acceleration_brake(v0: f64, a0: f64, bounds: &Bounds) -> Brake {
+    let Bounds {
+        v_max,
+        v_min,
+        a_max,
+        j,
+        ..
+    } = *bounds;
     let mut b = Brake {
         j: [-j, 0.0],
         ..Brake::default()
@@ -111,7 +119,7 @@ fn acceleration_brake(
     let v_at_a_zero = v_after(v0, a0, -j, t_to_a_zero);
     let up = j > 0.0;
     if (v_at_a_zero > v_max && up) || (v_at_a_zero < v_max && !up) {
-        return velocity_brake(v0, a0, v_max, v_min, a_min, j);
+        return velocity_brake(v0, a0, bounds);
     }
     if (v_at_a_max < v_min && up) || (v_at_a_max > v_min && !up) {
         let hold_to_v_min = -(v_at_a_max - v_min) / a_max;
@@ -125,31 +133,32 @@ fn acceleration_brake(
 }
 
 /// Braking for the jerk-limited position interface (none if the start is within reach).
-pub(crate) fn position_third(
-    v0: f64,
-    a0: f64,
-    v_max: f64,
-    v_min: f64,
-    a_max: f64,
-    a_min: f64,
-    j: f64,
-) -> Brake {
-    if j == 0.0 || a_max == 0.0 || a_min == 0.0 {
+pub(crate) fn position_third(v0: f64, a0: f64, b: &Bounds) -> Brake {
+    if b.j == 0.0 || b.a_max == 0.0 || b.a_min == 0.0 {
         // Zero limits: the motion keeps its acceleration; nothing to brake with.
         return Brake::default();
     }
-    if a0 > a_max {
-        acceleration_brake(v0, a0, v_max, v_min, a_max, a_min, j)
-    } else if a0 < a_min {
-        acceleration_brake(v0, a0, v_min, v_max, a_min, a_max, -j)
-    } else if (v0 > v_max && v_at_zero_acceleration(v0, a0, -j) > v_min)
-        || (a0 > 0.0 && v_at_zero_acceleration(v0, a0, j) > v_max)
+    // The limits seen braking the other way: the same values with the roles of the maximum and
+    // the minimum swapped, and the jerk negated.
+    let reversed = Bounds {
+        v_max: b.v_min,
+        v_min: b.v_max,
+        a_max: b.a_min,
+        a_min: b.a_max,
+        j: -b.j,
+    };
+    if a0 > b.a_max {
+        acceleration_brake(v0, a0, b)
+    } else if a0 < b.a_min {
+        acceleration_brake(v0, a0, &reversed)
+    } else if (v0 > b.v_max && v_at_zero_acceleration(v0, a0, -b.j) > b.v_min)
+        || (a0 > 0.0 && v_at_zero_acceleration(v0, a0, b.j) > b.v_max)
     {
-        velocity_brake(v0, a0, v_max, v_min, a_min, j)
-    } else if (v0 < v_min && v_at_zero_acceleration(v0, a0, j) < v_max)
-        || (a0 < 0.0 && v_at_zero_acceleration(v0, a0, -j) < v_min)
+        velocity_brake(v0, a0, b)
+    } else if (v0 < b.v_min && v_at_zero_acceleration(v0, a0, b.j) < b.v_max)
+        || (a0 < 0.0 && v_at_zero_acceleration(v0, a0, -b.j) < b.v_min)
     {
-        velocity_brake(v0, a0, v_min, v_max, a_max, -j)
+        velocity_brake(v0, a0, &reversed)
     } else {
         Brake::default()
     }

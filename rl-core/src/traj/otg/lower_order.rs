@@ -76,6 +76,15 @@ fn accept_second(
     }
 }
 
+/// Accelerate to velocity `peak`, decelerate to the target (second order, no cruise).
+#[inline]
+fn through_peak(peak: f64, e: &Ends, b: &Bounds) -> [f64; 7] {
+    let mut t = [0.0; 7];
+    t[0] = (peak - e.v0) / b.a_max;
+    t[2] = (e.vf - peak) / b.a_min;
+    t
+}
+
 fn second_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only: bool) {
     let (e, b) = (e.toward(dir), b.toward(dir));
     let (am, an) = (b.a_max, b.a_min);
@@ -83,16 +92,7 @@ fn second_toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, fi
     if h2 >= 0.0 {
         let h = libm::sqrt(h2);
         for peak in [-h, h] {
-            let t = [
-                (peak - e.v0) / am,
-                0.0,
-                (e.vf - peak) / an,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ];
-            if accept_second(t, &e, &b, dir, found) && first_only {
+            if accept_second(through_peak(peak, &e, &b), &e, &b, dir, found) && first_only {
                 return;
             }
         }
@@ -146,15 +146,7 @@ pub(crate) fn second_order_max_displacement(
     let (am, an) = (b.a_max, b.a_min);
     let peak = (duration + e.v0 / am - e.vf / an) / (1.0 / am - 1.0 / an);
     let mut t = if peak <= b.v_max {
-        [
-            (peak - e.v0) / am,
-            0.0,
-            (e.vf - peak) / an,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-        ]
+        through_peak(peak, e, b)
     } else {
         let (t0, t2) = ((b.v_max - e.v0) / am, (e.vf - b.v_max) / an);
         [t0, duration - t0 - t2, t2, 0.0, 0.0, 0.0, 0.0]

@@ -191,10 +191,22 @@ pub(crate) fn cubic_in(c: &[f64; 4], lo: f64, hi: f64, out: &mut [f64; 4]) -> us
     }
     let mut crit = [0.0; 2];
     let m = quadratic(3.0 * c[3], 2.0 * c[2], c[1], &mut crit);
-    let mut breaks = [lo; 4];
+    roots_between_extrema(c, &crit[..m], lo, hi, out)
+}
+
+/// The roots of `c` in `[lo, hi]` given its extrema `crit` (ascending): `c` is monotonic
+/// between consecutive ones.
+fn roots_between_extrema<const C: usize>(
+    c: &[f64; C],
+    crit: &[f64],
+    lo: f64,
+    hi: f64,
+    out: &mut [f64; 4],
+) -> usize {
+    let mut breaks = [lo; 6];
     let mut nb = 1;
-    for &x in &crit[..m] {
-        if x > lo && x < hi {
+    for &x in crit {
+        if x > lo && x < hi && nb < breaks.len() - 1 {
             breaks[nb] = x;
             nb += 1;
         }
@@ -262,19 +274,7 @@ pub(crate) fn quartic_in(c: &[f64; 5], lo: f64, hi: f64, out: &mut [f64; 4]) -> 
     let d = [c[1], 2.0 * c[2], 3.0 * c[3], 4.0 * c[4]];
     let mut crit = [0.0; 4];
     let m = cubic_in(&d, lo, hi, &mut crit);
-    let mut breaks = [lo; 6];
-    let mut nb = 1;
-    for &x in &crit[..m] {
-        if x > lo && x < hi {
-            breaks[nb] = x;
-            nb += 1;
-        }
-    }
-    breaks[nb] = hi;
-    nb += 1;
-    let mut n = 0;
-    roots_between(c, &breaks[..nb], out, &mut n);
-    n
+    roots_between_extrema(c, &crit[..m], lo, hi, out)
 }
 
 #[cfg(test)]

@@ -94,14 +94,28 @@ fn integrate(t: &[f64; 7], v0: f64, a0: f64, j: f64) -> [f64; 3] {
 
 /// Checks a step-1 candidate (durations `t` in the up frame of `dir`) and keeps it.
 #[inline]
-fn accept(mut t: [f64; 7], e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals) -> bool {
+fn accept(t: [f64; 7], e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals) -> bool {
+    accept_reaching(t, e, b, e.pd, dir, found)
+}
+
+/// As [`accept`], with the target displacement `pd` (NaN: the position is free, as for the
+/// velocity interface).
+#[inline]
+pub(crate) fn accept_reaching(
+    mut t: [f64; 7],
+    e: &Ends,
+    b: &Bounds,
+    pd: f64,
+    dir: Direction,
+    found: &mut Extremals,
+) -> bool {
     if !clean_times(&mut t) {
         return false;
     }
     let Some(end) = integrate_checked(&t, e.v0, e.a0, b) else {
         return false;
     };
-    if end.reaches(e.pd, e.vf, e.af) {
+    if end.reaches(pd, e.vf, e.af) {
         found.push(Extremal {
             t,
             dir,
@@ -274,6 +288,24 @@ impl Pieces {
     }
 }
 
+/// Solves the quartic `q` on `pieces` and keeps the profiles `times` gives for its roots.
+fn accept_roots(
+    q: &[f64; 5],
+    pieces: &Pieces,
+    times: impl Fn(f64) -> [f64; 7],
+    (e, b, dir): (&Ends, &Bounds, Direction),
+    found: &mut Extremals,
+    first_only: bool,
+) {
+    let mut roots = [0.0; 4];
+    let n = pieces.roots(q, &mut roots);
+    for &u in &roots[..n] {
+        if accept(times(u), e, b, dir, found) && first_only {
+            return;
+        }
+    }
+}
+
 /// `NONE`: no hold, no cruise. Roots `s = x + y` of the depressed quartic.
 fn none(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only: bool) {
     let j = b.j;
@@ -346,13 +378,7 @@ fn acc0(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only:
     // y in [max(−af, −a_max), −a_min], and the hold t1 ≥ 0: y² ≥ a_max² − (2J·vd + a0² − af²)/2.
     let mut pieces = Pieces::new(f64::max(-af, -am), -b.a_min);
     pieces.keep_above(0.0, 0.5 * (2.0 * j * vd + a0 * a0 - af_2) - am * am);
-    let mut roots = [0.0; 4];
-    let n = pieces.roots(&q, &mut roots);
-    for &y in &roots[..n] {
-        if accept(times(y), e, b, dir, found) && first_only {
-            return;
-        }
-    }
+    accept_roots(&q, &pieces, times, (e, b, dir), found, first_only);
 }
 
 /// `ACC1`: rise to `x`, fall to `a_min`, hold there, rise to the target. Roots `x` of a quartic.
@@ -385,13 +411,7 @@ fn acc1(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only:
     // x in [max(a0, a_min), a_max], and the hold t5 ≥ 0: x² ≥ a_min² + (a0² − af²)/2 + J·vd.
     let mut pieces = Pieces::new(f64::max(a0, an), b.a_max);
     pieces.keep_above(0.0, -(an * an + 0.5 * (a0_2 - af * af) + j * vd));
-    let mut roots = [0.0; 4];
-    let n = pieces.roots(&q, &mut roots);
-    for &x in &roots[..n] {
-        if accept(times(x), e, b, dir, found) && first_only {
-            return;
-        }
-    }
+    accept_roots(&q, &pieces, times, (e, b, dir), found, first_only);
 }
 
 /// `ACC0_ACC1`: holds at both acceleration limits. A quadratic in the second hold.

@@ -75,20 +75,7 @@ impl<const N: usize> OtgTrajectory<N> {
     /// Position, velocity, acceleration and jerk of every axis at `t` seconds.
     #[inline]
     pub fn at_time(&self, t: f64) -> Sample<N> {
-        let mut s = Sample {
-            position: [0.0; N],
-            velocity: [0.0; N],
-            acceleration: [0.0; N],
-            jerk: [0.0; N],
-        };
-        for (i, axis) in self.axes.iter().enumerate() {
-            let [p, v, a, j] = axis.at(t);
-            s.position[i] = p;
-            s.velocity[i] = v;
-            s.acceleration[i] = a;
-            s.jerk[i] = j;
-        }
-        s
+        self.at_time_from(t, &mut [0; N])
     }
 
     /// As [`Self::at_time`], starting each axis' search at the segment in `cursor` and leaving
@@ -105,11 +92,7 @@ impl<const N: usize> OtgTrajectory<N> {
         for (i, axis) in self.axes.iter().enumerate() {
             let k = axis.find(t, cursor[i]);
             cursor[i] = k;
-            let [p, v, a, j] = axis.at_index(t, k);
-            s.position[i] = p;
-            s.velocity[i] = v;
-            s.acceleration[i] = a;
-            s.jerk[i] = j;
+            [s.position[i], s.velocity[i], s.acceleration[i], s.jerk[i]] = axis.at_index(t, k);
         }
         s
     }
@@ -212,14 +195,7 @@ impl<const N: usize> Trajectory<N> for OtgTrajectory<N> {
     }
 
     fn derivative(&self, t: f64, order: usize) -> [f64; N] {
-        let s = self.sample(t);
-        match order {
-            0 => s.position,
-            1 => s.velocity,
-            2 => s.acceleration,
-            3 => s.jerk,
-            _ => [0.0; N],
-        }
+        self.sample(t).derivative(order)
     }
 
     /// Clamped to `[0, duration]` as the trait requires ([`OtgTrajectory::at_time`] is not).

@@ -9,8 +9,8 @@
 //! acceleration is linear in time, so the jerk switches once). As in Ruckig, the velocity limits
 //! do not constrain this interface (it is how one stops or follows a velocity).
 
-use super::frame::{Bounds, Direction, Ends, clean_times, integrate_checked, total};
-use super::third_order::{Extremal, Extremals};
+use super::frame::{Bounds, Direction, Ends, clean_times, integrate_checked};
+use super::third_order::{Extremals, accept_reaching};
 
 /// The bounds without velocity limits.
 #[inline]
@@ -22,23 +22,8 @@ fn free(b: &Bounds) -> Bounds {
     }
 }
 
-fn accept(mut t: [f64; 7], e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals) -> bool {
-    if !clean_times(&mut t) {
-        return false;
-    }
-    let Some(end) = integrate_checked(&t, e.v0, e.a0, &free(b)) else {
-        return false;
-    };
-    if end.reaches(f64::NAN, e.vf, e.af) {
-        found.push(Extremal {
-            t,
-            dir,
-            duration: total(&t),
-        });
-        true
-    } else {
-        false
-    }
+fn accept(t: [f64; 7], e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals) -> bool {
+    accept_reaching(t, e, &free(b), f64::NAN, dir, found)
 }
 
 fn toward(e: &Ends, b: &Bounds, dir: Direction, found: &mut Extremals, first_only: bool) {

@@ -107,14 +107,7 @@ impl<const N: usize> Trajectory<N> for WaypointTrajectory<N> {
     }
 
     fn derivative(&self, t: f64, order: usize) -> [f64; N] {
-        let s = self.sample(t);
-        match order {
-            0 => s.position,
-            1 => s.velocity,
-            2 => s.acceleration,
-            3 => s.jerk,
-            _ => [0.0; N],
-        }
+        self.sample(t).derivative(order)
     }
 
     fn sample(&self, t: f64) -> Sample<N> {
@@ -138,13 +131,9 @@ fn passing_velocities<const N: usize>(
             }
             let d = before.abs().min(after.abs());
             out[k - 1][i] = if after > 0.0 {
-                (2.0 * l.max_acceleration[i] * d)
-                    .sqrt()
-                    .min(l.max_velocity[i])
+                libm::sqrt(2.0 * l.max_acceleration[i] * d).min(l.max_velocity[i])
             } else {
-                -(2.0 * -l.min_acceleration[i] * d)
-                    .sqrt()
-                    .min(-l.min_velocity[i])
+                -libm::sqrt(2.0 * -l.min_acceleration[i] * d).min(-l.min_velocity[i])
             };
         }
     }
@@ -280,7 +269,7 @@ pub fn calculate_waypoints<const N: usize>(
             }
         }
         // Golden-section refinement of each factor between its grid neighbours.
-        let phi = 0.5 * (5f64.sqrt() - 1.0);
+        let phi = 0.5 * (libm::sqrt(5.0) - 1.0);
         let step = 1.0 / (LEVELS - 1) as f64;
         for _ in 0..SWEEPS {
             for k in 0..waypoints {
