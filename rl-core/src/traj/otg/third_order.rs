@@ -31,7 +31,7 @@
 //! jerk is `+J, -J, +J` with holds where a limit is active.
 
 use super::frame::{Bounds, Direction, Ends, P_PRECISION, UDDU, V_PRECISION};
-use super::frame::{clean_times, integrate_checked, total};
+use super::frame::{clean_times, integrate_checked, slack, total};
 use super::roots::{quadratic, quartic_in};
 
 /// An extremal profile of one axis: phase durations in the frame of its direction.
@@ -84,6 +84,10 @@ fn integrate(t: &[f64; 7], v0: f64, a0: f64, j: f64) -> [f64; 3] {
     let (mut p, mut v, mut a) = (0.0, v0, a0);
     for i in 0..7 {
         let ti = t[i];
+        // Each profile type has its own fixed zero phases: a well-predicted branch.
+        if ti == 0.0 {
+            continue;
+        }
         let ji = UDDU[i] * j;
         p += ti * (v + ti * (0.5 * a + ti * ji * (1.0 / 6.0)));
         v += ti * (a + 0.5 * ti * ji);
@@ -605,18 +609,24 @@ pub(crate) fn max_displacement(e: &Ends, b: &Bounds, duration: f64) -> Option<([
         }
     }
 
+    // The peak x and trough −y of the acceleration must lie within the limits: checked before
+    // integrating (most candidates of the wrong type fail here).
+    let [_, _, a_lo, a_hi] = slack(b);
+
     // NONE: J·T = 2s + af − a0 fixes s = x + y; x − y = c/s from the velocity.
     let s = 0.5 * (jt + a0 - af);
     if s > 0.0 {
         let c = j * vd + 0.5 * (a0 * a0 - af * af);
         let x = 0.5 * (s + c / s);
         let y = 0.5 * (s - c / s);
-        better(
-            [(x - a0) / j, 0.0, s / j, 0.0, 0.0, 0.0, (af + y) / j],
-            e,
-            b,
-            &mut best,
-        );
+        if x <= a_hi && -y >= a_lo {
+            better(
+                [(x - a0) / j, 0.0, s / j, 0.0, 0.0, 0.0, (af + y) / j],
+                e,
+                b,
+                &mut best,
+            );
+        }
     }
 
     if b.a_max.is_finite() {
@@ -625,6 +635,9 @@ pub(crate) fn max_displacement(e: &Ends, b: &Bounds, duration: f64) -> Option<([
         let k = j * vd + am * am + 0.5 * (a0 * a0 - af * af) - am * (jt - af + a0);
         let n = quadratic(1.0, 2.0 * am, k, &mut roots);
         for &y in &roots[..n] {
+            if -y < a_lo {
+                continue;
+            }
             let hold = duration - (2.0 * am + 2.0 * y + af - a0) / j;
             better(
                 [
@@ -649,6 +662,9 @@ pub(crate) fn max_displacement(e: &Ends, b: &Bounds, duration: f64) -> Option<([
         let k = 0.5 * (af * af - a0 * a0) + y * y - y * (jt - af + a0) - j * vd;
         let n = quadratic(1.0, 2.0 * y, k, &mut roots);
         for &x in &roots[..n] {
+            if x > a_hi {
+                continue;
+            }
             let hold = duration - (2.0 * x + 2.0 * y + af - a0) / j;
             better(
                 [(x - a0) / j, 0.0, (x + y) / j, 0.0, 0.0, hold, (af + y) / j],
