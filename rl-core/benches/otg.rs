@@ -55,7 +55,6 @@ fn time_jobs(path: &str) {
         }
         println!("{index} {best}");
     }
-    eprintln!("refine calls {} iterations {}", otg::roots::CALLS.load(std::sync::atomic::Ordering::Relaxed), otg::roots::ITERS.load(std::sync::atomic::Ordering::Relaxed));
 }
 
 /// A fixed set of moving-start jobs (deterministic generator, the distributions of

@@ -84,7 +84,7 @@ pub(crate) mod lower_order;
 pub(crate) mod phase;
 mod position_limits;
 mod profile;
-pub mod roots;
+pub(crate) mod roots;
 pub(crate) mod sync;
 pub(crate) mod third_order;
 mod trajectory;

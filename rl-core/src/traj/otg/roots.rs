@@ -79,14 +79,8 @@ fn refine<const C: usize>(c: &[f64; C], mut lo: f64, mut hi: f64, p_lo: f64) -> 
     }
     let mut dx_old = hi - lo;
     let mut dx = dx_old;
-    CALLS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     for _ in 0..MAX_ITERATIONS {
-        ITERS.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
         let (p, dp, ddp) = eval_with_two_derivatives(c, x);
-        #[cfg(feature = "std")]
-        if std::env::var_os("RL_TRACE").is_some() {
-            std::eprintln!("it x={x:e} p={p:e} lo={lo:e} hi={hi:e}");
-        }
         // Within the rounding of the evaluation: as close as a double gets.
         if p.abs() <= 8.0 * f64::EPSILON * magnitude(c, x) {
             return x;
@@ -329,6 +323,3 @@ mod tests {
         assert_eq!(quadratic(1.0, 0.0, 1.0, &mut out), 0);
     }
 }
-
-pub static CALLS: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
-pub static ITERS: core::sync::atomic::AtomicUsize = core::sync::atomic::AtomicUsize::new(0);
