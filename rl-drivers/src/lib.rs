@@ -41,6 +41,7 @@ mod boxed;
 pub mod capability;
 pub mod cia402;
 pub mod device;
+pub mod franka;
 pub mod proto;
 pub mod typestate;
 
@@ -66,5 +67,7 @@ pub use device::{
 };
 #[cfg(feature = "std")]
 pub use ethercat::EthercatDrives;
+#[cfg(feature = "std")]
+pub use franka::FrankaArm;
 #[cfg(feature = "std")]
 pub use mitsubishi_h7::MitsubishiH7;

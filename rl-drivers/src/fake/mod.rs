@@ -5,5 +5,6 @@
 pub mod cia402_drive;
 pub mod coach_server;
 pub mod ecat_segment;
+pub mod franka_controller;
 pub mod h7_controller;
 mod tcp_server;

@@ -1,0 +1,144 @@
+//! The fake Franka against libfranka itself: libfranka 0.21.2 as franky-control 2.0.0 ships it,
+//! in a venv that `scripts/test` installs (`target/franky-control-venv`), runs
+//! `tests/franka_peers/libfranka_session.py` against the fake: connect and read the state, a
+//! joint motion, a torque-controlled motion of two seconds, a reflex (a torque step) and its
+//! recovery. The fake serves the FR3's URDF from franky-sim's venv when it is there (else an
+//! FR3-shaped arm of this crate's making) and integrates its dynamics. Without the venv the test
+//! prints `SKIPPED: <reason>`.
+
+use std::net::{IpAddr, Ipv4Addr};
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use rl_drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("workspace")
+        .to_path_buf()
+}
+
+/// The venv's python, or why there is none.
+fn franky_control() -> Result<PathBuf, String> {
+    let python = std::env::var_os("RL_FRANKY_CONTROL_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace().join("target/franky-control-venv/bin/python"));
+    let ok = Command::new(&python)
+        .args(["-c", "import franky"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ok {
+        Ok(python)
+    } else {
+        Err(format!(
+            "no franky-control at {} (scripts/test installs it)",
+            python.display()
+        ))
+    }
+}
+
+/// The FR3's URDF as franky-sim ships it, if its venv is there.
+pub fn fr3_urdf() -> Option<String> {
+    let site = workspace().join("target/franky-sim-venv/lib");
+    let dir = std::fs::read_dir(&site).ok()?.flatten().next()?.path();
+    std::fs::read_to_string(dir.join("site-packages/franky_sim/assets/fr3_clean.urdf")).ok()
+}
+
+fn real_time() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-franka")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(85)
+        .best_effort(true)
+        .apply_to_current();
+}
+
+/// A fake on port 1337 (libfranka's fixed port) of a loopback address of its own.
+fn spawn_on_own_address(urdf: String) -> FakeFranka {
+    let pid = std::process::id();
+    for k in 0..64u32 {
+        let n = pid.wrapping_mul(64).wrapping_add(k);
+        let ip = IpAddr::V4(Ipv4Addr::new(
+            127,
+            (n >> 16) as u8 | 0x40,
+            (n >> 8) as u8,
+            (n as u8).max(2),
+        ));
+        let config = FakeFrankaConfig {
+            bind: ip,
+            on_thread_start: Some(real_time),
+            ..FakeFrankaConfig::loopback().with_urdf(urdf.clone())
+        };
+        if let Ok(f) = FakeFranka::spawn(config) {
+            return f;
+        }
+    }
+    panic!("no free loopback address for port 1337");
+}
+
+#[test]
+fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
+    let python = match franky_control() {
+        Ok(p) => p,
+        Err(reason) => {
+            println!("SKIPPED: {reason}");
+            return;
+        }
+    };
+    let (urdf, which) = match fr3_urdf() {
+        Some(u) => (u, "the FR3's URDF (franky-sim)"),
+        None => (fr3_shaped_urdf(), "an FR3-shaped arm (no franky-sim venv)"),
+    };
+    let fake = spawn_on_own_address(urdf);
+    let host = fake.addr().ip().to_string();
+    let script = workspace().join("tests/franka_peers/libfranka_session.py");
+    let start = Instant::now();
+    let out = Command::new(&python)
+        .arg(&script)
+        .arg(&host)
+        .output()
+        .expect("python runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!(
+        "libfranka against the fake ({which}) in {:?}:\n{stdout}",
+        start.elapsed()
+    );
+    std::thread::sleep(Duration::from_millis(20));
+    let s = fake.status();
+    println!(
+        "fake: states {} commands {} lost {} (max {} in a row) late {} motions {} finished {} \
+         reflexes {} recoveries {} refused {} slips {} max lateness {} µs raised {:?}",
+        s.states,
+        s.commands,
+        s.lost,
+        s.max_lost_in_a_row,
+        s.late,
+        s.motions,
+        s.finished,
+        s.reflexes,
+        s.recoveries,
+        s.refused_requests,
+        s.slips,
+        s.max_lateness_us,
+        s.raised
+    );
+    assert!(
+        out.status.success(),
+        "libfranka's session failed:\n{stdout}\n{stderr}"
+    );
+    let report: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    for step in [
+        "connect",
+        "joint_motion",
+        "torque_motion",
+        "error_and_recovery",
+    ] {
+        assert_eq!(report["steps"][step]["ok"], true, "{step}: {stdout}");
+    }
+    // The fake saw it all: one reflex (the torque step) and its recovery.
+    assert_eq!(s.reflexes, 1, "{s:?}");
+    assert!(s.recoveries >= 1, "{s:?}");
+    assert!(s.motions >= 4, "{s:?}");
+}
