@@ -120,11 +120,15 @@ fn live_comparison_with_ruckig() {
         );
         return;
     }
-    // 300 fresh random jobs per category (a different seed from the committed fixtures).
+    // 300 fresh random jobs per category (a different seed from the committed fixtures); the
+    // disagreeing jobs go to a directory of this test's own, not scripts/otg-vs-ruckig's.
+    let record = root.join(format!("target/tmp/otg-cli-live-{}", std::process::id()));
     let out = Command::new(root.join("scripts/otg-vs-ruckig"))
         .args([
             "--jobs", "300", "--chunk", "300", "--seed", "4242", "--show", "5",
         ])
+        .arg("--out")
+        .arg(&record)
         .env("RL_BIN", env!("CARGO_BIN_EXE_rl"))
         .output()
         .expect("scripts/otg-vs-ruckig runs");
