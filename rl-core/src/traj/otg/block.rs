@@ -300,13 +300,17 @@ impl Axis {
         Ok(())
     }
 
-    /// Whether a total duration `t` is blocked.
+    /// Whether a total duration `t` is blocked. Within a few units in the last place of an
+    /// interval's ends `t` is that end's extremal profile (which [`Self::plan`] plays): two axes
+    /// whose durations agree in exact arithmetic (2 s and 1.9999999999999996 s, the start of a
+    /// blocked interval) must not push the common duration past the interval.
     #[inline]
     pub fn is_blocked(&self, t: f64) -> bool {
+        let tol = 2.0 * f64::EPSILON * (1.0 + t);
         t < self.t_min
             || self.blocked[..self.n_blocked]
                 .iter()
-                .any(|&(lo, hi)| lo < t && t < hi)
+                .any(|&(lo, hi)| lo + tol < t && t < hi - tol)
     }
 
     /// The measure the target fixes: displacement, or final velocity for a velocity target.
