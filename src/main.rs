@@ -25,6 +25,8 @@ enum Command {
     Scene(cli::scene::SceneCommand),
     /// Sample a trajectory through waypoints from a CSV file.
     Traj(cli::traj::TrajArgs),
+    /// Online trajectory generation from any state to any target state (JSONL jobs).
+    Otg(cli::otg::OtgArgs),
     /// Measure wake-up jitter of this crate's real-time loop (cyclictest-equivalent).
     Jitter(cli::jitter::JitterArgs),
     /// Report what stands between this machine and hard real time.
@@ -65,6 +67,7 @@ fn main() -> ExitCode {
         Some(Command::Model(cmd)) => cli::model::run(cmd),
         Some(Command::Scene(cmd)) => cli::scene::run(cmd),
         Some(Command::Traj(args)) => cli::traj::run(args),
+        Some(Command::Otg(args)) => cli::otg::run(args),
         Some(Command::Jitter(args)) => cli::jitter::run_jitter(args),
         Some(Command::Preflight(args)) => cli::jitter::run_preflight(args),
         Some(Command::FakeRobot(cmd)) => cli::fake_robot::run(cmd),

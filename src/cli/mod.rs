@@ -4,6 +4,7 @@ pub mod capacity;
 pub mod fake_robot;
 pub mod jitter;
 pub mod model;
+pub mod otg;
 pub mod output;
 pub mod placement;
 pub mod plan;

@@ -47,6 +47,7 @@ mod cartesian;
 mod circular;
 mod error;
 mod jerk_limited;
+pub mod otg;
 mod piecewise;
 mod polynomial;
 mod quaternion_spline;
@@ -77,6 +78,19 @@ pub struct Sample<const D: usize> {
     pub acceleration: [f64; D],
     /// Third time derivative.
     pub jerk: [f64; D],
+}
+
+impl<const D: usize> Sample<D> {
+    /// The `order`-th derivative (0 = position, up to 3 = jerk; zero above).
+    pub fn derivative(&self, order: usize) -> [f64; D] {
+        match order {
+            0 => self.position,
+            1 => self.velocity,
+            2 => self.acceleration,
+            3 => self.jerk,
+            _ => [0.0; D],
+        }
+    }
 }
 
 /// A vector-valued function of time on `[0, duration]` with `D` axes and exact derivatives.
