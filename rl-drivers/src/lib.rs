@@ -46,6 +46,8 @@ pub mod proto;
 pub mod typestate;
 
 #[cfg(feature = "std")]
+pub mod ati;
+#[cfg(feature = "std")]
 pub mod canopen;
 #[cfg(feature = "std")]
 pub mod coach;
@@ -59,6 +61,8 @@ pub mod mitsubishi_h7;
 pub mod transport;
 
 pub use capability::*;
+#[cfg(feature = "std")]
+pub use ati::AtiNetFt;
 #[cfg(feature = "std")]
 pub use coach::Coach;
 pub use device::{

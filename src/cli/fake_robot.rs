@@ -17,6 +17,8 @@ use super::capacity::WithModel;
 use super::output::outln;
 use super::{CliError, CliResult};
 
+mod devices;
+
 /// Which fake robot to run.
 #[derive(Subcommand, Debug)]
 pub enum FakeRobotCommand {
@@ -31,6 +33,8 @@ pub enum FakeRobotCommand {
     Ethercat(EthercatArgs),
     /// A fake Franka FR3 speaking libfranka's protocol (FCI: TCP 1337 and 1 kHz UDP).
     Franka(FrankaArgs),
+    /// A fake ATI Net F/T force/torque sensor (RDT over UDP, calibration over TCP and HTTP).
+    Ft(devices::FtArgs),
 }
 
 /// Arguments of `rl fake-robot franka`.
@@ -131,6 +135,7 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
         FakeRobotCommand::Canopen(args) => run_canopen(&args, &stop),
         FakeRobotCommand::Ethercat(args) => run_ethercat(&args, &stop),
         FakeRobotCommand::Franka(args) => run_franka(&args, &stop),
+        FakeRobotCommand::Ft(args) => devices::run_ft(&args, &stop),
     }
 }
 

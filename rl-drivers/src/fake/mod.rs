@@ -7,4 +7,5 @@ pub mod coach_server;
 pub mod ecat_segment;
 pub mod franka_controller;
 pub mod h7_controller;
+pub mod netft_sensor;
 mod tcp_server;

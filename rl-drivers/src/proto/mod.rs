@@ -8,4 +8,5 @@ pub mod canopen;
 pub mod coach;
 pub mod ecat;
 pub mod h7;
+pub mod netft;
 pub mod r3;

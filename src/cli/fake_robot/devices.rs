@@ -1,0 +1,132 @@
+//! `rl fake-robot ft`: the fake devices around the arm (issue 30), each until Ctrl-C with one
+//! status line per second.
+
+use std::net::SocketAddr;
+use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+
+use clap::Args;
+
+use super::every_second;
+use crate::cli::output::outln;
+use crate::cli::{CliError, CliResult};
+
+/// Six comma-separated numbers.
+fn six(text: &str) -> Result<[f64; 6], String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}")))
+        .collect::<Result<_, _>>()?;
+    let arr: [f64; 6] = v
+        .try_into()
+        .map_err(|v: Vec<f64>| format!("{} values, expected 6 (fx,fy,fz,tx,ty,tz)", v.len()))?;
+    if arr.iter().all(|x| x.is_finite()) {
+        Ok(arr)
+    } else {
+        Err("values must be finite".into())
+    }
+}
+
+/// Arguments of `rl fake-robot ft`.
+#[derive(Args, Debug)]
+pub struct FtArgs {
+    /// The RDT (UDP) address; the calibration (TCP) and web (HTTP) servers bind the same host.
+    #[arg(long, default_value = "127.0.0.1:49152")]
+    pub bind: SocketAddr,
+    /// The calibration server's TCP port (READCALINFO).
+    #[arg(long, default_value_t = rl_drivers::proto::netft::TCP_PORT)]
+    pub tcp_port: u16,
+    /// The web server's port (netftapi2.xml; the sensor's own is 80).
+    #[arg(long, default_value_t = 8080)]
+    pub http_port: u16,
+    /// Records per second (1 to 7000).
+    #[arg(long, default_value_t = 7000)]
+    pub rate: u32,
+    /// Counts per N and per N·m of the calibration.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub counts: u32,
+    /// The load on the sensor: fx,fy,fz,tx,ty,tz in N and N·m (sensor frame).
+    #[arg(long, value_parser = six, allow_negative_numbers = true)]
+    pub wrench: Option<[f64; 6]>,
+    /// The unloaded sensor's reading (what a bias removes).
+    #[arg(long, value_parser = six, allow_negative_numbers = true)]
+    pub offset: Option<[f64; 6]>,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
+}
+
+/// Runs `rl fake-robot ft`.
+pub fn run_ft(args: &FtArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::netft_sensor::{FakeNetFt, FakeNetFtConfig};
+    use rl_drivers::proto::netft::Calibration;
+    let config = FakeNetFtConfig {
+        bind: args.bind.ip(),
+        rdt_port: args.bind.port(),
+        tcp_port: Some(args.tcp_port),
+        http_port: Some(args.http_port),
+        calibration: Calibration::si(args.counts, args.counts),
+        rdt_rate_hz: args.rate,
+        ..FakeNetFtConfig::loopback()
+    };
+    if args.counts == 0 {
+        return Err(CliError::usage("--counts: must be positive"));
+    }
+    let fake = FakeNetFt::spawn(config).map_err(|e| {
+        let code = if e.kind() == std::io::ErrorKind::InvalidInput {
+            2
+        } else {
+            1
+        };
+        let msg = format!("fake Net F/T on {}: {e}", args.bind);
+        if code == 2 {
+            CliError::usage(msg)
+        } else {
+            CliError::failed(msg)
+        }
+    })?;
+    if let Some(w) = args.wrench {
+        fake.set_wrench(w);
+    }
+    if let Some(o) = args.offset {
+        fake.set_offset(o);
+    }
+    let printed = outln!(
+        "fake ATI Net F/T: RDT on {}, calibration on TCP {}, netftapi2.xml on HTTP {}; {} records/s, {} counts per N and per N·m; Ctrl-C to stop",
+        fake.rdt_addr(),
+        fake.tcp_addr().map_or("-".into(), |a| a.to_string()),
+        fake.http_addr().map_or("-".into(), |a| a.to_string()),
+        args.rate,
+        args.counts
+    );
+    let mut last = 0;
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let rate = s.records - last;
+            last = s.records;
+            outln!(
+                "t={t}s streaming_to={} records={} ({rate}/s) datagrams={} dropped={} reordered={} \
+                 duplicated={} biases={} requests={} bad_requests={} calinfo={} http={} slips={} \
+                 max_lateness_us={}",
+                s.streaming_to.map_or("-".into(), |a| a.to_string()),
+                s.records,
+                s.datagrams,
+                s.dropped,
+                s.reordered,
+                s.duplicated,
+                s.biases,
+                s.requests,
+                s.bad_requests,
+                s.calinfo_requests,
+                s.http_requests,
+                s.slips,
+                s.max_lateness_us,
+            )
+        })
+    });
+    drop(fake);
+    printed?;
+    outln!("fake Net F/T stopped")?;
+    Ok(ExitCode::SUCCESS)
+}
