@@ -58,11 +58,13 @@ pub mod fake;
 #[cfg(feature = "std")]
 pub mod mitsubishi_h7;
 #[cfg(feature = "std")]
+pub mod robotiq;
+#[cfg(feature = "std")]
 pub mod transport;
 
-pub use capability::*;
 #[cfg(feature = "std")]
 pub use ati::AtiNetFt;
+pub use capability::*;
 #[cfg(feature = "std")]
 pub use coach::Coach;
 pub use device::{
@@ -75,3 +77,5 @@ pub use ethercat::EthercatDrives;
 pub use franka::FrankaArm;
 #[cfg(feature = "std")]
 pub use mitsubishi_h7::MitsubishiH7;
+#[cfg(feature = "std")]
+pub use robotiq::RobotiqGripper;

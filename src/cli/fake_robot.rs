@@ -35,6 +35,8 @@ pub enum FakeRobotCommand {
     Franka(FrankaArgs),
     /// A fake ATI Net F/T force/torque sensor (RDT over UDP, calibration over TCP and HTTP).
     Ft(devices::FtArgs),
+    /// A fake Robotiq 2F-85/140 gripper (Modbus RTU on a pseudo-terminal, Modbus TCP).
+    Gripper(devices::GripperArgs),
 }
 
 /// Arguments of `rl fake-robot franka`.
@@ -136,6 +138,7 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
         FakeRobotCommand::Ethercat(args) => run_ethercat(&args, &stop),
         FakeRobotCommand::Franka(args) => run_franka(&args, &stop),
         FakeRobotCommand::Ft(args) => devices::run_ft(&args, &stop),
+        FakeRobotCommand::Gripper(args) => devices::run_gripper(&args, &stop),
     }
 }
 

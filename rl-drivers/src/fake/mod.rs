@@ -8,4 +8,5 @@ pub mod ecat_segment;
 pub mod franka_controller;
 pub mod h7_controller;
 pub mod netft_sensor;
+pub mod robotiq_gripper;
 mod tcp_server;

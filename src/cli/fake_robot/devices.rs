@@ -1,4 +1,4 @@
-//! `rl fake-robot ft`: the fake devices around the arm (issue 30), each until Ctrl-C with one
+//! `rl fake-robot ft | gripper`: the fake devices around the arm (issue 30), each until Ctrl-C with one
 //! status line per second.
 
 use std::net::SocketAddr;
@@ -128,5 +128,122 @@ pub fn run_ft(args: &FtArgs, stop: &AtomicBool) -> CliResult {
     drop(fake);
     printed?;
     outln!("fake Net F/T stopped")?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Arguments of `rl fake-robot gripper`.
+#[derive(Args, Debug)]
+pub struct GripperArgs {
+    /// Serve Modbus RTU on a pseudo-terminal linked at PATH (open PATH as the serial port).
+    #[arg(long, value_name = "PATH")]
+    pub serial: Option<std::path::PathBuf>,
+    /// Serve Modbus TCP at ADDR (e.g. 127.0.0.1:5020).
+    #[arg(long, value_name = "ADDR")]
+    pub modbus_tcp: Option<SocketAddr>,
+    /// The gripper: 2f-85 or 2f-140.
+    #[arg(long, default_value = "2f-85")]
+    pub model: String,
+    /// Its Modbus unit.
+    #[arg(long, default_value_t = rl_drivers::proto::robotiq::DEFAULT_UNIT)]
+    pub unit: u8,
+    /// The serial line's baud rate (answers are paced at it, 8N1).
+    #[arg(long, default_value_t = rl_drivers::proto::robotiq::DEFAULT_BAUD)]
+    pub baud: u32,
+    /// How long an activation takes.
+    #[arg(long, default_value = "1.5s", value_parser = crate::cli::parse_duration)]
+    pub activation_time: std::time::Duration,
+    /// An object between the fingers, this wide (m): a closing grasp stops on it.
+    #[arg(long)]
+    pub object: Option<f64>,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
+}
+
+/// Runs `rl fake-robot gripper`.
+pub fn run_gripper(args: &GripperArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::robotiq_gripper::{FakeGripper, FakeGripperConfig};
+    use rl_drivers::proto::robotiq::Model;
+    let model = match args.model.to_ascii_lowercase().as_str() {
+        "2f-85" | "2f85" => Model::TwoF85,
+        "2f-140" | "2f140" => Model::TwoF140,
+        other => {
+            return Err(CliError::usage(format!(
+                "--model {other}: expected 2f-85 or 2f-140"
+            )));
+        }
+    };
+    if args.serial.is_none() && args.modbus_tcp.is_none() {
+        return Err(CliError::usage(
+            "give --serial PATH (Modbus RTU on a pseudo-terminal) or --modbus-tcp ADDR, or both",
+        ));
+    }
+    if let Some(w) = args.object
+        && !(w.is_finite() && (0.0..=model.stroke_m()).contains(&w))
+    {
+        return Err(CliError::usage(format!(
+            "--object {w}: an opening from 0 to {} m",
+            model.stroke_m()
+        )));
+    }
+    let config = FakeGripperConfig {
+        model,
+        unit: args.unit,
+        serial: args.serial.is_some(),
+        serial_link: args.serial.clone(),
+        baud: args.baud,
+        tcp: args.modbus_tcp,
+        activation_time: args.activation_time,
+        ..FakeGripperConfig::serial()
+    };
+    let mut fake =
+        FakeGripper::spawn(config).map_err(|e| CliError::failed(format!("fake gripper: {e}")))?;
+    fake.set_object(args.object);
+    let mut wires = Vec::new();
+    if let (Some(link), Some(pty)) = (&args.serial, fake.serial_path()) {
+        wires.push(format!(
+            "Modbus RTU on {} -> {} at {} baud 8N1",
+            link.display(),
+            pty.display(),
+            args.baud
+        ));
+    }
+    if let Some(a) = fake.tcp_addr() {
+        wires.push(format!("Modbus TCP on {a}"));
+    }
+    let printed = outln!(
+        "fake Robotiq {} gripper, unit {}: {}; Ctrl-C to stop",
+        model.name(),
+        args.unit,
+        wires.join(", ")
+    );
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let g = s.status;
+            outln!(
+                "t={t}s requests={} answers={} exceptions={} crc_errors={} other_units={} garbage_bytes={} \
+                 gACT={} gSTA={:?} gGTO={} gOBJ={:?} fault={} position={} opening_mm={:.1} current={} tcp_clients={}",
+                s.requests,
+                s.answers,
+                s.exceptions,
+                s.crc_errors,
+                s.other_units,
+                s.garbage_bytes,
+                u8::from(g.activated),
+                g.activation,
+                u8::from(g.going),
+                g.object,
+                g.fault,
+                g.position,
+                s.opening_m * 1000.0,
+                g.current,
+                s.tcp_clients,
+            )
+        })
+    });
+    fake.shutdown();
+    printed?;
+    outln!("fake gripper stopped")?;
     Ok(ExitCode::SUCCESS)
 }
