@@ -61,6 +61,8 @@ pub mod mitsubishi_h7;
 pub mod robotiq;
 #[cfg(feature = "std")]
 pub mod transport;
+#[cfg(feature = "std")]
+pub mod ur;
 
 #[cfg(feature = "std")]
 pub use ati::AtiNetFt;
@@ -79,3 +81,5 @@ pub use franka::FrankaArm;
 pub use mitsubishi_h7::MitsubishiH7;
 #[cfg(feature = "std")]
 pub use robotiq::RobotiqGripper;
+#[cfg(feature = "std")]
+pub use ur::UniversalRobot;

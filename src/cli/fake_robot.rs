@@ -37,6 +37,8 @@ pub enum FakeRobotCommand {
     Ft(devices::FtArgs),
     /// A fake Robotiq 2F-85/140 gripper (Modbus RTU on a pseudo-terminal, Modbus TCP).
     Gripper(devices::GripperArgs),
+    /// A fake Universal Robots controller (RTDE 30004, dashboard 29999, URScript 30002/30003).
+    Ur(devices::UrArgs),
 }
 
 /// Arguments of `rl fake-robot franka`.
@@ -139,6 +141,7 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
         FakeRobotCommand::Franka(args) => run_franka(&args, &stop),
         FakeRobotCommand::Ft(args) => devices::run_ft(&args, &stop),
         FakeRobotCommand::Gripper(args) => devices::run_gripper(&args, &stop),
+        FakeRobotCommand::Ur(args) => devices::run_ur(&args, &stop),
     }
 }
 

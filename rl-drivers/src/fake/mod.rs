@@ -10,3 +10,4 @@ pub mod h7_controller;
 pub mod netft_sensor;
 pub mod robotiq_gripper;
 mod tcp_server;
+pub mod ur_controller;

@@ -12,3 +12,4 @@ pub mod modbus;
 pub mod netft;
 pub mod r3;
 pub mod robotiq;
+pub mod rtde;

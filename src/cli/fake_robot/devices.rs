@@ -1,4 +1,4 @@
-//! `rl fake-robot ft | gripper`: the fake devices around the arm (issue 30), each until Ctrl-C with one
+//! `rl fake-robot ft | gripper | ur`: the fake devices around the arm (issue 30), each until Ctrl-C with one
 //! status line per second.
 
 use std::net::SocketAddr;
@@ -245,5 +245,132 @@ pub fn run_gripper(args: &GripperArgs, stop: &AtomicBool) -> CliResult {
     fake.shutdown();
     printed?;
     outln!("fake gripper stopped")?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Arguments of `rl fake-robot ur`.
+#[derive(Args, Debug)]
+pub struct UrArgs {
+    /// The address every server binds (loopback by default).
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: std::net::IpAddr,
+    /// RTDE's port.
+    #[arg(long, default_value_t = rl_drivers::proto::rtde::PORT)]
+    pub rtde_port: u16,
+    /// The dashboard server's port.
+    #[arg(long, default_value_t = rl_drivers::fake::ur_controller::DASHBOARD_PORT)]
+    pub dashboard_port: u16,
+    /// The ports that take URScript (the secondary and real-time interfaces).
+    #[arg(long, value_delimiter = ',', default_value = "30002,30003")]
+    pub script_ports: Vec<u16>,
+    /// The arm: ur5e or ur10e (kinematics and joint speed limits).
+    #[arg(long, default_value = "ur5e")]
+    pub arm: String,
+    /// A robot model (URDF or RL XML, six joints): its home position is where the arm stands
+    /// and its forward kinematics give the tool pose.
+    #[arg(long)]
+    pub model: Option<std::path::PathBuf>,
+    /// Start powered off with the brakes on, as after booting (a client powers it on through
+    /// the dashboard); by default it is running, as after an operator's start-up.
+    #[arg(long)]
+    pub power_off: bool,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long)]
+    pub seconds: Option<u64>,
+}
+
+fn fake_ur_thread() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-ur")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(85)
+        .best_effort(true)
+        .apply_to_current();
+}
+
+/// Runs `rl fake-robot ur`.
+pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
+    use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig, UrKinematics};
+    let kinematics = match args.arm.to_ascii_lowercase().as_str() {
+        "ur5e" => UrKinematics::UR5E,
+        "ur10e" => UrKinematics::UR10E,
+        other => {
+            return Err(CliError::usage(format!(
+                "--arm {other}: expected ur5e or ur10e"
+            )));
+        }
+    };
+    let mut config = FakeUrConfig {
+        bind: args.bind,
+        rtde_port: args.rtde_port,
+        dashboard_port: Some(args.dashboard_port),
+        script_ports: args.script_ports.clone(),
+        kinematics,
+        running: !args.power_off,
+        on_thread_start: Some(fake_ur_thread),
+        ..FakeUrConfig::loopback()
+    };
+    if let Some(path) = &args.model {
+        let arm = super::Arm::load(path, "the fake UR moves")?;
+        if arm.limits.len() != 6 {
+            return Err(CliError::usage(format!(
+                "--model {}: {} joints; a UR arm has 6",
+                path.display(),
+                arm.limits.len()
+            )));
+        }
+        for (q, h) in config.initial_q.iter_mut().zip(&arm.home) {
+            *q = *h;
+        }
+        config.model = arm.kinematics;
+    }
+    let fake = FakeUr::spawn(config)
+        .map_err(|e| CliError::failed(format!("fake UR controller on {}: {e}", args.bind)))?;
+    let scripts: Vec<String> = fake
+        .script_addrs()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    let printed = outln!(
+        "fake UR controller ({}{}): RTDE on {}, dashboard on {}, URScript on {}; Ctrl-C to stop",
+        kinematics.name,
+        if args.power_off { ", powered off" } else { "" },
+        fake.rtde_addr(),
+        fake.dashboard_addr().map_or("-".into(), |a| a.to_string()),
+        scripts.join(", ")
+    );
+    let mut last = 0;
+    let printed = printed.and_then(|()| {
+        every_second(stop, args.seconds, |t| {
+            let s = fake.status();
+            let rate = s.outputs_sent - last;
+            last = s.outputs_sent;
+            outln!(
+                "t={t}s robot_mode={} safety_mode={} runtime_state={} program={} outputs={} ({rate}/s) \
+                 inputs={} rtde_clients={} protocol_errors={} servoj={} watchdogs={} protective_stops={} \
+                 dashboard={} slips={} max_lateness_us={} q=[{}]{}",
+                s.robot_mode,
+                s.safety_mode,
+                s.runtime_state,
+                s.program.as_deref().unwrap_or("-"),
+                s.outputs_sent,
+                s.inputs_applied,
+                s.rtde_clients,
+                s.protocol_errors,
+                s.servoj_calls,
+                s.watchdog_triggers,
+                s.protective_stops,
+                s.dashboard_commands,
+                s.slips,
+                s.max_lateness_us,
+                s.q.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", "),
+                s.last_program_error
+                    .as_ref()
+                    .map_or(String::new(), |e| format!(" last_error=\"{e}\"")),
+            )
+        })
+    });
+    drop(fake);
+    printed?;
+    outln!("fake UR controller stopped")?;
     Ok(ExitCode::SUCCESS)
 }

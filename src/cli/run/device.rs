@@ -29,7 +29,8 @@ const R3_PORT: u16 = 10001;
 /// The devices `--device` accepts, for messages.
 pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PORT], fake-cia402, \
      cannelloni+udp://HOST:PORT[?nodes=1-6], cannelloni+tcp://HOST:PORT[?listen][&nodes=…] or \
-     socketcan://IFACE[?nodes=…], ethercat://IF or franka://HOST[:PORT]";
+     socketcan://IFACE[?nodes=…], ethercat://IF, franka://HOST[:PORT] or \
+     ur://HOST[:PORT][?power-on]";
 
 /// The robot `rl run` drives.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -61,6 +62,14 @@ pub enum DeviceSpec {
     Franka {
         /// Its command server (port 1337 by default).
         server: SocketAddr,
+    },
+    /// A Universal Robots arm over RTDE (the follower program on its controller).
+    Ur {
+        /// RTDE's address (port 30004 by default; dashboard 29999 and script 30002 on the
+        /// same host).
+        server: SocketAddr,
+        /// Power on and release the brakes through the dashboard at start.
+        power_on: bool,
     },
 }
 
@@ -212,6 +221,15 @@ impl DeviceSpec {
             let server = resolve(rest, rl_drivers::franka::COMMAND_PORT).map_err(bad)?;
             return Ok(Self::Franka { server });
         }
+        if let Some(rest) = text.strip_prefix("ur://") {
+            let (host, power_on) = match rest.split_once('?') {
+                None => (rest, false),
+                Some((h, "power-on")) => (h, true),
+                Some((_, q)) => return Err(bad(format!("`?{q}`: expected ?power-on"))),
+            };
+            let server = resolve(host, rl_drivers::proto::rtde::PORT).map_err(bad)?;
+            return Ok(Self::Ur { server, power_on });
+        }
         if let Some(interface) = text.strip_prefix("ethercat://") {
             if interface.is_empty() || interface.len() > 15 || interface.contains('/') {
                 return Err(bad(
@@ -350,6 +368,24 @@ impl DeviceSpec {
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
+                    fake: None,
+                })
+            }
+            Self::Ur { server, power_on } => {
+                if model.dof() != rl_drivers::ur::DOF {
+                    return Err(CliError::usage(format!(
+                        "--device ur://{server}: the model has {} joints; a UR arm has 6",
+                        model.dof()
+                    )));
+                }
+                let mut config = rl_drivers::ur::UrConfig::new(server.ip());
+                config.rtde_port = server.port();
+                config.power_on = *power_on;
+                let robot = rl_drivers::UniversalRobot::new(config)
+                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                Ok(Opened {
+                    robot: Box::new(robot),
+                    name: format!("UR at {server} (RTDE, joint positions at 500 Hz)"),
                     fake: None,
                 })
             }
@@ -499,6 +535,13 @@ mod tests {
             })
         );
         assert_eq!(
+            DeviceSpec::parse("ur://127.0.0.3?power-on").ok(),
+            Some(DeviceSpec::Ur {
+                server: "127.0.0.3:30004".parse().expect("addr"),
+                power_on: true,
+            })
+        );
+        assert_eq!(
             DeviceSpec::parse("ethercat://eth1").ok(),
             Some(DeviceSpec::Ethercat {
                 interface: "eth1".into()
@@ -516,6 +559,8 @@ mod tests {
             "tcp://1.2.3.4",
             "coach://",
             "franka://",
+            "ur://",
+            "ur://1.2.3.4?fast",
         ] {
             let e = DeviceSpec::parse(bad).expect_err(bad);
             assert_eq!(e.exit_code(), 2, "{bad}");
