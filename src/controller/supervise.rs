@@ -106,6 +106,16 @@ impl Supervision {
     pub fn device_failure_limit(&self) -> u32 {
         self.max_consecutive_lost.saturating_add(1)
     }
+
+    /// Widens the derived tracking bound by a device's own lag: measured joints that follow
+    /// the commands `lag` later (a first-order smoothing, as a UR's `servoj` lookahead) trail
+    /// them by up to `v_k · lag`, on top of the [`tracking_cycles`](Self::tracking_cycles) of
+    /// `cycle` (the slower of the control period and the device's cycle).
+    pub fn allow_device_lag(&mut self, lag: core::time::Duration, cycle: core::time::Duration) {
+        if !lag.is_zero() && !cycle.is_zero() {
+            self.tracking_cycles += lag.as_secs_f64() / cycle.as_secs_f64();
+        }
+    }
 }
 
 /// What was wrong with a feedback value.

@@ -202,6 +202,11 @@ pub struct Opened {
     pub name: String,
     /// The in-process fake, if the device talks to one.
     pub fake: Option<InProcessFake>,
+    /// How much later than the commands the measured joints follow by the device's own
+    /// smoothing (a UR's `servoj` lookahead); zero for devices that execute a position within
+    /// their cycle. The supervisor's tracking bound allows it
+    /// ([`Supervision::allow_device_lag`](rl::controller::Supervision::allow_device_lag)).
+    pub lag: Duration,
 }
 
 /// An in-process fake the tool started, kept for the report.
@@ -434,6 +439,7 @@ impl DeviceSpec {
                         fake.r3_addr()
                     ),
                     fake: Some(InProcessFake::H7(fake)),
+                    lag: Duration::ZERO,
                 })
             }
             Self::H7 { server, r3 } => {
@@ -447,6 +453,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("H7 at {server} (R3 {r3})"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::FakeCia402 => {
@@ -477,6 +484,7 @@ impl DeviceSpec {
                         nodes.len()
                     ),
                     fake: Some(InProcessFake::Cia402(fake)),
+                    lag: Duration::ZERO,
                 })
             }
             Self::Cia402(address, units) => {
@@ -498,6 +506,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("CiA 402 drives {nodes:?} on {}", address.bus),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::Ethercat { interface, units } => {
@@ -525,6 +534,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("EtherCAT CiA 402 drives on {interface}"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::Franka { server } => {
@@ -536,6 +546,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::Ur { server, power_on } => {
@@ -548,12 +559,15 @@ impl DeviceSpec {
                 let mut config = rl_drivers::ur::UrConfig::new(server.ip());
                 config.rtde_port = server.port();
                 config.power_on = *power_on;
+                // The measured joints trail `servoj`'s commands by its lookahead.
+                let lag = Duration::from_secs_f64(config.lookahead_time);
                 let robot = rl_drivers::UniversalRobot::new(config)
                     .map_err(|e| CliError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("UR at {server} (RTDE, joint positions at 500 Hz)"),
                     fake: None,
+                    lag,
                 })
             }
             Self::Coach { server } => {
@@ -569,6 +583,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("Coach at {server}"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
         }

@@ -1,11 +1,19 @@
 //! The fake controller's arm: joint targets from `servoj`, `speedj`, `movej` and `stopj`, the
 //! measured joints following them, the joint speed limit a target may not exceed, and the tool
 //! pose (a UR's Denavit–Hartenberg kinematics, or a model's).
+//!
+//! `servoj`'s lookahead smooths the commands: the target joints follow them as a first-order
+//! lag of the lookahead time, so one late or doubled command is evened out and only a
+//! sustained speed beyond a joint's limit stops the arm. The measured joints follow the targets
+//! a few milliseconds behind ([`DRIVE_LAG`]).
 
 use crate::fake::h7_controller::ForwardKinematics;
 
 /// The controller's cycle, s.
 pub(crate) const DT: f64 = 0.002;
+
+/// The lag of the measured joints behind the targets, s.
+pub(crate) const DRIVE_LAG: f64 = 0.004;
 
 /// A UR arm's kinematics (standard Denavit–Hartenberg, Universal Robots' published values).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,8 +126,6 @@ pub(crate) struct Arm {
     pub target_qd: [f64; 6],
     pub target_qdd: [f64; 6],
     motion: Motion,
-    /// The lag of the measured joints behind the targets, s.
-    lag: f64,
 }
 
 impl Arm {
@@ -133,7 +139,6 @@ impl Arm {
             target_qd: [0.0; 6],
             target_qdd: [0.0; 6],
             motion: Motion::Hold,
-            lag: 0.03,
         }
     }
 
@@ -180,8 +185,10 @@ impl Arm {
         match self.motion {
             Motion::Hold => self.target_qd = [0.0; 6],
             Motion::Servo { q, lookahead } => {
-                self.lag = lookahead;
-                self.target_q = q;
+                let k = DT / (lookahead + DT);
+                for j in 0..6 {
+                    self.target_q[j] += (q[j] - self.target_q[j]) * k;
+                }
             }
             Motion::Speed { qd, a } => {
                 for j in 0..6 {
@@ -227,7 +234,7 @@ impl Arm {
             }
         }
         // The measured joints follow with a first-order lag.
-        let k = DT / (self.lag + DT);
+        let k = DT / (DRIVE_LAG + DT);
         for j in 0..6 {
             let q = self.q[j] + (self.target_q[j] - self.q[j]) * k;
             self.qd[j] = (q - self.q[j]) / DT;
@@ -271,16 +278,39 @@ mod tests {
     }
 
     #[test]
-    fn servo_targets_are_followed_and_speed_limited() {
+    fn servo_targets_are_smoothed_followed_and_speed_limited() {
         let mut arm = Arm::new(UrKinematics::UR5E, None, [0.0; 6]);
         arm.servo([0.004, 0.0, 0.0, 0.0, 0.0, 0.0], 0.05);
         arm.advance(1.0).unwrap();
-        assert_eq!(arm.target_q[0], 0.004);
-        assert!((arm.target_qd[0] - 2.0).abs() < 1e-9);
-        assert!(arm.q[0] > 0.0 && arm.q[0] < 0.004);
-        // A jump of 0.1 rad in 2 ms is 50 rad/s.
-        arm.servo([0.104, 0.0, 0.0, 0.0, 0.0, 0.0], 0.05);
+        // One cycle of the lookahead's smoothing: 2/52 of the way.
+        let first = 0.004 * DT / (0.05 + DT);
+        assert!((arm.target_q[0] - first).abs() < 1e-15, "{}", arm.target_q[0]);
+        assert!((arm.target_qd[0] - first / DT).abs() < 1e-9);
+        assert!(arm.q[0] > 0.0 && arm.q[0] < arm.target_q[0]);
+        // One second on, the target and the measured joint are there.
+        for _ in 0..500 {
+            arm.advance(1.0).unwrap();
+        }
+        assert!((arm.target_q[0] - 0.004).abs() < 1e-9);
+        assert!((arm.q[0] - 0.004).abs() < 1e-9);
+        // A jump of 0.5 rad: the smoothed target would move 9.6 rad/s, beyond the UR5e's π.
+        arm.servo([0.504, 0.0, 0.0, 0.0, 0.0, 0.0], 0.05);
+        let before = arm.target_q;
         assert_eq!(arm.advance(1.0), Err(0));
-        assert_eq!(arm.target_q[0], 0.004, "the target did not move");
+        assert_eq!(arm.target_q, before, "the target did not move");
+    }
+
+    #[test]
+    fn one_doubled_servo_step_is_smoothed_out() {
+        // A client late by one cycle sends two cycles' motion at once: 2 rad/s for one cycle of
+        // a 1 rad/s ramp. The lookahead evens it out; the limit is not reached.
+        let mut arm = Arm::new(UrKinematics::UR5E, None, [0.0; 6]);
+        let mut q = 0.0;
+        for i in 0..200 {
+            q += if i == 100 { 2.0 * DT } else { DT };
+            arm.servo([q, 0.0, 0.0, 0.0, 0.0, 0.0], 0.1);
+            arm.advance(1.0).unwrap();
+            assert!(arm.target_qd[0] < 1.1, "{}", arm.target_qd[0]);
+        }
     }
 }
