@@ -17,6 +17,16 @@ use rl_drivers::robotiq::{Exchange, GripperConfig, RobotiqGripper, SerialPort};
 use rl_drivers::{CyclicDevice, Device, State};
 use serde_json::Value;
 
+/// The fake gripper's thread runs at a real-time priority where the process may (root, as in
+/// CI): a gripper's firmware answers in its own time, whatever else the host runs.
+fn realtime() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-gripper")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(80)
+        .best_effort(true)
+        .apply_to_current();
+}
+
 fn pymodbus(test: &str) -> Option<std::path::PathBuf> {
     match python::python_with(&["pymodbus", "serial"]) {
         Ok(p) => Some(p),
@@ -37,6 +47,7 @@ fn pymodbus_drives_the_fake_gripper_over_rtu_and_tcp() {
         return;
     };
     let fake = FakeGripper::spawn(FakeGripperConfig {
+        on_thread_start: Some(realtime),
         activation_time: Duration::from_millis(300),
         tcp: Some("127.0.0.1:0".parse().unwrap()),
         ..FakeGripperConfig::serial()

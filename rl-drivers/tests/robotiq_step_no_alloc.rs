@@ -13,6 +13,16 @@ use rl_testkit::CountingAllocator;
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
+/// The fake gripper's thread runs at a real-time priority where the process may (root, as in
+/// CI): a gripper's firmware answers in its own time, whatever else the host runs.
+fn realtime() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-gripper")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(80)
+        .best_effort(true)
+        .apply_to_current();
+}
+
 #[test]
 fn the_counter_sees_allocations() {
     assert!(rl_testkit::allocations(|| drop(std::hint::black_box(vec![1u8; 64]))).0 >= 1);
@@ -50,6 +60,7 @@ fn steady(g: &mut RobotiqGripper, fake: &FakeGripper) {
 #[test]
 fn rtu_steps_allocate_nothing() {
     let fake = FakeGripper::spawn(FakeGripperConfig {
+        on_thread_start: Some(realtime),
         activation_time: Duration::from_millis(50),
         ..FakeGripperConfig::serial()
     })
@@ -68,6 +79,7 @@ fn rtu_steps_allocate_nothing() {
 #[test]
 fn tcp_steps_allocate_nothing() {
     let fake = FakeGripper::spawn(FakeGripperConfig {
+        on_thread_start: Some(realtime),
         activation_time: Duration::from_millis(50),
         ..FakeGripperConfig::tcp("127.0.0.1:0".parse().unwrap())
     })

@@ -71,6 +71,9 @@ pub struct FakeGripperConfig {
     /// How long an activation takes (the real gripper opens and closes to find its stroke:
     /// seconds).
     pub activation_time: Duration,
+    /// Called first on the fake's thread (to give it a real-time priority: a gripper's
+    /// firmware is not delayed by the host's other programs).
+    pub on_thread_start: Option<fn()>,
 }
 
 impl FakeGripperConfig {
@@ -85,6 +88,7 @@ impl FakeGripperConfig {
             tcp: None,
             turnaround: Duration::from_millis(1),
             activation_time: Duration::from_millis(1500),
+            on_thread_start: None,
         }
     }
 
@@ -215,7 +219,12 @@ impl FakeGripper {
         let s = shared.clone();
         let thread = std::thread::Builder::new()
             .name("fake-gripper".into())
-            .spawn(move || server.run(&s))?;
+            .spawn(move || {
+                if let Some(f) = server.config.on_thread_start {
+                    f();
+                }
+                server.run(&s);
+            })?;
         Ok(Self {
             shared,
             thread: Some(thread),

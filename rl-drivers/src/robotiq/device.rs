@@ -23,7 +23,9 @@ use std::time::Instant;
 
 use super::master::{MasterError, ModbusMaster, check_answer};
 use crate::capability::{Gripper, LinkStatistics, LinkStatisticsSensor};
-use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{
+    DeviceError, Driver, Error, ErrorKind, Lifecycle, Operation, State, impl_cyclic_device,
+};
 use crate::proto::modbus::{ExceptionCode, MAX_PDU, Registers, Request, Response};
 use crate::proto::robotiq::{
     ActivationStatus, COMMAND_REGISTER, Command, DEFAULT_UNIT, Fault, Model, STATUS_REGISTER,
@@ -68,6 +70,10 @@ pub struct GripperConfig {
     pub closed_count: u8,
     /// Failed steps in a row that fault the device.
     pub max_failures: u32,
+    /// Times a request of `open`, `start` or `stop` is sent again after no answer or a corrupt
+    /// one (a frame lost on the line); a step is never repeated (its failure is counted and the
+    /// next step is the retry).
+    pub retries: u8,
 }
 
 impl GripperConfig {
@@ -85,6 +91,7 @@ impl GripperConfig {
             open_count: 0,
             closed_count: 255,
             max_failures: 5,
+            retries: 2,
         }
     }
 }
@@ -110,6 +117,8 @@ pub struct GripperCounters {
     pub major_faults: u64,
     /// Objects detected (a rising edge of a contact status).
     pub objects_detected: u64,
+    /// Requests of `open`, `start` or `stop` sent again ([`GripperConfig::retries`]).
+    pub retries: u64,
 }
 
 /// A Modbus master behind a box: RTU on any serial line, or TCP.
@@ -365,8 +374,30 @@ impl RobotiqGripper {
         }
     }
 
-    /// One transaction; an exception answer is a device error.
+    /// One transaction; an exception answer is a device error. Outside a step, a timeout or a
+    /// corrupt answer is retried up to [`GripperConfig::retries`] times.
     fn transact(&mut self, operation: Operation, request: &Request<'_>) -> Result<(), Error> {
+        let retries = if operation == Operation::Step {
+            0
+        } else {
+            self.config.retries
+        };
+        let mut attempt = 0;
+        loop {
+            match self.transact_once(operation, request) {
+                Err(e)
+                    if attempt < retries
+                        && matches!(e.kind(), ErrorKind::Timeout | ErrorKind::Protocol) =>
+                {
+                    attempt += 1;
+                    self.counters.retries += 1;
+                }
+                result => return result,
+            }
+        }
+    }
+
+    fn transact_once(&mut self, operation: Operation, request: &Request<'_>) -> Result<(), Error> {
         let deadline = Instant::now() + self.config.response_timeout;
         let unit = self.config.unit;
         let master = self.master.as_mut().ok_or(Error::State {

@@ -4,8 +4,8 @@ repeat counts) and PyPI `netft` 2.0.1 (plain RDT, counts). Prints one JSON objec
 
 Usage: netft_check.py HOST RDT_PORT HTTP_PORT
 Protocol with the test on stdin/stdout: prints "ready" once pynetft streams, waits for a line
-on stdin (the test injects faults meanwhile), reads 0.3 s more, biases the sensor, reads 0.3 s
-more, stops, prints the JSON of pynetft's part, waits for a line (the test changes the load),
+on stdin (the test injects faults meanwhile), reads 0.3 s more, biases the sensor, reads until
+the biased records come (3 s at most), stops, prints the JSON of pynetft's part, waits for a line (the test changes the load),
 reads one record with `netft` (only if RDT_PORT is 49152: `netft` knows no other) and prints
 its JSON.
 """
@@ -30,8 +30,14 @@ time.sleep(0.3)
 loaded = client.latest_sample()
 health = client.health()
 client.bias()
-time.sleep(0.3)
-biased = client.latest_sample()
+# Records sent before the bias may still wait in the socket's buffer (7000 a second; a
+# loaded machine delays pynetft's reader): read until the biased ones come, for 3 s at most.
+deadline = time.monotonic() + 3.0
+while True:
+    time.sleep(0.05)
+    biased = client.latest_sample()
+    if all(abs(x) < 1e-6 for x in biased.wrench) or time.monotonic() > deadline:
+        break
 client.stop()
 
 cal = health.sensor_configuration.calibration

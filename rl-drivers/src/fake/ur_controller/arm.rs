@@ -284,7 +284,11 @@ mod tests {
         arm.advance(1.0).unwrap();
         // One cycle of the lookahead's smoothing: 2/52 of the way.
         let first = 0.004 * DT / (0.05 + DT);
-        assert!((arm.target_q[0] - first).abs() < 1e-15, "{}", arm.target_q[0]);
+        assert!(
+            (arm.target_q[0] - first).abs() < 1e-15,
+            "{}",
+            arm.target_q[0]
+        );
         assert!((arm.target_qd[0] - first / DT).abs() < 1e-9);
         assert!(arm.q[0] > 0.0 && arm.q[0] < arm.target_q[0]);
         // One second on, the target and the measured joint are there.
