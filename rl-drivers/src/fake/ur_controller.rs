@@ -22,7 +22,8 @@
 //!   runs when the robot is running (powered, brakes released) and not stopped for safety;
 //!   it replaces a running one. `servoj`, `speedj`, `movej`, `stopj`, `sync`, `sleep`,
 //!   register reads and writes, `rtde_set_watchdog` (`ignore`, `pause`, `stop`), digital
-//!   outputs. A target faster than a joint's speed limit is a protective stop.
+//!   outputs. `servoj`'s lookahead smooths its commands (a first-order lag); a target that
+//!   moves faster than a joint's speed limit is a protective stop.
 //! - **Dashboard.** The commands of PolyScope 5's dashboard server and its answers (power,
 //!   brakes, play/stop/pause of the loaded program, modes, protective stop, popups, version).
 //! - **Faults to inject**: a protective stop, an emergency stop, a frozen controller (no

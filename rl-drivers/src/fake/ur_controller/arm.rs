@@ -55,6 +55,7 @@ impl UrKinematics {
     /// The tool pose at `q`: `[x, y, z, rx, ry, rz]` (m, rotation vector in rad), as RTDE's
     /// `actual_TCP_pose`.
     pub fn tcp_pose(&self, q: &[f64; 6]) -> [f64; 6] {
+        #![allow(clippy::needless_range_loop)] // joints and matrices indexed alike
         // 4×4 homogeneous transforms, row-major.
         let mut t = [[0.0f64; 4]; 4];
         for (i, row) in t.iter_mut().enumerate() {
@@ -180,6 +181,7 @@ impl Arm {
     /// One cycle. `Err(joint)` if a target would exceed the joint's speed limit (the
     /// controller then stops: a protective stop).
     pub(crate) fn advance(&mut self, speed_fraction: f64) -> Result<(), usize> {
+        #![allow(clippy::needless_range_loop)] // six arrays indexed alike
         let before = self.target_q;
         let old_qd = self.target_qd;
         match self.motion {

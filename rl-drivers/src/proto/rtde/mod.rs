@@ -209,9 +209,12 @@ impl Header {
     }
 }
 
+/// A package split off a byte stream: its header, its payload, and the bytes after it.
+pub type Split<'a> = (Header, &'a [u8], &'a [u8]);
+
 /// Splits the first complete package off `bytes`: its header and payload, and the bytes after
 /// it. `Ok(None)` while it is incomplete.
-pub fn split(bytes: &[u8]) -> Result<Option<(Header, &[u8], &[u8])>, RtdeError> {
+pub fn split(bytes: &[u8]) -> Result<Option<Split<'_>>, RtdeError> {
     if bytes.len() < HEADER_LEN {
         return Ok(None);
     }
