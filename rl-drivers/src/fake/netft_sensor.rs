@@ -25,7 +25,7 @@
 //!   unplugged cable: the sensor keeps counting), a status word (bit 31: error), and garbage
 //!   datagrams to the streaming client.
 
-use std::io::{self, Read, Write};
+use std::io::{self, Read};
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -642,18 +642,6 @@ impl Sensor {
 }
 
 /// Writes all of `bytes` to a non-blocking stream, waiting briefly when it is full.
-fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> io::Result<()> {
-    let deadline = Instant::now() + CLIENT_TIMEOUT;
-    while !bytes.is_empty() {
-        match stream.write(bytes) {
-            Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
-            Ok(n) => bytes = &bytes[n..],
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock && Instant::now() < deadline => {
-                std::thread::sleep(Duration::from_micros(100));
-            }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(())
+fn write_all(stream: &mut TcpStream, bytes: &[u8]) -> io::Result<()> {
+    super::tcp_server::write_all_within(stream, bytes, CLIENT_TIMEOUT)
 }

@@ -735,18 +735,6 @@ fn in_map(address: u16, count: u16, base: u16) -> bool {
     address >= base && u32::from(address) + u32::from(count) <= u32::from(base + MAP_REGISTERS)
 }
 
-fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> io::Result<()> {
-    let deadline = Instant::now() + Duration::from_secs(1);
-    while !bytes.is_empty() {
-        match stream.write(bytes) {
-            Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
-            Ok(n) => bytes = &bytes[n..],
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock && Instant::now() < deadline => {
-                std::thread::sleep(Duration::from_micros(100));
-            }
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(())
+fn write_all(stream: &mut TcpStream, bytes: &[u8]) -> io::Result<()> {
+    super::tcp_server::write_all_within(stream, bytes, Duration::from_secs(1))
 }

@@ -88,6 +88,19 @@ pub struct MasterCounters {
     pub stale_bytes: u64,
 }
 
+impl MasterCounters {
+    /// Counts a transaction's outcome.
+    fn count(&mut self, result: &Result<usize, MasterError>) {
+        match result {
+            Ok(_) => self.responses += 1,
+            Err(MasterError::Timeout) => self.timeouts += 1,
+            Err(MasterError::Crc { .. }) => self.crc_errors += 1,
+            Err(MasterError::Garbage(_)) => self.garbage += 1,
+            Err(_) => {}
+        }
+    }
+}
+
 /// A Modbus master: sends one request to `unit` and returns the answer's PDU.
 pub trait ModbusMaster {
     /// Sends `request` to `unit` and waits for its answer until `deadline`; the answer's PDU is
@@ -244,13 +257,7 @@ impl<S: SerialLine> ModbusMaster for RtuMaster<S> {
         deadline: Instant,
     ) -> Result<usize, MasterError> {
         let result = self.transact_inner(unit, request, pdu, deadline);
-        match &result {
-            Ok(_) => self.counters.responses += 1,
-            Err(MasterError::Timeout) => self.counters.timeouts += 1,
-            Err(MasterError::Crc { .. }) => self.counters.crc_errors += 1,
-            Err(MasterError::Garbage(_)) => self.counters.garbage += 1,
-            Err(_) => {}
-        }
+        self.counters.count(&result);
         if result.is_err() {
             self.resync = true;
         }
@@ -411,12 +418,7 @@ impl ModbusMaster for TcpMaster {
         deadline: Instant,
     ) -> Result<usize, MasterError> {
         let result = self.transact_inner(unit, request, pdu, deadline);
-        match &result {
-            Ok(_) => self.counters.responses += 1,
-            Err(MasterError::Timeout) => self.counters.timeouts += 1,
-            Err(MasterError::Garbage(_)) => self.counters.garbage += 1,
-            Err(_) => {}
-        }
+        self.counters.count(&result);
         result
     }
 
