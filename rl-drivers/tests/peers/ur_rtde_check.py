@@ -18,13 +18,16 @@ out = {}
 r = rtde_receive.RTDEReceiveInterface(host, 500.0)
 out["connected"] = r.isConnected()
 stamps = []
+walls = []  # when each new timestamp was first seen, s since t0
 t0 = time.monotonic()
 while time.monotonic() - t0 < seconds:
     t = r.getTimestamp()
     if not stamps or t != stamps[-1]:
         stamps.append(t)
+        walls.append(time.monotonic() - t0)
     time.sleep(0.0002)
 out["stamps"] = stamps
+out["walls"] = walls
 out["actual_q"] = list(r.getActualQ())
 out["target_q"] = list(r.getTargetQ())
 out["tcp_pose"] = list(r.getActualTCPPose())
