@@ -741,6 +741,28 @@ mod tests {
     }
 
     #[test]
+    fn a_devices_lag_widens_the_derived_tracking_bound_only() {
+        use core::time::Duration;
+        // A UR's servoj lookahead of 0.1 s on its 2 ms cycle: 50 cycles more, at 1 rad/s.
+        let mut config = Supervision::default();
+        config.allow_device_lag(Duration::from_millis(100), Duration::from_millis(2));
+        let b = Bounds::<4>::new(&config, &[1.0], &[-1.0], &[1.0], 0.002, 0.002);
+        assert!(
+            (b.tracking[0] - (0.1 + 4.0 * 0.002)).abs() < 1e-12,
+            "{}",
+            b.tracking[0]
+        );
+        assert!((b.step[0] - 0.002).abs() < 1e-15, "the step bound stays");
+        // No lag, no change; an explicit bound wins.
+        let mut plain = Supervision::default();
+        plain.allow_device_lag(Duration::ZERO, Duration::from_millis(2));
+        assert_eq!(plain, Supervision::default());
+        config.tracking_error = vec![0.01];
+        let b = Bounds::<4>::new(&config, &[1.0], &[-1.0], &[1.0], 0.002, 0.002);
+        assert_eq!(b.tracking[0], 0.01);
+    }
+
+    #[test]
     fn bad_feedback_is_a_fault() {
         let link = LinkStatistics::default();
         let mut s = supervisor();
