@@ -201,7 +201,11 @@ impl<'a> Message<'a> {
         let flag = |r: &mut Reader<'_>, what| -> Result<bool, RtdeError> {
             let v = r.u8(what)?;
             done(r, what, 1)?;
-            Ok(v != 0)
+            match v {
+                0 => Ok(false),
+                1 => Ok(true),
+                value => Err(RtdeError::NotAFlag { what, value }),
+            }
         };
         let m = match ty {
             PackageType::RequestProtocolVersion => {
@@ -465,6 +469,25 @@ mod tests {
                 2
             )
             .is_err()
+        );
+    }
+
+    #[test]
+    fn an_accepted_byte_other_than_0_or_1_is_refused() {
+        // Found by the fuzz target: a pause answer of 0xB8 decoded as `true` and re-encoded
+        // as 1. The guide's `accepted` is 0 or 1; anything else is malformed.
+        let (h, p, _) = split(&[0, 4, b'P', 0xB8]).unwrap().unwrap();
+        assert_eq!(
+            Message::decode_answer(h, p, 2),
+            Err(RtdeError::NotAFlag {
+                what: "pause answer",
+                value: 0xB8
+            })
+        );
+        let (h, p, _) = split(&[0, 4, b'P', 1]).unwrap().unwrap();
+        assert_eq!(
+            Message::decode_answer(h, p, 2),
+            Ok(Message::PauseAccepted(true))
         );
     }
 }

@@ -133,6 +133,13 @@ pub enum RtdeError {
         /// `true` for `IN_USE` (another client writes it), `false` for `NOT_FOUND`.
         in_use: bool,
     },
+    /// An answer's `accepted` byte that is neither 0 nor 1.
+    NotAFlag {
+        /// The answer.
+        what: &'static str,
+        /// The byte.
+        value: u8,
+    },
     /// A data package for another recipe.
     WrongRecipe {
         /// The recipe expected.
@@ -162,6 +169,9 @@ impl fmt::Display for RtdeError {
                 "recipe field {field} refused: {}",
                 if *in_use { "IN_USE" } else { "NOT_FOUND" }
             ),
+            Self::NotAFlag { what, value } => {
+                write!(f, "{what}: accepted byte {value}, expected 0 or 1")
+            }
             Self::WrongRecipe { expected, got } => {
                 write!(f, "data package of recipe {got}, expected {expected}")
             }
