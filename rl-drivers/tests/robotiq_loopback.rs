@@ -5,6 +5,10 @@
 //! a wrong unit. The fake's own behaviour (priority faults, the watchdog, the automatic
 //! release, broadcasts, exceptions) through a bare Modbus master.
 
+#[path = "devices/realtime.rs"]
+mod realtime;
+
+use realtime::realtime;
 use std::time::{Duration, Instant};
 
 use rl_drivers::fake::robotiq_gripper::{FakeGripper, FakeGripperConfig};
@@ -19,16 +23,6 @@ use rl_drivers::robotiq::{
 use rl_drivers::{
     CyclicDevice, Device, DeviceError, ErrorKind, Gripper, LinkStatisticsSensor, State,
 };
-
-/// The fake gripper's thread runs at a real-time priority where the process may (root, as in
-/// CI): a gripper's firmware answers in its own time, whatever else the host runs.
-fn realtime() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-gripper")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(80)
-        .best_effort(true)
-        .apply_to_current();
-}
 
 fn fake_serial() -> FakeGripper {
     FakeGripper::spawn(FakeGripperConfig {

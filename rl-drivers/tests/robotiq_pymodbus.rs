@@ -7,6 +7,10 @@
 #[path = "devices/python.rs"]
 mod python;
 
+#[path = "devices/realtime.rs"]
+mod realtime;
+
+use realtime::realtime;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -16,16 +20,6 @@ use rl_drivers::proto::robotiq::Model;
 use rl_drivers::robotiq::{Exchange, GripperConfig, RobotiqGripper, SerialPort};
 use rl_drivers::{CyclicDevice, Device, State};
 use serde_json::Value;
-
-/// The fake gripper's thread runs at a real-time priority where the process may (root, as in
-/// CI): a gripper's firmware answers in its own time, whatever else the host runs.
-fn realtime() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-gripper")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(80)
-        .best_effort(true)
-        .apply_to_current();
-}
 
 fn pymodbus(test: &str) -> Option<std::path::PathBuf> {
     match python::python_with(&["pymodbus", "serial"]) {

@@ -2,6 +2,10 @@
 //! and over TCP, through a wrong CRC and a late answer (a counting global allocator counts
 //! allocations on the test's own thread; the fake gripper's thread is not counted).
 
+#[path = "devices/realtime.rs"]
+mod realtime;
+
+use realtime::realtime;
 use std::time::Duration;
 
 use rl_drivers::fake::robotiq_gripper::{FakeGripper, FakeGripperConfig};
@@ -12,16 +16,6 @@ use rl_testkit::CountingAllocator;
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-/// The fake gripper's thread runs at a real-time priority where the process may (root, as in
-/// CI): a gripper's firmware answers in its own time, whatever else the host runs.
-fn realtime() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-gripper")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(80)
-        .best_effort(true)
-        .apply_to_current();
-}
 
 #[test]
 fn the_counter_sees_allocations() {

@@ -10,20 +10,14 @@
 #[path = "devices/python.rs"]
 mod python;
 
+#[path = "devices/realtime.rs"]
+mod realtime;
+
+use realtime::realtime;
 use std::net::{IpAddr, Ipv4Addr};
 use std::process::Command;
 
 use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig};
-
-/// The controller's cycle runs at a real-time priority where the process may (root, as in
-/// CI): a real controller's cycle is not disturbed by the other programs of a shared machine.
-fn realtime() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-ur")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(80)
-        .best_effort(true)
-        .apply_to_current();
-}
 
 /// A loopback address of this test's own: ur_rtde knows only port 30004.
 const HOST: Ipv4Addr = Ipv4Addr::new(127, 0, 0, 94);
