@@ -1,7 +1,8 @@
 //! `rl run --device ur://HOST:PORT` against the fake UR controller in this process: the
-//! controller runtime opens the arm over RTDE, the follower program runs on the fake, the
-//! embedded RV-6SL tour (six joints) is tracked at the controller's 500 Hz, and the run stops
-//! the program and pauses RTDE. The fake binds a loopback address of this test's own, where the
+//! controller runtime opens the arm over RTDE and plans from the joints `open` read (the arm
+//! stands away from the model's home), the follower program runs on the fake, the embedded
+//! RV-6SL tour (six joints) is tracked at the controller's 500 Hz, and the run stops the
+//! program and pauses RTDE. The fake binds a loopback address of this test's own, where the
 //! driver's default dashboard (29999) and script (30002) ports are free.
 
 use std::net::{IpAddr, Ipv4Addr};
@@ -24,8 +25,11 @@ fn rl_run_drives_the_fake_ur() {
     let home = rl::controller::rv6sl()
         .expect("embedded model")
         .home_or_neutral();
+    // The arm stands away from the model's home: the run plans from where `open` finds it.
     let mut initial_q = [0.0; 6];
-    initial_q.copy_from_slice(&home);
+    for (k, q) in initial_q.iter_mut().enumerate() {
+        *q = home[k] + [0.3, -0.2, 0.4, 0.1, -0.3, 0.2][k];
+    }
     let fake = match FakeUr::spawn(FakeUrConfig {
         bind: IpAddr::V4(HOST),
         rtde_port: 0,

@@ -56,6 +56,24 @@ fn started(fake: &FakeUr) -> UniversalRobot {
 }
 
 #[test]
+fn the_joints_are_known_from_open_on() {
+    // A caller plans from the joints before `start` (as `rl run` does): `open` reads them.
+    let f = fake(true);
+    let want = f.status().q;
+    assert!(want.iter().any(|q| *q != 0.0), "{want:?}");
+    let mut r = UniversalRobot::new(config(&f)).unwrap();
+    r.open().unwrap();
+    let mut q = [0.0; 6];
+    r.joint_position(&mut q).unwrap();
+    assert_eq!(q, want);
+    // The outputs were paused again; `start` restarts them, with no gap counted.
+    r.start().unwrap();
+    assert!(r.step().is_ok());
+    assert_eq!(r.counters().skipped, 0, "{:?}", r.counters());
+    r.stop().unwrap();
+}
+
+#[test]
 fn the_program_follows_a_joint_motion_and_ends_on_stop() {
     let f = fake(true);
     let mut r = started(&f);

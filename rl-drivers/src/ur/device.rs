@@ -3,7 +3,8 @@
 //! - `open`: RTDE (protocol version 2, else 1), the controller's version, the output recipe
 //!   (joints, speeds, tool pose and force, modes, I/O, the program's handshake register) at
 //!   500 Hz on e-Series (125 Hz on CB3), two input recipes (the command register and six joint
-//!   registers; the digital outputs), and the dashboard if it answers.
+//!   registers; the digital outputs), one package read (outputs started, then paused: the
+//!   joints are known before `start`), and the dashboard if it answers.
 //! - `start`: with [`UrConfig::power_on`], powers the arm on and releases its brakes through
 //!   the dashboard; starts the outputs; checks that the robot runs and no safety stop holds
 //!   (else a typed error that says what to do); writes the joints where they stand and the
@@ -576,6 +577,29 @@ impl UniversalRobot {
         Ok(false)
     }
 
+    /// Reads the arm's state once (the outputs started until the first package, then paused),
+    /// so its joints are known from `open` on: a caller plans its motion from them before
+    /// `start`.
+    fn first_state(&mut self, operation: Operation) -> Result<(), Error> {
+        let p = self.request(operation, Message::Start, PackageType::Start)?;
+        if self.answer(operation, &p)? != Message::StartAccepted(true) {
+            return Err(Error::device(operation, SOURCE, &"RTDE start refused"));
+        }
+        if !self.wait_for(operation, false, |_| true)? {
+            return Err(Error::Timeout {
+                operation,
+                waited: self.config.timeout,
+            });
+        }
+        let p = self.request(operation, Message::Pause, PackageType::Pause)?;
+        if self.answer(operation, &p)? != Message::PauseAccepted(true) {
+            return Err(Error::device(operation, SOURCE, &"RTDE pause refused"));
+        }
+        // The stream restarts at `start`: no gap to count across the pause.
+        self.have_state = false;
+        Ok(())
+    }
+
     fn send_program(&mut self, operation: Operation) -> Result<(), Error> {
         let script = self.program().script();
         let addr = SocketAddr::new(self.config.host, self.config.script_port);
@@ -624,7 +648,7 @@ impl Driver for UniversalRobot {
             .map_err(|e| Error::io(op, &e))?;
         self.link = Some(link);
         self.have_state = false;
-        let r = self.open_rtde();
+        let r = self.open_rtde().and_then(|()| self.first_state(op));
         if r.is_err() {
             self.link = None;
             return r;

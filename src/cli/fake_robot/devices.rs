@@ -61,6 +61,7 @@ pub fn run_ft(args: &FtArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::netft_sensor::{FakeNetFt, FakeNetFtConfig};
     use rl_drivers::proto::netft::Calibration;
     let config = FakeNetFtConfig {
+        on_thread_start: Some(fake_device_thread),
         bind: args.bind.ip(),
         rdt_port: args.bind.port(),
         tcp_port: Some(args.tcp_port),
@@ -187,6 +188,7 @@ pub fn run_gripper(args: &GripperArgs, stop: &AtomicBool) -> CliResult {
         )));
     }
     let config = FakeGripperConfig {
+        on_thread_start: Some(fake_device_thread),
         model,
         unit: args.unit,
         serial: args.serial.is_some(),
@@ -279,8 +281,10 @@ pub struct UrArgs {
     pub seconds: Option<u64>,
 }
 
-fn fake_ur_thread() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-ur")
+/// The fakes' threads run SCHED_FIFO 85 where the process may (as the other stand-alone fakes,
+/// just below `rl run`'s loop): a device does not share its CPU with the host's programs.
+fn fake_device_thread() {
+    let _ = rl_rt::RtThreadBuilder::new("fake-device")
         .policy(rl_rt::Policy::Fifo)
         .priority(85)
         .best_effort(true)
@@ -306,7 +310,7 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
         script_ports: args.script_ports.clone(),
         kinematics,
         running: !args.power_off,
-        on_thread_start: Some(fake_ur_thread),
+        on_thread_start: Some(fake_device_thread),
         ..FakeUrConfig::loopback()
     };
     if let Some(path) = &args.model {
