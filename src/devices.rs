@@ -53,7 +53,8 @@ const R3_PORT: u16 = 10001;
 /// The devices `--device` accepts, for messages.
 pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PORT], fake-cia402, \
      cannelloni+udp://HOST:PORT[?nodes=1-6][&units=…], cannelloni+tcp://HOST:PORT[?listen][&nodes=…], \
-     socketcan://IFACE[?nodes=…], ethercat://IF[?units=…] or franka://HOST[:PORT]";
+     socketcan://IFACE[?nodes=…], ethercat://IF[?units=…], franka://HOST[:PORT] or \
+     ur://HOST[:PORT][?power-on]";
 
 /// The form of `units=` (and `--units`), for messages.
 pub const UNITS_FORM: &str = "cpr:N,gear:G[,feed:F][,torque:NM][,lead:M], each value one number \
@@ -249,6 +250,14 @@ pub enum DeviceSpec {
         /// Its command server (port 1337 by default).
         server: SocketAddr,
     },
+    /// A Universal Robots arm over RTDE (the follower program on its controller).
+    Ur {
+        /// RTDE's address (port 30004 by default; dashboard 29999 and script 30002 on the
+        /// same host).
+        server: SocketAddr,
+        /// Power on and release the brakes through the dashboard at start.
+        power_on: bool,
+    },
 }
 
 /// A device built for a run: the driver behind the capabilities the controller needs, its name
@@ -260,6 +269,11 @@ pub struct Opened {
     pub name: String,
     /// The in-process fake, if the device talks to one.
     pub fake: Option<InProcessFake>,
+    /// How much later than the commands the measured joints follow by the device's own
+    /// smoothing (a UR's `servoj` lookahead); zero for devices that execute a position within
+    /// their cycle. The supervisor's tracking bound allows it
+    /// ([`Supervision::allow_device_lag`](rl::controller::Supervision::allow_device_lag)).
+    pub lag: Duration,
 }
 
 /// An in-process fake the tool started, kept for the report.
@@ -413,6 +427,15 @@ impl DeviceSpec {
             let server = resolve(rest, rl_drivers::franka::COMMAND_PORT).map_err(bad)?;
             return Ok(Self::Franka { server });
         }
+        if let Some(rest) = text.strip_prefix("ur://") {
+            let (host, power_on) = match rest.split_once('?') {
+                None => (rest, false),
+                Some((h, "power-on")) => (h, true),
+                Some((_, q)) => return Err(bad(format!("`?{q}`: expected ?power-on"))),
+            };
+            let server = resolve(host, rl_drivers::proto::rtde::PORT).map_err(bad)?;
+            return Ok(Self::Ur { server, power_on });
+        }
         if let Some(interface) = text.strip_prefix("ethercat://") {
             if interface.is_empty() || interface.len() > 15 || interface.contains('/') {
                 return Err(bad(
@@ -483,6 +506,7 @@ impl DeviceSpec {
                         fake.r3_addr()
                     ),
                     fake: Some(InProcessFake::H7(fake)),
+                    lag: Duration::ZERO,
                 })
             }
             Self::H7 { server, r3 } => {
@@ -496,6 +520,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("H7 at {server} (R3 {r3})"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::FakeCia402 => {
@@ -526,6 +551,7 @@ impl DeviceSpec {
                         nodes.len()
                     ),
                     fake: Some(InProcessFake::Cia402(fake)),
+                    lag: Duration::ZERO,
                 })
             }
             Self::Cia402(address, units) => {
@@ -547,6 +573,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("CiA 402 drives {nodes:?} on {}", address.bus),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::Ethercat { interface, units } => {
@@ -574,6 +601,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("EtherCAT CiA 402 drives on {interface}"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
             Self::Franka { server } => {
@@ -585,6 +613,28 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
                     fake: None,
+                    lag: Duration::ZERO,
+                })
+            }
+            Self::Ur { server, power_on } => {
+                if model.dof() != rl_drivers::ur::DOF {
+                    return Err(CliError::usage(format!(
+                        "--device ur://{server}: the model has {} joints; a UR arm has 6",
+                        model.dof()
+                    )));
+                }
+                let mut config = rl_drivers::ur::UrConfig::new(server.ip());
+                config.rtde_port = server.port();
+                config.power_on = *power_on;
+                // The measured joints trail `servoj`'s commands by its lookahead.
+                let lag = Duration::from_secs_f64(config.lookahead_time);
+                let robot = rl_drivers::UniversalRobot::new(config)
+                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                Ok(Opened {
+                    robot: Box::new(robot),
+                    name: format!("UR at {server} (RTDE, joint positions at 500 Hz)"),
+                    fake: None,
+                    lag,
                 })
             }
             Self::Coach { server } => {
@@ -600,6 +650,7 @@ impl DeviceSpec {
                     robot: Box::new(robot),
                     name: format!("Coach at {server}"),
                     fake: None,
+                    lag: Duration::ZERO,
                 })
             }
         }
@@ -820,6 +871,13 @@ mod tests {
             })
         );
         assert_eq!(
+            DeviceSpec::parse("ur://127.0.0.3?power-on").ok(),
+            Some(DeviceSpec::Ur {
+                server: "127.0.0.3:30004".parse().expect("addr"),
+                power_on: true,
+            })
+        );
+        assert_eq!(
             DeviceSpec::parse("ethercat://eth1").ok(),
             Some(DeviceSpec::Ethercat {
                 interface: "eth1".into(),
@@ -838,6 +896,8 @@ mod tests {
             "tcp://1.2.3.4",
             "coach://",
             "franka://",
+            "ur://",
+            "ur://1.2.3.4?fast",
             "franka://127.0.0.1?units=cpr:1,gear:1",
             "cannelloni+udp://127.0.0.1:1?units=gear:100",
             "cannelloni+udp://127.0.0.1:1?units=cpr:0,gear:100",

@@ -46,6 +46,8 @@ pub mod proto;
 pub mod typestate;
 
 #[cfg(feature = "std")]
+pub mod ati;
+#[cfg(feature = "std")]
 pub mod canopen;
 #[cfg(feature = "std")]
 pub mod coach;
@@ -56,8 +58,14 @@ pub mod fake;
 #[cfg(feature = "std")]
 pub mod mitsubishi_h7;
 #[cfg(feature = "std")]
+pub mod robotiq;
+#[cfg(feature = "std")]
 pub mod transport;
+#[cfg(feature = "std")]
+pub mod ur;
 
+#[cfg(feature = "std")]
+pub use ati::AtiNetFt;
 pub use capability::*;
 #[cfg(feature = "std")]
 pub use coach::Coach;
@@ -71,3 +79,7 @@ pub use ethercat::EthercatDrives;
 pub use franka::FrankaArm;
 #[cfg(feature = "std")]
 pub use mitsubishi_h7::MitsubishiH7;
+#[cfg(feature = "std")]
+pub use robotiq::RobotiqGripper;
+#[cfg(feature = "std")]
+pub use ur::UniversalRobot;

@@ -199,6 +199,10 @@ fn start<const N: usize>(
             }
         })?;
     options.device_name = opened.name;
+    let cycle = opened.robot.update_period();
+    options
+        .supervision
+        .allow_device_lag(opened.lag, period.map_or(cycle, |p| p.max(cycle)));
     let robot: Box<dyn JointRobot + Send> = opened.robot;
     let run = Run::<_, N, N>::start(robot, loaded, options).map_err(|e| match e {
         RunError::Options(why) => PyValueError::new_err(why),

@@ -17,6 +17,8 @@ use super::capacity::WithModel;
 use super::output::outln;
 use super::{CliError, CliResult};
 
+mod devices;
+
 /// Which fake robot to run.
 #[derive(Subcommand, Debug)]
 pub enum FakeRobotCommand {
@@ -31,6 +33,12 @@ pub enum FakeRobotCommand {
     Ethercat(EthercatArgs),
     /// A fake Franka FR3 speaking libfranka's protocol (FCI: TCP 1337 and 1 kHz UDP).
     Franka(FrankaArgs),
+    /// A fake ATI Net F/T force/torque sensor (RDT over UDP, calibration over TCP and HTTP).
+    Ft(devices::FtArgs),
+    /// A fake Robotiq 2F-85/140 gripper (Modbus RTU on a pseudo-terminal, Modbus TCP).
+    Gripper(devices::GripperArgs),
+    /// A fake Universal Robots controller (RTDE 30004, dashboard 29999, URScript 30002/30003).
+    Ur(devices::UrArgs),
 }
 
 /// Arguments of `rl fake-robot franka`.
@@ -193,6 +201,9 @@ pub fn run(cmd: FakeRobotCommand) -> CliResult {
         FakeRobotCommand::Canopen(args) => run_canopen(&args, &stop),
         FakeRobotCommand::Ethercat(args) => run_ethercat(&args, &stop),
         FakeRobotCommand::Franka(args) => run_franka(&args, &stop),
+        FakeRobotCommand::Ft(args) => devices::run_ft(&args, &stop),
+        FakeRobotCommand::Gripper(args) => devices::run_gripper(&args, &stop),
+        FakeRobotCommand::Ur(args) => devices::run_ur(&args, &stop),
     }
 }
 

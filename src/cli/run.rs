@@ -618,6 +618,8 @@ fn drive<const B: usize, const J: usize>(
         supervision.device_failure_limit(),
     )?;
     let fake = opened.fake;
+    let cycle = opened.robot.update_period();
+    supervision.allow_device_lag(opened.lag, setup.period.map_or(cycle, |p| p.max(cycle)));
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {
             [one] => vec![*one; joints.len()],

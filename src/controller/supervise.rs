@@ -106,6 +106,16 @@ impl Supervision {
     pub fn device_failure_limit(&self) -> u32 {
         self.max_consecutive_lost.saturating_add(1)
     }
+
+    /// Widens the derived tracking bound by a device's own lag: measured joints that follow
+    /// the commands `lag` later (a first-order smoothing, as a UR's `servoj` lookahead) trail
+    /// them by up to `v_k · lag`, on top of the [`tracking_cycles`](Self::tracking_cycles) of
+    /// `cycle` (the slower of the control period and the device's cycle).
+    pub fn allow_device_lag(&mut self, lag: core::time::Duration, cycle: core::time::Duration) {
+        if !lag.is_zero() && !cycle.is_zero() {
+            self.tracking_cycles += lag.as_secs_f64() / cycle.as_secs_f64();
+        }
+    }
 }
 
 /// What was wrong with a feedback value.
@@ -728,6 +738,28 @@ mod tests {
         // A slow control loop on a fast device: steps are bounded by the device's cycle.
         let b = Bounds::<4>::new(&Supervision::default(), &[1.0], &[-1.0], &[1.0], 0.5, P);
         assert_eq!((b.step[0], b.tracking[0]), (P, 4.0 * 0.5));
+    }
+
+    #[test]
+    fn a_devices_lag_widens_the_derived_tracking_bound_only() {
+        use core::time::Duration;
+        // A UR's servoj lookahead of 0.1 s on its 2 ms cycle: 50 cycles more, at 1 rad/s.
+        let mut config = Supervision::default();
+        config.allow_device_lag(Duration::from_millis(100), Duration::from_millis(2));
+        let b = Bounds::<4>::new(&config, &[1.0], &[-1.0], &[1.0], 0.002, 0.002);
+        assert!(
+            (b.tracking[0] - (0.1 + 4.0 * 0.002)).abs() < 1e-12,
+            "{}",
+            b.tracking[0]
+        );
+        assert!((b.step[0] - 0.002).abs() < 1e-15, "the step bound stays");
+        // No lag, no change; an explicit bound wins.
+        let mut plain = Supervision::default();
+        plain.allow_device_lag(Duration::ZERO, Duration::from_millis(2));
+        assert_eq!(plain, Supervision::default());
+        config.tracking_error = vec![0.01];
+        let b = Bounds::<4>::new(&config, &[1.0], &[-1.0], &[1.0], 0.002, 0.002);
+        assert_eq!(b.tracking[0], 0.01);
     }
 
     #[test]

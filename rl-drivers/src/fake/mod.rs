@@ -7,4 +7,7 @@ pub mod coach_server;
 pub mod ecat_segment;
 pub mod franka_controller;
 pub mod h7_controller;
+pub mod netft_sensor;
+pub mod robotiq_gripper;
 mod tcp_server;
+pub mod ur_controller;

@@ -1,11 +1,11 @@
 //! The TCP plumbing the fakes share: an accept loop that serves each client on its own thread
 //! until a stop flag is set, and client reads that time out, so a serving thread sees that flag.
 
-use std::io::{self, Read};
+use std::io::{self, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Accepts clients on the non-blocking `listener` until `stop` is set, sleeping `idle` while
 /// none is waiting; runs `accepted` for each new client (to count it) and serves it with `serve`
@@ -77,4 +77,26 @@ pub(crate) fn read_polled(stream: &mut TcpStream, buf: &mut [u8]) -> Polled {
         }
         Err(_) => Polled::Closed,
     }
+}
+
+/// Writes all of `bytes` to the non-blocking `stream`, waiting out a full send buffer for at
+/// most `bound` (a client that does not read is then dropped by the caller).
+pub(crate) fn write_all_within(
+    stream: &mut TcpStream,
+    mut bytes: &[u8],
+    bound: Duration,
+) -> io::Result<()> {
+    let deadline = Instant::now() + bound;
+    while !bytes.is_empty() {
+        match stream.write(bytes) {
+            Ok(0) => return Err(io::Error::from(io::ErrorKind::WriteZero)),
+            Ok(n) => bytes = &bytes[n..],
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock && Instant::now() < deadline => {
+                std::thread::sleep(Duration::from_micros(50));
+            }
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }

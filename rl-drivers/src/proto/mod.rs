@@ -8,4 +8,8 @@ pub mod canopen;
 pub mod coach;
 pub mod ecat;
 pub mod h7;
+pub mod modbus;
+pub mod netft;
 pub mod r3;
+pub mod robotiq;
+pub mod rtde;

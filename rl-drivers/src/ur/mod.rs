@@ -1,0 +1,31 @@
+//! Universal Robots arms (e-Series, CB3) over RTDE, with a program on the controller that
+//! follows RTDE input registers, and the dashboard server (RL's `UniversalRobotsRtde` and
+//! `UniversalRobotsDashboard`).
+//!
+//! - [`crate::proto::rtde`]: the RTDE codec (messages, types, variables, recipes), `no_std`;
+//! - [`program`]: the URScript program sent at `start` ([`FollowerProgram`]);
+//! - [`dashboard`]: the dashboard client ([`Dashboard`]);
+//! - `device`: the cyclic device, [`UniversalRobot`].
+//!
+//! A session: `open` (RTDE version 2, the controller's version, one output recipe at 500 Hz
+//! and two input recipes; the dashboard), `start` (optionally power on and release the brakes;
+//! start the outputs; the program follows the registers once its handshake reads 1), one
+//! exchange a step (the joints written, the controller's next package read, safety and the
+//! program checked), `stop` (the program ends with `stopj`; RTDE paused), `close`.
+//!
+//! Not built: RL's `UniversalRobotsRealtime` (the 30003 state stream), joint velocity and
+//! acceleration commands (`speedj`), analog I/O through the device, and the primary
+//! interface's messages (a program that does not compile is seen only as one that does not
+//! start).
+
+pub mod dashboard;
+mod device;
+mod link;
+pub mod program;
+
+pub use dashboard::{Dashboard, DashboardError};
+pub use device::{
+    DOF, UniversalRobot, UrConfig, UrCounters, UrState, robot_mode, robot_mode_name,
+    safety_stop_name,
+};
+pub use program::FollowerProgram;
