@@ -272,7 +272,7 @@ pub struct Opened {
     /// How much later than the commands the measured joints follow by the device's own
     /// smoothing (a UR's `servoj` lookahead); zero for devices that execute a position within
     /// their cycle. The supervisor's tracking bound allows it
-    /// ([`Supervision::allow_device_lag`](rl::controller::Supervision::allow_device_lag)).
+    /// ([`Supervision::allow_device_lag`](crate::controller::Supervision::allow_device_lag)).
     pub lag: Duration,
 }
 
@@ -618,7 +618,7 @@ impl DeviceSpec {
             }
             Self::Ur { server, power_on } => {
                 if model.dof() != rl_drivers::ur::DOF {
-                    return Err(CliError::usage(format!(
+                    return Err(SpecError::usage(format!(
                         "--device ur://{server}: the model has {} joints; a UR arm has 6",
                         model.dof()
                     )));
@@ -629,7 +629,7 @@ impl DeviceSpec {
                 // The measured joints trail `servoj`'s commands by its lookahead.
                 let lag = Duration::from_secs_f64(config.lookahead_time);
                 let robot = rl_drivers::UniversalRobot::new(config)
-                    .map_err(|e| CliError::usage(format!("--device: {e}")))?;
+                    .map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("UR at {server} (RTDE, joint positions at 500 Hz)"),
