@@ -39,6 +39,9 @@ enum Command {
     Run(cli::run::RunArgs),
     /// Show robots in a web browser, live over RL's Coach protocol (rlCoachMdl).
     View(cli::view::ViewArgs),
+    /// A cell of machines over Zenoh (ROS 2's rmw_zenoh): `cell watch` prints what runs publish.
+    #[command(subcommand)]
+    Cell(cli::cell::CellCommand),
 }
 
 /// `command` and all its subcommands, recursively, with negative numbers accepted as values
@@ -71,6 +74,7 @@ fn main() -> ExitCode {
         Some(Command::Plan(args)) => cli::plan::run(*args),
         Some(Command::Run(args)) => cli::run::run(args),
         Some(Command::View(args)) => cli::view::run(args),
+        Some(Command::Cell(cmd)) => cli::cell::run(cmd),
         None => cli::run::run(cli::run::RunArgs::default()),
     };
     match result {

@@ -165,6 +165,9 @@ pub struct RunArgs {
     /// With --view: keep serving the page after the report, until Ctrl-C.
     #[arg(long, requires = "view")]
     pub view_hold: bool,
+    /// Join a cell over Zenoh (src/cli/cell.rs).
+    #[command(flatten)]
+    pub zenoh: super::cell::ZenohArgs,
 }
 
 /// The planning problem of `--plan`, checked before anything starts.
@@ -288,6 +291,7 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
     if let Some(path) = &args.plot {
         check_writable(path).map_err(|e| CliError::usage(format!("--plot: {e}")))?;
     }
+    args.zenoh.check()?;
     Ok(Setup {
         device,
         period,
@@ -573,6 +577,8 @@ fn drive<const B: usize, const J: usize>(
     };
     let opened = setup.device.build(&loaded, setup.period, home.as_deref())?;
     let fake = opened.fake;
+    let period = setup.period.unwrap_or_else(|| opened.robot.update_period());
+    let mut cell = super::cell::RunCell::<J>::open(&args.zenoh, model, period, &stop)?;
     let mut supervision = Supervision::default();
     if args.no_supervision {
         supervision.enabled = false;
@@ -597,7 +603,7 @@ fn drive<const B: usize, const J: usize>(
         cpus: args.cpu.into_iter().collect(),
         lock_memory: !args.no_mlock,
         supervision,
-        telemetry: setup.telemetry.is_some() || args.plot.is_some(),
+        telemetry: setup.telemetry.is_some() || args.plot.is_some() || cell.is_some(),
         stop: stop.clone(),
         model_name,
         device_name: opened.name,
@@ -641,6 +647,9 @@ fn drive<const B: usize, const J: usize>(
         if let Some(file) = &mut setup.telemetry {
             file.write(r);
         }
+        if let Some(c) = &cell {
+            c.forward(r);
+        }
         if want_plot && r.cycle % stride == 0 {
             if plot_rows.len() >= PLOT_ROWS {
                 stride *= 2;
@@ -653,8 +662,13 @@ fn drive<const B: usize, const J: usize>(
     };
     let started = Instant::now();
     let mut told = StopLevel::None;
-    while let Some(p) = run.poll(Duration::from_millis(50)) {
+    // A cell gets the records within a few milliseconds.
+    let poll = Duration::from_millis(if args.zenoh.wanted() { 2 } else { 50 });
+    while let Some(p) = run.poll(poll) {
         run.drain_telemetry(&mut sink);
+        if let Some(c) = &cell {
+            c.progress(&p);
+        }
         display.update(&p, started.elapsed());
         let level = stop.level();
         if level > told {
@@ -671,6 +685,7 @@ fn drive<const B: usize, const J: usize>(
     }
     let mut report = run.join_with(&mut sink);
     display.finish();
+    let cell_json = cell.take().map(|c| c.finish(&mut report));
     if let Some(file) = setup.telemetry.take() {
         match file.finish() {
             Ok(rows) => report.telemetry_rows = Some(rows),
@@ -703,6 +718,9 @@ fn drive<const B: usize, const J: usize>(
         }
         if let (Some(obj), Some(plan)) = (json.as_object_mut(), plan_json) {
             obj.insert("plan".into(), plan);
+        }
+        if let (Some(obj), Some(cell)) = (json.as_object_mut(), cell_json) {
+            obj.insert("zenoh".into(), cell);
         }
         outln!("{json}")
     } else {

@@ -1,0 +1,36 @@
+//! Shared by rl-cell's tests: the Python peers (PyPI eclipse-zenoh and rosbags in a venv that
+//! scripts/test makes), free ports.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The venv's Python with `zenoh` and `rosbags`: `$RL_CELL_PYTHON`, or the venv scripts/test
+/// makes (`target/cell-venv`). `None` (the caller prints SKIPPED) when neither imports both.
+pub fn python() -> Option<PathBuf> {
+    let candidate = match std::env::var_os("RL_CELL_PYTHON") {
+        Some(p) => PathBuf::from(p),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/cell-venv/bin/python"),
+    };
+    let ok = Command::new(&candidate)
+        .args(["-c", "import zenoh, rosbags"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    ok.then_some(candidate)
+}
+
+/// A peer script's path.
+pub fn peer_script(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/peers")
+        .join(name)
+}
+
+/// A TCP port free on loopback now.
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .expect("a free port")
+}
