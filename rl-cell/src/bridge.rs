@@ -692,6 +692,18 @@ impl<const J: usize> Cell<J> {
     }
 }
 
+impl<const J: usize> Drop for Cell<J> {
+    /// Without [`finish`](Cell::finish) (an early error): the bridge thread ends without
+    /// publishing an end; the tokens go with the session.
+    fn drop(&mut self) {
+        if let Some(t) = self.thread.take() {
+            self.shared.finished.store(true, Ordering::Release);
+            self.waker.unpark();
+            let _ = t.join();
+        }
+    }
+}
+
 fn bridge_loop<const J: usize>(
     out: &mut OutState<J>,
     rx: &mut QueueReceiver<(Sample<J>, i64)>,

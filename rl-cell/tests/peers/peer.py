@@ -22,9 +22,8 @@ import time
 
 import numpy as np
 import zenoh
-from rosbags.typesys import Stores, get_typestore
 
-store = get_typestore(Stores.ROS2_JAZZY)
+from rosmsg import build, store
 
 TYPES = {
     'sensor_msgs::msg::dds_::JointState_': 'sensor_msgs/msg/JointState',
@@ -99,26 +98,6 @@ def subscribe(args):
     lv.undeclare()
     s.close()
     out.close()
-
-
-def build(typename, value):
-    cls = store.types[typename]
-    kwargs = {}
-    for name, desc in store.fielddefs[typename][1]:
-        v = value[name]
-        if desc[0] == 2:
-            kwargs[name] = build(desc[1], v)
-        elif desc[0] in (3, 4):
-            sub_kind, sub = desc[1][0]
-            if sub_kind == 2:
-                kwargs[name] = [build(sub, x) for x in v]
-            elif sub[0] == 'string':
-                kwargs[name] = list(v)
-            else:
-                kwargs[name] = np.array(v, dtype=np.float64)
-        else:
-            kwargs[name] = v
-    return cls(**kwargs)
 
 
 def publish(args):

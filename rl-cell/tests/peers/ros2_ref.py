@@ -9,32 +9,7 @@ and prints {"hashes": {T: "RIHS01_..."}, "cdr": ["hex", ...]} (little-endian CDR
 import json
 import sys
 
-import numpy as np
-from rosbags.typesys import Stores, get_typestore
-
-store = get_typestore(Stores.ROS2_JAZZY)
-
-
-def build(typename, value):
-    cls = store.types[typename]
-    fields = store.fielddefs[typename][1]
-    kwargs = {}
-    for name, desc in fields:
-        v = value[name]
-        kind = desc[0]
-        if kind == 2:  # a nested message
-            kwargs[name] = build(desc[1], v)
-        elif kind in (3, 4):  # an array or a sequence
-            sub_kind, sub = desc[1][0]
-            if sub_kind == 2:
-                kwargs[name] = [build(sub, x) for x in v]
-            elif sub[0] == 'string':
-                kwargs[name] = list(v)
-            else:
-                kwargs[name] = np.array(v, dtype=np.float64 if sub[0] == 'float64' else None)
-        else:
-            kwargs[name] = v
-    return cls(**kwargs)
+from rosmsg import build, store
 
 
 def main():
