@@ -90,11 +90,9 @@ fn session() -> Session {
     let bus =
         CanAddress::parse(&format!("cannelloni+udp://{}", fake.local_addr().unwrap())).unwrap();
     let mut config = Cia402Config::new(bus, &nodes);
+    // The master reads the drives' units (the fakes' 100:1 gear carries the inverse-dynamics
+    // torques: ±3 276 N·m in the torque offset).
     config.sdo_timeout = Duration::from_millis(200);
-    for a in &mut config.axes {
-        // A 100:1 gear carries the inverse-dynamics torques (±3 276 N·m in the torque offset).
-        a.units = AxisUnits::GEARED_100;
-    }
     let mut robot = Cia402::new(config).unwrap();
     robot.open().unwrap();
     // The arm's position comes from SDO at open: the plan is made before anything is enabled.

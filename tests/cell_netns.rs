@@ -16,15 +16,9 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod cli;
+mod netns;
 use cli::exit_by;
-
-fn ip(args: &[&str]) -> bool {
-    Command::new("ip")
-        .args(args)
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
+use netns::{ip, is_root};
 
 /// The namespaces and the veth pair, removed again when dropped.
 struct Net;
@@ -85,7 +79,7 @@ impl Drop for Net {
 
 #[test]
 fn cutting_the_link_mid_run_leaves_the_run_alone_and_every_loss_counted() {
-    let root = nix::unistd::Uid::effective().is_root();
+    let root = is_root();
     let python = std::env::var_os("RL_CELL_PYTHON")
         .map(PathBuf::from)
         .unwrap_or_else(|| {

@@ -235,7 +235,7 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
         "type": "trajectory_msgs/msg/JointTrajectory", "sequence": 1,
         "msg": {"header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
             "joint_names": (0..6).map(|k| format!("joint{k}")).collect::<Vec<_>>(),
-            "points": [{"positions": [0.0; 6], "velocities": [], "accelerations": [], "effort": [],
+            "points": [{"positions": vec![0.0f64; 6], "velocities": [], "accelerations": [], "effort": [],
                 "time_from_start": {"sec": 0, "nanosec": 0}}]}});
     let stop = serde_json::json!({"key": topic_key(0, "/arm1/stop", &STRING),
         "type": "std_msgs/msg/String", "sequence": 1, "msg": {"data": "rest"}, "after_s": 1.0});

@@ -7,7 +7,8 @@
 use std::time::{Duration, Instant};
 
 use rl::controller::{
-    ControlRun, Fault, PlanError, RunEnd, RunError, RunOptions, RunReport, rv6sl,
+    ControlRun, CycleRecord, Fault, PlanError, RunEnd, RunError, RunOptions, RunReport,
+    Supervision, rv6sl,
 };
 use rl::core::loader::{self, LoadedModel};
 use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
@@ -185,10 +186,14 @@ fn a_frozen_controller_ends_the_run_and_is_still_switched_off() {
     let report = run_with(model, &fake, options(), Duration::from_millis(500), |f| {
         f.freeze_for(Duration::from_millis(600))
     });
+    // A freeze of 84 cycles: a short loss first (brought to rest), then a dead link that
+    // stops the run at once.
+    let f = fault(&report);
     assert!(
-        matches!(fault(&report), Fault::ConsecutiveLost { .. }),
+        matches!(f, Fault::ConsecutiveLost { .. } | Fault::LinkLost { .. }),
         "{report}"
     );
+    assert!(f.stops_at_once(), "{report}");
     // The stop waited out the freeze (its R3 requests are answered after the thaw): program
     // stopped, servo off; the end packet came while frozen and was dropped, as a hung
     // controller would.
@@ -243,4 +248,119 @@ fn foreign_datagrams_are_counted_after_the_device_is_closed() {
     );
     assert!(report.link.rejected >= 100, "{report}");
     assert_eq!(report.to_json()["rejected_packets"], report.link.rejected);
+}
+
+/// One loss test at a time: what they assert about the loss must not be the machine's.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Runs with telemetry; `lose` replies dropped in a row after 0.5 s. The report and the
+/// records from the fault on.
+fn run_losing(lose: u32, supervision: Supervision) -> (RunReport, Vec<CycleRecord<8>>, FakeH7) {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let model = rv6sl().expect("model");
+    let fake = fake(&model, |_| {});
+    let options = RunOptions {
+        supervision,
+        ..options().duration(Duration::from_secs(3)).telemetry(true)
+    };
+    let mut run = ControlRun::<_, 16, 8>::start(h7(&fake), model, options).expect("starts");
+    let started = Instant::now();
+    let mut records = Vec::new();
+    let mut dropped = false;
+    while run.poll(Duration::from_millis(10)).is_some() {
+        run.drain_telemetry(|r| records.push(*r));
+        if !dropped && started.elapsed() >= Duration::from_millis(500) {
+            fake.drop_next(lose);
+            dropped = true;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "the run did not end"
+        );
+    }
+    let report = run.join_with(|r| records.push(*r));
+    (report, records, fake)
+}
+
+/// Largest commanded speed of any joint between two records, rad/s.
+fn speed(a: &CycleRecord<8>, b: &CycleRecord<8>) -> f64 {
+    let dt = 7.11e-3;
+    (0..6)
+        .map(|k| (b.commanded[k] - a.commanded[k]).abs() / dt)
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_short_loss_brings_the_arm_to_rest_along_its_path() {
+    let (report, records, fake) = run_losing(5, Supervision::default());
+    let f = fault(&report);
+    assert_eq!(f, Fault::LinkInterrupted { count: 3, bound: 3 }, "{report}");
+    assert!(!f.stops_at_once());
+    assert!(report.to_string().contains("brought to rest"), "{report}");
+    // The five dropped (a loaded machine may lose more, counted too).
+    assert!(report.link.lost >= 5, "{report}");
+    // After the loss the commands went on along the path and slowed to rest: the last
+    // commanded step is (almost) nothing, and it took the halt's ramp (≥ 0.1 s), not a cycle.
+    let last = records.len() - 1;
+    assert!(
+        speed(&records[last - 1], &records[last]) < 1e-3,
+        "still moving at the end"
+    );
+    let moving = records
+        .windows(2)
+        .rposition(|w| speed(&w[0], &w[1]) > 0.05)
+        .expect("the arm moved");
+    let lost_at = records
+        .iter()
+        .position(|r| r.time_s >= 0.49)
+        .expect("the loss came during the run");
+    assert!(
+        moving > lost_at + 14,
+        "the arm came to rest over {} cycles after the loss",
+        moving.saturating_sub(lost_at)
+    );
+    // It never stepped beyond what the speed limits allow: the controller clamped nothing.
+    let s = fake.status();
+    assert_eq!((s.speed_clamps, s.limit_hits), (0, 0), "{s:?}");
+    assert_switched_off(&fake, &report, true);
+}
+
+#[test]
+fn a_dead_link_still_stops_at_once() {
+    let (report, records, fake) = run_losing(1000, Supervision::default());
+    let f = fault(&report);
+    assert!(f.stops_at_once(), "{report}");
+    assert!(
+        matches!(
+            f,
+            Fault::ConsecutiveLost { count: 10, .. } | Fault::LinkLost { .. }
+        ),
+        "{report}"
+    );
+    // Ten lost replies after the loss began, not a halt's ramp.
+    let lost_at = records
+        .iter()
+        .position(|r| r.time_s >= 0.49)
+        .expect("the loss came during the run");
+    assert!(
+        records.len() - lost_at <= 16,
+        "{} cycles after the loss began",
+        records.len() - lost_at
+    );
+    fake.drop_next(0);
+    assert_switched_off(&fake, &report, false);
+}
+
+#[test]
+fn the_loss_bounds_are_the_callers() {
+    // Eight lost in a row allowed: a loss of five is ridden through, the run completes.
+    let supervision = Supervision {
+        rest_after_lost: 8,
+        max_consecutive_lost: 12,
+        ..Supervision::default()
+    };
+    let (report, _, fake) = run_losing(5, supervision);
+    assert_eq!(report.end, Some(RunEnd::CycleLimit), "{report}");
+    assert!(report.link.lost >= 5, "{report}");
+    assert_switched_off(&fake, &report, true);
 }

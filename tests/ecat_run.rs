@@ -3,32 +3,12 @@
 //! in a network namespace on the two ends of a veth pair made for this test. Needs root;
 //! without it the test prints SKIPPED.
 
-use std::process::{Command, Stdio};
+mod netns;
+
+use std::process::Stdio;
 use std::time::Duration;
 
-struct Netns(String);
-
-impl Drop for Netns {
-    fn drop(&mut self) {
-        let _ = Command::new("ip").args(["netns", "del", &self.0]).status();
-    }
-}
-
-fn ip(args: &[&str]) -> bool {
-    Command::new("ip")
-        .args(args)
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-fn is_root() -> bool {
-    std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
-        s.lines()
-            .find(|l| l.starts_with("Uid:"))
-            .and_then(|l| l.split_whitespace().nth(2))
-            == Some("0")
-    })
-}
+use netns::{Netns, is_root};
 
 #[test]
 fn rl_run_drives_the_fake_ethercat_segment() {
@@ -38,29 +18,15 @@ fn rl_run_drives_the_fake_ethercat_segment() {
         );
         return;
     }
-    let ns = Netns(format!("rlrun-{}", std::process::id()));
-    assert!(ip(&["netns", "add", &ns.0]));
-    assert!(ip(&[
-        "-n", &ns.0, "link", "add", "ecm", "type", "veth", "peer", "name", "ecs"
-    ]));
-    assert!(ip(&["-n", &ns.0, "link", "set", "ecm", "up"]));
-    assert!(ip(&["-n", &ns.0, "link", "set", "ecs", "up"]));
+    let ns = Netns::with_veth("rlrun", "ecm", "ecs");
     let rl = env!("CARGO_BIN_EXE_rl");
     let model = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/rlmdl/unimation-puma560.xml"
     );
-    let mut fake = Command::new("ip")
-        .args([
-            "netns",
-            "exec",
-            &ns.0,
-            rl,
-            "fake-robot",
-            "ethercat",
-            "--interface",
-            "ecs",
-        ])
+    let mut fake = ns
+        .command(rl)
+        .args(["fake-robot", "ethercat", "--interface", "ecs"])
         .args(["--model", model, "--seconds", "60"])
         .stdout(Stdio::piped())
         .spawn()
@@ -75,18 +41,9 @@ fn rl_run_drives_the_fake_ethercat_segment() {
     // times; if the machine never kept the loop, the test says SKIPPED with the measurements.
     let mut late = Vec::new();
     let out = loop {
-        let out = Command::new("ip")
-            .args([
-                "netns",
-                "exec",
-                &ns.0,
-                rl,
-                "run",
-                "--device",
-                "ethercat://ecm",
-                "--model",
-                model,
-            ])
+        let out = ns
+            .command(rl)
+            .args(["run", "--device", "ethercat://ecm", "--model", model])
             .args(["--duration", "2", "--json", "--plot"])
             .arg(&plot)
             .output()

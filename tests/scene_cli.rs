@@ -4,7 +4,7 @@
 
 mod cli;
 
-use cli::{rl, rl_json};
+use cli::{rl, rl_json, rl_within};
 use serde_json::Value;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -235,4 +235,72 @@ fn bad_input_exits_2_naming_file_and_reason() {
     let out = rl(&["scene", "info", &path("tests/data/rlmdl/README.md")]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unsupported format"));
+}
+
+#[test]
+fn hostile_files_are_refused_at_once_naming_what_and_where() {
+    // Issue 24: /dev/zero grew `rl model info` to 8.8 GB; a FIFO blocked it forever; 861 bytes
+    // of VRML took `rl scene info` to a 6.17 GB allocation and `rl view --env` to 5.7 GB;
+    // `--eds /dev/zero` read without end. Each is now an error within seconds.
+    let limit = std::time::Duration::from_secs(60);
+    let dir = std::env::temp_dir().join(format!("rl-hostile-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let refused = |args: &[&str], needles: &[&str]| {
+        let out = rl_within(args, limit);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n:?} not in {err}");
+        }
+    };
+    refused(
+        &["model", "info", "/dev/zero"],
+        &["/dev/zero", "character device"],
+    );
+    refused(
+        &["fake-robot", "canopen", "--eds", "/dev/zero"],
+        &["--eds", "character device"],
+    );
+    let fifo = dir.join("robot.urdf");
+    if std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        refused(
+            &["model", "info", fifo.to_str().unwrap()],
+            &["robot.urdf", "FIFO"],
+        );
+    } else {
+        println!("SKIPPED (FIFO case only): mkfifo is not available");
+    }
+    // Eight levels of ten USEs: 10^8 boxes from 861 bytes.
+    let mut vrml = String::from("#VRML V2.0 utf8\nDEF a0 Shape { geometry Box { size 1 1 1 } }\n");
+    for k in 1..=8 {
+        let uses = vec![format!("USE a{}", k - 1); 10].join(" ");
+        vrml.push_str(&format!("DEF a{k} Group {{ children [ {uses} ] }}\n"));
+    }
+    assert_eq!(vrml.len(), 861);
+    let laughs = dir.join("laughs.wrl");
+    std::fs::write(&laughs, &vrml).unwrap();
+    let laughs = laughs.to_str().unwrap();
+    let needles = [
+        "laughs.wrl:2:8",
+        "Group \"a1\" › Shape \"a0\"",
+        "limit of 200000",
+    ];
+    refused(&["scene", "info", laughs], &needles);
+    refused(
+        &[
+            "view",
+            "--env",
+            laughs,
+            "--http",
+            "127.0.0.1:0",
+            "--no-coach",
+        ],
+        &needles,
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

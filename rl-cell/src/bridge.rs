@@ -27,7 +27,9 @@
 //! period (cycles apart × period). A sample's `header.stamp` is the cycle's time on the loop's
 //! grid: `start + cycle × period`, `start` estimated from the wall clock when the samples reach
 //! the bridge (the earliest of the first 1000, so the estimate errs late by the shortest
-//! hand-over, typically under a millisecond, and the stamps stay exactly a period apart).
+//! hand-over, typically under a millisecond). The estimate only moves earlier, and only over the
+//! first 1000 samples (a stamp may then step by less than a period); from then on the stamps are
+//! exactly a period apart.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};

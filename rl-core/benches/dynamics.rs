@@ -1,6 +1,7 @@
 //! Dynamics benchmarks (issue 3): every algorithm of `rl model bench` — fk (all body poses),
 //! jacobian (world Jacobian of the first tool, FK included), rnea, nle (C + G), gravity, crba
-//! (mass matrix) and aba — on RL's UR5 (6 axes) and KUKA LBR iiwa 7 R800 (7 axes) models, in
+//! (mass matrix), aba, and the analytical derivatives (drnea: ∂τ/∂q, ∂τ/∂q̇, M; daba: ∂q̈/∂q,
+//! ∂q̈/∂q̇, M⁻¹; dstatic: ∂g/∂q) — on RL's UR5 (6 axes) and KUKA LBR iiwa 7 R800 (7 axes) models, in
 //! fixed-size models of capacity 8, cycling through 16 random states so no call sees the
 //! state of the one before. `scripts/bench-pinocchio` compares the same algorithms with
 //! Pinocchio and dynibo.
@@ -14,6 +15,7 @@ use std::path::PathBuf;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use rl_core::algo::{self, Jacobian};
 use rl_core::loader;
+use rl_core::model::DerivativeData;
 use rl_core::{Data, Model};
 
 /// Bodies and DOF of the benchmark models: enough for a 7-axis arm.
@@ -96,6 +98,7 @@ fn dynamics(c: &mut Criterion) {
         let s = states(&model);
         let (nq, nv) = (model.nq(), model.dof());
         let mut data = Data::<N>::new();
+        let mut deriv = DerivativeData::<N>::new();
         let mut jac: Jacobian<N> = [[0.0; N]; 6];
         let mut group = c.benchmark_group("dynamics");
         // Runs `f` on the next state at every iteration.
@@ -160,6 +163,31 @@ fn dynamics(c: &mut Criterion) {
             &s.tau[i][..nv]
         )
         .map(|t| t[0]));
+        bench!("drnea", |i| algo::rnea_derivatives(
+            &model,
+            &mut data,
+            &mut deriv,
+            black_box(&s.q[i][..nq]),
+            &s.qd[i][..nv],
+            &s.qdd[i][..nv]
+        )
+        .map(|r| r.dtau_dq.get(0, 0)));
+        bench!("daba", |i| algo::aba_derivatives(
+            &model,
+            &mut data,
+            &mut deriv,
+            black_box(&s.q[i][..nq]),
+            &s.qd[i][..nv],
+            &s.tau[i][..nv]
+        )
+        .map(|r| r.ddq_dq.get(0, 0)));
+        bench!("dstatic", |i| algo::static_torque_derivatives(
+            &model,
+            &mut data,
+            &mut deriv,
+            black_box(&s.q[i][..nq])
+        )
+        .map(|m| m.get(0, 0)));
         group.finish();
     }
 }

@@ -279,7 +279,7 @@ fn a_body_with_two_parents() {
 #[test]
 fn not_exactly_one_root() {
     let e = urdf_err("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>");
-    assert!(matches!(&e.kind, LoadErrorKind::NoSingleRoot { roots } if roots.len() == 2));
+    assert!(matches!(&e.kind, LoadErrorKind::NoSingleRoot { roots, count: 2 } if roots.len() == 2));
     names(&e, "1:1: <robot \"r\">");
     assert!(e.to_string().contains("several roots (a, b)"), "{e}");
     let e = rl_err("<rlmdl><model><world id=\"w1\"/>\n<world id=\"w2\"/></model></rlmdl>");
@@ -391,7 +391,10 @@ fn unsupported_features() {
 fn unreadable_file_names_the_path() {
     let path = std::env::temp_dir().join("rl-core-loader-test-no-such-file.urdf");
     let e = loader::load_file::<N>(&path).unwrap_err();
-    assert!(matches!(e.kind, LoadErrorKind::Io(_)));
+    assert!(matches!(
+        e.kind,
+        LoadErrorKind::File(loader::ReadErrorKind::NotFound)
+    ));
     assert!(e.to_string().contains("no-such-file.urdf"), "{e}");
 }
 

@@ -26,6 +26,7 @@ fn with_mimic_joints_too() {
 fn run_all(model: &rl_core::Model<32>) {
     let model = model.clone();
     let mut data = Box::new(Data::<32>::new());
+    let mut deriv = Box::new(rl_core::model::DerivativeData::<32>::new());
     let mut r = Rng(1);
     let states: Vec<_> = (0..20).map(|_| random_state(&model, &mut r)).collect();
     let fext = vec![ForceVector::ZERO; model.body_count()];
@@ -57,6 +58,41 @@ fn run_all(model: &rl_core::Model<32>) {
             let mut b = tau;
             algo::solve_mass_matrix(&model, &data, &mut b[..model.dof()]).unwrap();
             sink += algo::aba(&model, &mut data, q, qd, &tau[..model.dof()]).unwrap()[0];
+            let nv = model.dof();
+            sink += algo::rnea_derivatives(&model, &mut data, &mut deriv, q, qd, qdd)
+                .unwrap()
+                .dtau_dq
+                .get(0, 0);
+            sink += algo::rnea_derivatives_with_external_forces(
+                &model, &mut data, &mut deriv, q, qd, qdd, &fext,
+            )
+            .unwrap()
+            .dtau_dv
+            .get(0, 0);
+            sink += algo::aba_derivatives(&model, &mut data, &mut deriv, q, qd, &tau[..nv])
+                .unwrap()
+                .ddq_dq
+                .get(0, 0);
+            sink += algo::aba_derivatives_with_external_forces(
+                &model,
+                &mut data,
+                &mut deriv,
+                q,
+                qd,
+                &tau[..nv],
+                &fext,
+            )
+            .unwrap()
+            .minv
+            .get(0, 0);
+            sink += algo::static_torque_derivatives(&model, &mut data, &mut deriv, q)
+                .unwrap()
+                .get(0, 0);
+            sink += algo::static_torque_derivatives_with_external_forces(
+                &model, &mut data, &mut deriv, q, &fext,
+            )
+            .unwrap()
+            .get(0, 0);
             sink += algo::operational_inverse_inertia(&model, &mut data, q, 0, &mut jac[0])
                 .unwrap()[0][0];
         }

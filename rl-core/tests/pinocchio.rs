@@ -9,94 +9,15 @@
 
 mod support;
 
-use glam::DVec3;
+use rl_core::Data;
 use rl_core::algo;
-use rl_core::joint::{Joint, Prismatic, Revolute, SixDof};
-use rl_core::model::ROOT;
-use rl_core::spatial::RigidBodyInertia;
-use rl_core::{Data, Model, ModelBuilder};
-use serde_json::Value;
 use support::assert_close;
-use support::fixture::{f64s, mat3, pose, vec3};
+use support::fixture::{build, f64s, fixture, pose};
 
 const N: usize = 64;
 /// For the model over 64 bodies (tiago_dual, 101).
 const BIG: usize = 128;
 const TOL: f64 = 1e-9;
-
-fn fixture(name: &str) -> Value {
-    let path = format!(
-        "{}/tests/data/pinocchio/{name}.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    serde_json::from_str(&text).unwrap()
-}
-
-/// The model Pinocchio described, joint for joint (continuous joints as plain revolute ones;
-/// their states use `q_angles`; mimic joints follow their leaders).
-fn build<const N: usize>(fx: &Value) -> Model<N> {
-    let mut b = ModelBuilder::<N>::new();
-    b.gravity(vec3(&fx["gravity"]));
-    let joints = fx["joints"].as_array().unwrap();
-    let mut names: Vec<String> = Vec::new();
-    for j in joints {
-        let name = j["name"].as_str().unwrap();
-        let parent = match j["parent"].as_str().unwrap() {
-            "universe" => ROOT,
-            p => names.iter().position(|n| n == p).unwrap(),
-        };
-        let ty = j["type"].as_str().unwrap();
-        let s = j["motion_subspace"].as_array().unwrap();
-        let joint = if ty.contains("FreeFlyer") {
-            Joint::SixDof(SixDof)
-        } else {
-            let own_nv = if j["mimic"].is_null() { 1 } else { 0 };
-            assert_eq!(j["nv"].as_u64(), Some(own_nv), "{ty}");
-            let col: Vec<f64> = s.iter().map(|row| row[0].as_f64().unwrap()).collect();
-            let lin = DVec3::new(col[0], col[1], col[2]);
-            let ang = DVec3::new(col[3], col[4], col[5]);
-            if ang.length() > 0.5 {
-                Joint::Revolute(Revolute::new(ang))
-            } else {
-                Joint::Prismatic(Prismatic::new(lin))
-            }
-        };
-        let body = &j["body"];
-        let inertia = RigidBodyInertia::from_com(
-            body["mass"].as_f64().unwrap(),
-            vec3(&body["com"]),
-            mat3(&body["inertia_at_com"]),
-        );
-        b.add_body(parent, name, joint, pose(&j["placement"]), name, inertia)
-            .unwrap();
-        names.push(name.to_string());
-    }
-    for (i, j) in joints.iter().enumerate() {
-        let m = &j["mimic"];
-        if !m.is_null() {
-            let leader = names
-                .iter()
-                .position(|n| n == m["leader"].as_str().unwrap());
-            b.set_mimic(
-                i,
-                leader.unwrap(),
-                m["multiplier"].as_f64().unwrap(),
-                m["offset"].as_f64().unwrap(),
-            )
-            .unwrap();
-        }
-    }
-    for f in fx["frames"].as_array().unwrap() {
-        let parent = names
-            .iter()
-            .position(|n| n == f["parent_joint"].as_str().unwrap())
-            .unwrap();
-        b.add_tool(f["name"].as_str().unwrap(), parent, pose(&f["placement"]))
-            .unwrap();
-    }
-    b.build()
-}
 
 fn check(robot: &str) {
     check_n::<N>(robot, 10);
@@ -257,4 +178,16 @@ fn pr2_mimic_grippers() {
 #[test]
 fn tiago_dual_over_64_bodies() {
     check_n::<BIG>("tiago_dual", 3);
+}
+
+/// The KUKA LBR iiwa of pybullet's data (rl-core/tests/data/urdf/).
+#[test]
+fn iiwa() {
+    check("iiwa");
+}
+
+/// Unitree G1, 29 joints on a floating base (35 DOF).
+#[test]
+fn g1_floating_base() {
+    check("g1");
 }

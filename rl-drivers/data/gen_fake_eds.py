@@ -77,6 +77,26 @@ rec(0x607D, "Software position limit", [
     (2, "Max position limit", I32, "rw", "0", 0),
 ], ARRAY)
 var(0x607F, "Max profile velocity", U32, "rw", "0")
+# The factor group (CiA 402-2 §6.3): encoder increments per motor revolution, motor revolutions per
+# shaft revolution, position units per shaft revolution. These defaults are the fake's own
+# (2^20 counts, direct drive, position unit = increment); the fake writes its configured units
+# over them, or removes the three objects when told to refuse them. Read-only here: the fake's
+# motor does not rescale, so a write is refused rather than silently ignored.
+rec(0x608F, "Position encoder resolution", [
+    (0, "Highest sub-index supported", U8, "const", "2", 0),
+    (1, "Encoder increments", U32, "ro", "1048576", 0),
+    (2, "Motor revolutions", U32, "ro", "1", 0),
+], ARRAY)
+rec(0x6091, "Gear ratio", [
+    (0, "Highest sub-index supported", U8, "const", "2", 0),
+    (1, "Motor revolutions", U32, "ro", "1", 0),
+    (2, "Shaft revolutions", U32, "ro", "1", 0),
+], ARRAY)
+rec(0x6092, "Feed constant", [
+    (0, "Highest sub-index supported", U8, "const", "2", 0),
+    (1, "Feed", U32, "ro", "1048576", 0),
+    (2, "Shaft revolutions", U32, "ro", "1", 0),
+], ARRAY)
 var(0x60B1, "Velocity offset", I32, "rww", "0", 1)
 var(0x60B2, "Torque offset", I16, "rww", "0", 1)
 rec(0x60C2, "Interpolation time period", [

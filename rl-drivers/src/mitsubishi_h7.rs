@@ -14,7 +14,9 @@
 //!   to it until the cycle's deadline ([`MitsubishiH7Config::reply_timeout`], one period).
 //! - `stop` (from running or faulted): the end packet (command 255), `STOP`, `DSTATE`, and
 //!   `SRVOFF` with a poll until the servo is off — every step attempted even when an earlier
-//!   one failed, each bounded in time; the first error is returned.
+//!   one failed, each bounded in time; the first error is returned. An R3 connection that
+//!   dropped (before or during the stop) is opened again once and the step repeated: the servo
+//!   must go off.
 //! - `close`: drop both sockets (the counts stay).
 //!
 //! Every reply is checked: it must come from the controller's address, be 196 bytes, decode,
@@ -41,7 +43,9 @@ use crate::capability::{
     CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
     JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
 };
-use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
+use crate::device::{
+    DeviceError, Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device,
+};
 use crate::proto::h7::{
     CYCLE_US, Command, Data, DataShape, DataView, DecodeError, IoType, MAX_AXES, Mode, MxtType,
     PACKET_LEN, Packet, PoseData,
@@ -233,6 +237,8 @@ pub struct H7Counters {
     pub r3_stale_bytes: u64,
     /// Current run of failed steps.
     pub consecutive_failures: u32,
+    /// R3 connections opened again by `stop` after the controller dropped one.
+    pub r3_reconnects: u64,
     /// Steps that sent nothing because the previous request was still unanswered: the
     /// controller was a cycle behind, and waiting for that reply lets it catch up.
     pub held: u64,
@@ -494,16 +500,7 @@ impl MitsubishiH7 {
             operation,
             state: State::Closed,
         })?;
-        let map = |e: std::io::Error| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(operation, &e)
-            }
-        };
+        let map = |e: std::io::Error| r3_io_error(operation, timeout, &e);
         let disconnected = Error::Disconnected { operation };
         while let Some(stale) = link.try_recv(&mut self.r3_rx).map_err(map)? {
             if stale == 0 {
@@ -560,6 +557,29 @@ impl MitsubishiH7 {
 
     fn r3_command(&mut self, operation: Operation, slot: u8, body: &str) -> Result<(), Error> {
         self.r3_exchange(operation, slot, body).map(|_| ())
+    }
+
+    /// Connects R3 (again).
+    fn connect_r3(&mut self, operation: Operation) -> Result<(), Error> {
+        let timeout = self.config.r3_timeout;
+        self.r3 = None;
+        let r3 = TcpLink::connect(self.config.r3, timeout)
+            .map_err(|e| r3_io_error(operation, timeout, &e))?;
+        self.r3 = Some(r3);
+        Ok(())
+    }
+
+    /// Runs an R3 step of the stop; if the connection is gone (reset or closed by the
+    /// controller, before or during the stop), connects again once and repeats the step.
+    fn stop_r3<T>(&mut self, step: impl Fn(&mut Self) -> Result<T, Error>) -> Result<T, Error> {
+        match step(self) {
+            Err(e) if e.kind().is_link_loss() || self.r3.is_none() => {
+                self.connect_r3(Operation::Stop)?;
+                self.counters.r3_reconnects += 1;
+                step(self)
+            }
+            r => r,
+        }
     }
 
     fn dstate(&mut self, operation: Operation) -> Result<DState, Error> {
@@ -717,6 +737,15 @@ impl MitsubishiH7 {
     }
 }
 
+/// An R3 socket error: an expired deadline is a timeout of `waited`, anything else I/O.
+fn r3_io_error(operation: Operation, waited: Duration, e: &std::io::Error) -> Error {
+    if e.kind() == std::io::ErrorKind::TimedOut {
+        Error::Timeout { operation, waited }
+    } else {
+        Error::io(operation, e)
+    }
+}
+
 /// The local address the system would use to reach `server` (a connected UDP socket sends
 /// nothing; connecting only picks the route).
 fn route_ip(server: SocketAddr) -> std::io::Result<IpAddr> {
@@ -737,25 +766,20 @@ impl Driver for MitsubishiH7 {
 
     fn open_sequence(&mut self) -> Result<(), Error> {
         const OP: Operation = Operation::Open;
-        let timeout = self.config.r3_timeout;
-        let r3 = TcpLink::connect(self.config.r3, timeout).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::TimedOut {
-                Error::Timeout {
-                    operation: OP,
-                    waited: timeout,
-                }
-            } else {
-                Error::io(OP, &e)
-            }
-        })?;
+        self.connect_r3(OP)?;
         // A wildcard address would hear every interface: bind to the one that routes to
         // the controller.
         let mut local = self.config.local;
-        if local.ip().is_unspecified() {
-            local.set_ip(route_ip(self.config.server).map_err(|e| Error::io(OP, &e))?);
-        }
-        let udp = UdpLink::bind(local, self.config.server).map_err(|e| Error::io(OP, &e))?;
-        self.r3 = Some(r3);
+        let bound = (|| {
+            if local.ip().is_unspecified() {
+                local.set_ip(route_ip(self.config.server)?);
+            }
+            UdpLink::bind(local, self.config.server)
+        })();
+        let udp = bound.map_err(|e| {
+            self.r3 = None;
+            Error::io(OP, &e)
+        })?;
         self.udp = Some(udp);
         self.reply = None;
         self.read_joint_report().inspect_err(|_| self.drop_links())
@@ -832,9 +856,9 @@ impl Driver for MitsubishiH7 {
             self.counters.sent += 1;
         }
         steps.keep(sent);
-        steps.keep(self.r3_command(OP, 1, "STOP"));
+        steps.keep(self.stop_r3(|d| d.r3_command(OP, 1, "STOP")));
         // If the state cannot be read, switch the servo off anyway.
-        let servo_on = match self.dstate(OP) {
+        let servo_on = match self.stop_r3(|d| d.dstate(OP)) {
             Ok(state) => state.servo_on(),
             Err(e) => {
                 steps.keep(Err(e));
@@ -842,8 +866,8 @@ impl Driver for MitsubishiH7 {
             }
         };
         if servo_on {
-            steps.keep(self.r3_command(OP, 1, "SRVOFF"));
-            steps.keep(self.wait_servo(OP, false));
+            steps.keep(self.stop_r3(|d| d.r3_command(OP, 1, "SRVOFF")));
+            steps.keep(self.stop_r3(|d| d.wait_servo(OP, false)));
         }
         steps.into_result()
     }

@@ -373,6 +373,54 @@ fn over_cannelloni(address: &str) {
 }
 
 #[test]
+fn frames_from_another_sender_do_not_reach_the_fake_drives() {
+    let _serial = serial();
+    let mut fc = FakeCia402Config::new(&[1, 2]).unwrap();
+    fc.sync_loss_periods = 10;
+    let fake = FakeCia402::serve(
+        fc,
+        &CanAddress::parse("cannelloni+udp://127.0.0.1:0").unwrap(),
+    )
+    .unwrap();
+    let addr = fake.local_addr().unwrap();
+    let bus = CanAddress::parse(&format!("cannelloni+udp://{addr}")).unwrap();
+    let mut config = Cia402Config::new(bus, &[1, 2]).with_period(Duration::from_millis(20));
+    config.sdo_timeout = Duration::from_millis(200);
+    let mut dev = Cia402::new(config).unwrap();
+    dev.open().unwrap();
+    dev.start().unwrap();
+    let mut q = [0.0; 2];
+    dev.joint_position(&mut q).unwrap();
+    // Another program sends, in valid cannelloni datagrams: NMT "stop" to every node, and an
+    // RPDO with controlword 0 (disable voltage) to node 1.
+    let stranger = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let nmt_stop = [2, 0, 0, 0, 1, 0, 0, 0, 0x00, 2, 0x02, 0x00];
+    let disable = [2, 0, 1, 0, 1, 0, 0, 0x02, 0x01, 8, 0, 0, 0, 0, 0, 0, 0, 0];
+    let failed = run(&mut dev, 30, |d, k| {
+        if k % 5 == 2 {
+            stranger.send_to(&nmt_stop, addr).unwrap();
+            stranger.send_to(&disable, addr).unwrap();
+        }
+        d.set_joint_position(&q).unwrap();
+    });
+    assert_eq!(failed, 0);
+    let s = fake.status();
+    assert!(
+        s.nodes
+            .iter()
+            .all(|n| n.nmt == nmt::State::Operational && n.power == PowerState::OperationEnabled),
+        "{s:?}"
+    );
+    assert!(
+        s.rejected >= 12,
+        "the stranger's datagrams are counted: {}",
+        s.rejected
+    );
+    dev.stop().unwrap();
+    dev.close().unwrap();
+}
+
+#[test]
 fn a_session_over_cannelloni_udp() {
     let _serial = serial();
     over_cannelloni("cannelloni+udp://127.0.0.1:0");

@@ -5,7 +5,9 @@
 //! (a) python-canopen as master reads our fake drive's identity and objects by SDO, configures
 //! a PDO, and brings it to operation enabled through its `BaseNode402`;
 //! (b) our master configures and exchanges PDOs with python-canopen's `LocalNode` loaded from
-//! our EDS.
+//! our EDS;
+//! (c) python-canopen reads the units our fake drives report (0x608F, 0x6091, 0x6092, 0x6076),
+//! and the abort of a drive without them.
 //!
 //! The Python environment: `RL_CAN_PYTHON` (a python with canopen, python-can and
 //! can-cannelloni), else `target/can-peers/bin/python` (what `scripts/test` installs). Without
@@ -16,7 +18,7 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use rl_drivers::canopen::{Cia402, Cia402Config};
-use rl_drivers::cia402::PowerState;
+use rl_drivers::cia402::{AxisUnits, PowerState};
 use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
 use rl_drivers::transport::can::CanAddress;
 use rl_drivers::{
@@ -219,4 +221,63 @@ fn our_master_drives_python_canopen_s_local_node() {
         "{now:?}"
     );
     assert!(v["syncs"].as_u64().unwrap() >= 40 && v["rpdos"].as_u64().unwrap() >= 40);
+}
+
+#[test]
+fn python_canopen_reads_the_units_our_fake_drives_report() {
+    let python = match python() {
+        Ok(p) => p,
+        Err(why) => {
+            println!("SKIPPED: {why}");
+            return;
+        }
+    };
+    // Node 3: a 12-bit encoder behind a 50.5:1 gear, rated 0.64 N·m, position unit = count;
+    // node 4: the same drive without the factor-group objects.
+    let mut config = FakeCia402Config::new(&[3, 4]).unwrap();
+    for a in &mut config.axes {
+        a.units = AxisUnits {
+            counts_per_rev: 4096.0,
+            gear_ratio: 50.5,
+            feed: None,
+            lead_m: None,
+            rated_torque_nm: 0.64,
+        };
+    }
+    config.axes[1].unit_objects = false;
+    let fake = FakeCia402::serve(
+        config,
+        &CanAddress::parse("cannelloni+tcp://127.0.0.1:0").unwrap(),
+    )
+    .unwrap();
+    let out = Command::new(&python)
+        .arg(script("units_402.py"))
+        .arg(fake.local_addr().unwrap().to_string())
+        .arg(eds())
+        .args(["3", "4"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let v = json_of(&out);
+    // 50.5 = 505 / 10; 4096 × 50.5 = 206 848 counts per joint revolution.
+    assert_eq!(
+        v["3"],
+        serde_json::json!({
+            "0x608f": [4096, 1],
+            "0x6091": [505, 10],
+            "0x6092": [206_848, 1],
+            "0x6076": [640],
+        }),
+        "{v}"
+    );
+    assert_eq!(
+        v["4"],
+        serde_json::json!({
+            "0x608f": 0x0602_0000,
+            "0x6091": 0x0602_0000,
+            "0x6092": 0x0602_0000,
+            "0x6076": [640],
+        }),
+        "object does not exist: {v}"
+    );
 }

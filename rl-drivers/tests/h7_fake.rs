@@ -215,3 +215,98 @@ fn pose_replies_come_from_forward_kinematics() {
     assert!((yaw - (c + s)).abs() < 1e-6, "yaw {yaw}");
     assert!(fake.status().moves >= 1);
 }
+
+/// `r3` for robot 1, slot 1, without the carriage return.
+fn r3_1(stream: &mut TcpStream, body: &str) -> String {
+    r3(stream, &format!("1;1;{body}")).trim_end().to_owned()
+}
+
+fn r3_client(fake: &FakeH7) -> TcpStream {
+    let s = TcpStream::connect(fake.r3_addr()).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
+    s
+}
+
+#[test]
+fn operation_rights_belong_to_the_connection_that_took_them_and_end_with_it() {
+    let fake = FakeH7::spawn(FakeH7Config::loopback(6)).unwrap();
+    let mut a = r3_client(&fake);
+    let mut b = r3_client(&fake);
+    assert_eq!(r3_1(&mut a, "CNTLON"), "QoK");
+    // The other connection gets neither the rights nor the servo.
+    assert_eq!(r3_1(&mut b, "CNTLON"), "QeR4002");
+    assert_eq!(r3_1(&mut b, "SRVON"), "QeR4000");
+    assert_eq!(
+        r3_1(&mut b, "ERRORMES4002"),
+        "QoKanother connection holds the operation rights"
+    );
+    // The holder closes its connection without CNTLOFF: the rights end with it.
+    drop(a);
+    let deadline = Instant::now() + Duration::from_secs(2);
+    let mut answer = r3_1(&mut b, "CNTLON");
+    while answer != "QoK" && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        answer = r3_1(&mut b, "CNTLON");
+    }
+    assert_eq!(answer, "QoK");
+    assert_eq!(r3_1(&mut b, "SRVON"), "QoK");
+    assert_eq!(r3_1(&mut b, "CNTLOFF"), "QoK");
+    // Given back, another connection may take them.
+    let mut c = r3_client(&fake);
+    assert_eq!(r3_1(&mut c, "CNTLON"), "QoK");
+    assert_eq!(r3_1(&mut b, "SRVOFF"), "QoK");
+}
+
+extern "C" fn ignore_signal(_: libc::c_int) {}
+
+#[test]
+fn the_r3_responder_survives_signals_instead_of_dropping_the_connection() {
+    use nix::sys::signal::{SaFlags, SigAction, SigHandler, SigSet, Signal, sigaction};
+    let fake = FakeH7::spawn(FakeH7Config::loopback(6)).unwrap();
+    let mut robot =
+        MitsubishiH7::new(MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr())).unwrap();
+    robot.open().unwrap();
+    // A handler without SA_RESTART: a blocked socket read with a timeout returns EINTR.
+    let action = SigAction::new(
+        SigHandler::Handler(ignore_signal),
+        SaFlags::empty(),
+        SigSet::empty(),
+    );
+    // SAFETY: the handler does nothing (async-signal-safe); no other handler of SIGUSR1 is
+    // replaced in this test binary.
+    unsafe { sigaction(Signal::SIGUSR1, &action) }.unwrap();
+    // The thread serving our connection, by name (comm holds 15 bytes).
+    let task = std::fs::read_dir("/proc/self/task")
+        .unwrap()
+        .filter_map(Result::ok)
+        .find(|t| {
+            std::fs::read_to_string(t.path().join("comm"))
+                .is_ok_and(|c| c.trim() == "fake-h7-r3-clie")
+        })
+        .expect("the R3 client thread");
+    let tid: libc::pid_t = task.file_name().to_string_lossy().parse().unwrap();
+    for _ in 0..50 {
+        // SAFETY: tgkill with this process's id, a thread id read from /proc and a signal
+        // whose handler is installed above.
+        unsafe {
+            libc::syscall(
+                libc::SYS_tgkill,
+                std::process::id() as libc::pid_t,
+                tid,
+                libc::SIGUSR1,
+            )
+        };
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // The connection is still there: the whole start sequence runs over it.
+    robot
+        .start()
+        .unwrap_or_else(|e| panic!("start after the signals: {e}"));
+    assert_eq!(
+        fake.status().r3_clients,
+        1,
+        "no second connection was needed"
+    );
+    robot.stop().unwrap();
+    robot.close().unwrap();
+}

@@ -295,6 +295,37 @@ fn stop_after_a_freeze_faulted_the_device_switches_the_servo_off() {
 }
 
 #[test]
+fn a_stop_connects_r3_again_when_the_controller_drops_it_during_the_stop() {
+    let fake = fake_with(|_| {});
+    let mut robot = started(config(&fake));
+    robot.step().unwrap();
+    // The controller freezes for 0.6 s as the stop begins, and drops the R3 connection while
+    // the stop waits for it: the stop connects again and the servo still goes off.
+    fake.freeze_for(Duration::from_millis(600));
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            std::thread::sleep(Duration::from_millis(100));
+            fake.reset_r3_connections();
+        });
+        robot.stop().unwrap_or_else(|e| panic!("stop: {e}"));
+    });
+    assert_eq!(robot.state(), State::Open);
+    assert_eq!(robot.counters().r3_reconnects, 1);
+    let s = fake.status();
+    assert!(
+        !s.servo_on && !s.program_running,
+        "servo off, program stopped"
+    );
+    assert_eq!(s.r3_clients, 2, "one connection, and the one the stop made");
+    assert!(
+        s.r3_log.ends_with(&["SRVOFF".into(), "DSTATE".into()]),
+        "{:?}",
+        s.r3_log
+    );
+    robot.close().unwrap();
+}
+
+#[test]
 fn stop_goes_on_after_a_refused_step_and_returns_the_first_error() {
     let fake = fake_with(|_| {});
     let mut robot = started(config(&fake));

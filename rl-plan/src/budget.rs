@@ -83,7 +83,7 @@ impl Budget {
     /// microsecond), within the time.
     #[inline]
     pub fn allows(&self, i: u64) -> bool {
-        i < self.max_iterations && (i % 4 != 0 || !self.expired())
+        i < self.max_iterations && (!i.is_multiple_of(4) || !self.expired())
     }
 
     /// Time since the budget started.

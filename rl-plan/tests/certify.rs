@@ -240,8 +240,10 @@ fn certified_edges_are_clear_everywhere(name: &str) {
     let robot =
         Robot::load_urdf(&data().join(name).join(format!("{name}.urdf")), None, None).unwrap();
     let problems = mbm::find_problems(&data().join(name).join("problems")).unwrap();
+    // 15 s: the hybrid checker asks the meshes wherever its covering spheres touch (issue 29),
+    // slower in the cage than when the file's spheres refused on their own.
     let mut opts = PlanOptions {
-        time: Duration::from_secs(5),
+        time: Duration::from_secs(15),
         optimize_time: Duration::from_secs(1),
         ..Default::default()
     };

@@ -165,3 +165,89 @@ fn gnat_serves_rotations_and_kdtree_refuses_them() {
         .collect();
     check(&space, &points, &queries, 10, 0.9);
 }
+
+/// The `f32` k-d tree against a linear `f32` scan written here (the same rounding: coordinates
+/// to `f32`, times the weight) and against linear `f64` search where the two nearest are not
+/// tied within `f32` precision; points inserted one by one, many of them repeated (a leaf of
+/// equal points cannot split).
+#[test]
+fn f32_kdtree_finds_what_a_linear_f32_scan_finds() {
+    use rl_plan::nn::KdtreeF32;
+    let mut coords: Vec<(String, Topology)> =
+        (0..7).map(|i| (format!("q{i}"), interval())).collect();
+    coords[0].1 = Topology::Interval {
+        lower: -3.0,
+        upper: 3.0,
+    };
+    let mut space = JointSpace::new(coords).unwrap();
+    let w = [1.0f32, 0.5, 1.0, 2.0, 1.0, 1.0, 0.25];
+    for (i, &x) in w.iter().enumerate() {
+        space.set_weight(i, f64::from(x)).unwrap();
+    }
+    let mut rng = Rng::seed_from(41);
+    let mut tree = KdtreeF32::new(&space).unwrap();
+    let mut linear = Linear::new(&space);
+    let mut points: Vec<Vec<f64>> = Vec::new();
+    let mut q = vec![0.0; 7];
+    let f32_nearest = |points: &[Vec<f64>], q: &[f64]| {
+        let mut best = (f32::INFINITY, usize::MAX);
+        for (i, p) in points.iter().enumerate() {
+            let mut d2 = 0.0f32;
+            for d in 0..7 {
+                let v = p[d] as f32 * w[d] - q[d] as f32 * w[d];
+                d2 += v * v;
+            }
+            if d2 < best.0 {
+                best = (d2, i);
+            }
+        }
+        best.1
+    };
+    let (mut compared, mut untied) = (0, 0);
+    for n in 0..3000 {
+        if n % 10 == 9 {
+            // A repeat of an earlier point (and 40 copies of one point in a row).
+            let again = points[n / 3].clone();
+            points.push(again);
+        } else if (1000..1040).contains(&n) {
+            points.push(vec![0.25; 7]);
+        } else {
+            space.sample_uniform(&mut rng, &mut q);
+            points.push(q.clone());
+        }
+        tree.insert(&space, n, &points[n]);
+        linear.insert(&space, n, &points[n]);
+        if n % 7 == 0 {
+            space.sample_uniform(&mut rng, &mut q);
+            let got = tree.nearest_one(&space, &q).unwrap();
+            assert_eq!(got.id, f32_nearest(&points, &q), "after {n} points");
+            assert!((got.distance - space.distance(&q, &points[got.id])).abs() < 1e-12);
+            let want = linear.nearest(&space, &q, 2);
+            if want.len() == 2 && want[1].distance - want[0].distance > 1e-5 {
+                assert_eq!(got.id, want[0].id);
+                untied += 1;
+            }
+            // k nearest and radius: the same sets as linear f64 search, away from ties.
+            let k = tree.nearest(&space, &q, 5);
+            let lk = linear.nearest(&space, &q, 6);
+            if lk.len() == 6 && lk[5].distance - lk[4].distance > 1e-5 {
+                let mut a: Vec<usize> = k.iter().map(|x| x.id).collect();
+                let mut b: Vec<usize> = lk[..5].iter().map(|x| x.id).collect();
+                a.sort_unstable();
+                b.sort_unstable();
+                assert_eq!(a, b, "k nearest after {n} points");
+            }
+            let r = 0.6;
+            let within: Vec<usize> = tree.within(&space, &q, r).iter().map(|x| x.id).collect();
+            let lw: Vec<usize> = linear.within(&space, &q, r).iter().map(|x| x.id).collect();
+            assert_eq!(within, lw, "within {r} after {n} points");
+            compared += 1;
+        }
+    }
+    assert!(
+        compared > 400 && untied > 300,
+        "{compared} queries, {untied} untied"
+    );
+    tree.clear();
+    assert!(tree.is_empty() && tree.nearest_one(&space, &q).is_none());
+}

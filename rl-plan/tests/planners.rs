@@ -157,6 +157,7 @@ fn optimisers_shorten_and_stay_valid() {
     let (space, free) = wall();
     for optimizer in [
         OptimizerKind::Simple,
+        OptimizerKind::Shortcut,
         OptimizerKind::Advanced {
             length: 1.0,
             ratio: 0.1,
@@ -269,5 +270,41 @@ fn gaussian_samples_lie_near_obstacles_and_bridge_samples_in_the_gap() {
             (4.0..=6.0).contains(&q[0]) && (7.0..=8.5).contains(&q[1]),
             "bridge sample {q:?} is not in the passage"
         );
+    }
+}
+
+#[test]
+fn rrt_con_con_adds_one_vertex_per_connect_as_rl_does() {
+    // Through the gap with steps of 0.1: a connect crosses many steps. RL's RrtCon::connect adds
+    // only its last valid step, so every iteration adds at most two vertices (one per tree);
+    // a vertex per step would add dozens.
+    let (space, free) = wall();
+    for seed in 0..5 {
+        let mut planner = PlannerKind::parse("rrt-con-con").unwrap();
+        planner.rrt_settings_mut().unwrap().delta = 0.1;
+        let mut check = FnValidity::new(free.clone());
+        let r = plan(
+            &space,
+            &mut check,
+            &[1.0, 1.0],
+            &[9.0, 1.0],
+            &options(planner, seed),
+        )
+        .unwrap();
+        assert!(r.solved, "seed {seed}");
+        assert!(
+            r.iterations > 0,
+            "seed {seed}: the straight motion is blocked"
+        );
+        assert!(
+            r.vertices as u64 <= 2 + 2 * r.iterations,
+            "seed {seed}: {} vertices after {} iterations",
+            r.vertices,
+            r.iterations
+        );
+        let p = r.path.as_ref().unwrap();
+        let mut f = free.clone();
+        assert!((0..p.len()).all(|i| f(p.point(i))), "seed {seed}");
+        assert!(p.length(&space) > 10.0, "seed {seed}: through the wall");
     }
 }

@@ -189,7 +189,12 @@ fn start<const N: usize>(
     mut options: RunOptions,
 ) -> PyResult<(Box<dyn Running>, Option<InProcessFake>)> {
     let opened = spec
-        .build(&loaded, period, None)
+        .build(
+            &loaded,
+            period,
+            None,
+            options.supervision.device_failure_limit(),
+        )
         .map_err(|e| crate::error::RunError::new_err(e.to_string()))?;
     options.device_name = opened.name;
     let robot: Box<dyn JointRobot + Send> = opened.robot;

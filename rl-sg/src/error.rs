@@ -3,12 +3,24 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use rl_core::loader::{Clipped, ReadError, ReadErrorKind};
+
 /// What went wrong.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum SgErrorKind {
     /// A file could not be read.
     Io(String),
+    /// A file was not read: not a regular file (a FIFO, a device), above the size limit, not
+    /// UTF-8 (rl-core's bounded reader said why).
+    File(ReadErrorKind),
+    /// A load would pass one of its limits ([`crate::load::SceneLimits`]).
+    TooLarge {
+        /// What would be too large.
+        what: &'static str,
+        /// The limit.
+        limit: u64,
+    },
     /// The text is not well-formed XML, YAML or VRML (the message says what was expected).
     Syntax(String),
     /// A file referred to (a mesh, an inlined VRML file, a scene) does not exist.
@@ -75,10 +87,16 @@ impl fmt::Display for SgErrorKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Io(e) => write!(f, "cannot read: {e}"),
-            Self::Syntax(e) => write!(f, "syntax error: {e}"),
+            Self::File(e) => write!(f, "{e}"),
+            Self::TooLarge { what, limit } => {
+                write!(f, "the {what} is above the loader's limit of {limit}")
+            }
+            Self::Syntax(e) => write!(f, "syntax error: {}", Clipped(e, 400)),
             Self::MissingFile { path } => write!(f, "file not found: {}", path.display()),
-            Self::UnsupportedFormat { format } => write!(f, "unsupported format: {format}"),
-            Self::Unsupported { feature } => write!(f, "unsupported: {feature}"),
+            Self::UnsupportedFormat { format } => {
+                write!(f, "unsupported format: {}", Clipped(format, 400))
+            }
+            Self::Unsupported { feature } => write!(f, "unsupported: {}", Clipped(feature, 400)),
             Self::DegenerateMesh { reason } => write!(f, "degenerate mesh: {reason}"),
             Self::NonManifoldMesh { edges, example } => write!(
                 f,
@@ -90,10 +108,21 @@ impl fmt::Display for SgErrorKind {
                 what,
                 value,
                 reason,
-            } => write!(f, "invalid {what} \"{value}\": {reason}"),
-            Self::Missing { what } => write!(f, "missing {what}"),
-            Self::UnknownName { what, name } => write!(f, "no {what} named \"{name}\""),
-            Self::DuplicateName { name } => write!(f, "the name \"{name}\" is used twice"),
+            } => write!(
+                f,
+                "invalid {} \"{}\": {reason}",
+                Clipped(what, Clipped::NAME),
+                Clipped(value, Clipped::NAME)
+            ),
+            Self::Missing { what } => write!(f, "missing {}", Clipped(what, 400)),
+            Self::UnknownName { what, name } => {
+                write!(f, "no {what} named \"{}\"", Clipped(name, Clipped::NAME))
+            }
+            Self::DuplicateName { name } => write!(
+                f,
+                "the name \"{}\" is used twice",
+                Clipped(name, Clipped::NAME)
+            ),
             Self::Model(e) => write!(f, "kinematic model: {e}"),
             Self::Nested(e) => write!(f, "{e}"),
         }
@@ -229,13 +258,26 @@ impl fmt::Display for SgError {
             write!(f, "{l}:{c}: ")?;
         }
         if let Some(e) = &self.element {
-            write!(f, "{e}: ")?;
+            write!(f, "{}: ", Clipped(e, 1000))?;
         }
         write!(f, "{}", self.kind)
     }
 }
 
 impl std::error::Error for SgError {}
+
+impl From<ReadError> for SgError {
+    /// A missing file is [`SgErrorKind::MissingFile`], anything else [`SgErrorKind::File`].
+    fn from(e: ReadError) -> Self {
+        let kind = match e.kind {
+            ReadErrorKind::NotFound => SgErrorKind::MissingFile {
+                path: e.path.clone(),
+            },
+            k => SgErrorKind::File(k),
+        };
+        Self::new(kind).in_file(e.path)
+    }
+}
 
 /// Checks that every value is finite; `what` names them in the error.
 pub(crate) fn check_finite(what: &str, values: &[f64]) -> Result<(), SgError> {

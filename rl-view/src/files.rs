@@ -11,6 +11,9 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+use rl_core::loader::{InputLimits, check_xml, read_bytes, read_text};
+use rl_sg::load::SceneLimits;
+
 use crate::error::ViewError;
 
 /// What an entry serves.
@@ -133,8 +136,13 @@ impl FileTable {
         path: &Path,
         package_dirs: &[PathBuf],
     ) -> Result<ServedUrdf, ViewError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ViewError::Io {
+        let limits = InputLimits::DEFAULT;
+        let text = read_text(path, limits.max_bytes).map_err(|e| ViewError::Io {
             path: path.to_path_buf(),
+            reason: e.kind.to_string(),
+        })?;
+        check_xml(&text, &limits).map_err(|e| ViewError::Load {
+            what: path.display().to_string(),
             reason: e.to_string(),
         })?;
         let dir = match path.parent() {
@@ -221,12 +229,13 @@ impl FileTable {
     }
 
     /// The content of entry `key` (the URL without `/files/`) and its content type; `None` if
-    /// the table has no such entry or its file cannot be read any more.
+    /// the table has no such entry or its file cannot be read any more (or is no longer a
+    /// regular file within rl-sg's file size limit).
     pub fn read(&self, key: &str) -> Option<(Vec<u8>, &'static str)> {
         let e = self.entries.get(key)?;
         let bytes = match &e.content {
             Content::Bytes(b) => b.clone(),
-            Content::File(p) => std::fs::read(p).ok()?,
+            Content::File(p) => read_bytes(p, SceneLimits::DEFAULT.max_file_bytes).ok()?,
         };
         Some((bytes, e.content_type))
     }

@@ -23,11 +23,13 @@
 //! println!("open {}", viewer.url());
 //! ```
 
+pub mod admission;
 pub mod coach;
 pub mod error;
 pub mod files;
 pub mod http;
 pub mod load;
+pub mod origin;
 pub mod path;
 pub mod publish;
 pub mod scene_json;
@@ -35,7 +37,7 @@ pub mod state;
 pub mod ws;
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 
@@ -44,7 +46,9 @@ pub use load::{LoadOptions, ModelSource, World};
 pub use publish::{PublishError, Publisher};
 pub use state::{Engine, IkReport, Source};
 
+use admission::Admission;
 use files::FileTable;
+use origin::HostPolicy;
 use publish::LiveReader;
 use ws::{Hub, lock};
 
@@ -81,6 +85,12 @@ pub(crate) struct Shared {
     pub(crate) files: FileTable,
     pub(crate) hub: Hub,
     pub(crate) stop: AtomicBool,
+    /// Who gets a connection.
+    pub(crate) admission: Admission,
+    /// Which `Host` and `Origin` are answered.
+    pub(crate) policy: Mutex<HostPolicy>,
+    /// How long a page may stay silent, in milliseconds ([`ws::IDLE_LIMIT`] by default).
+    pub(crate) page_idle_ms: AtomicU64,
     live: Mutex<Vec<LiveReader>>,
 }
 
@@ -198,6 +208,9 @@ impl Viewer {
             engine: Mutex::new(Engine::new(world)),
             hub: Hub::default(),
             stop: AtomicBool::new(false),
+            admission: Admission::default(),
+            policy: Mutex::new(HostPolicy::new(http_addr)),
+            page_idle_ms: AtomicU64::new(ws::IDLE_LIMIT.as_millis() as u64),
             live: Mutex::new(Vec::new()),
         });
         let mut threads = Vec::new();
@@ -243,6 +256,33 @@ impl Viewer {
     /// Pages connected now.
     pub fn pages(&self) -> usize {
         self.shared.hub.clients()
+    }
+
+    /// Answers requests that name the server `name` too (a host name of the machine, e.g.
+    /// `robot.local`, when the viewer listens beyond loopback): by default only `localhost` and
+    /// IP addresses are, so that a page from elsewhere cannot reach it through DNS rebinding
+    /// ([`origin`]).
+    pub fn allow_host(&self, name: &str) {
+        lock(&self.shared.policy).allow(name);
+    }
+
+    /// Closes pages that send nothing for `limit` (default [`ws::IDLE_LIMIT`]; the page pings
+    /// every 5 s and answers the server's pings).
+    pub fn set_page_idle_limit(&self, limit: std::time::Duration) {
+        let ms = u64::try_from(limit.as_millis()).unwrap_or(u64::MAX).max(1);
+        self.shared.page_idle_ms.store(ms, Ordering::Relaxed);
+    }
+
+    /// Connections now: request heads arriving, requests being answered, pages
+    /// ([`admission`]).
+    pub fn connections(&self) -> (usize, usize, usize) {
+        self.shared.admission.counts()
+    }
+
+    /// Connections turned away so far: slow ones closed to make room for newer ones, and
+    /// requests or pages refused with 503 because their pool was full.
+    pub fn turned_away(&self) -> (u64, u64) {
+        self.shared.admission.turned_away()
     }
 
     /// The current state message (as a page would get it).

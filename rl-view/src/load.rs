@@ -149,8 +149,10 @@ fn geometry_options(kind: GeometryKind, package_dirs: &[PathBuf]) -> UrdfGeometr
 
 /// Whether `path` is an RL scene (an XML file whose root element is `<rlsg>`).
 pub fn is_rl_scene(path: &std::path::Path) -> bool {
-    std::fs::read_to_string(path).is_ok_and(|t| {
-        roxmltree::Document::parse(&t).is_ok_and(|d| d.root_element().has_tag_name("rlsg"))
+    let limits = rl_core::loader::InputLimits::DEFAULT;
+    rl_core::loader::read_text(path, limits.max_bytes).is_ok_and(|t| {
+        rl_core::loader::check_xml(&t, &limits).is_ok()
+            && roxmltree::Document::parse(&t).is_ok_and(|d| d.root_element().has_tag_name("rlsg"))
     })
 }
 

@@ -22,9 +22,10 @@ pub struct PathData {
 impl PathData {
     /// Reads the CSV at `path` for a model with `joints`.
     pub fn load(path: &Path, joints: &[JointInfo]) -> Result<PathData, ViewError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ViewError::Io {
+        let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+        let text = rl_core::loader::read_text(path, max).map_err(|e| ViewError::Io {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason: e.kind.to_string(),
         })?;
         Self::parse(&text, joints).map_err(|(line, reason)| ViewError::Path {
             path: path.to_path_buf(),

@@ -2,12 +2,12 @@
 //! [`BROADCAST_PERIOD`], and one thread per page that sends `hello` on connect, forwards the
 //! newest state (intermediate ones are skipped, not queued: a slow page never holds the others
 //! back) and answers the page's messages (`set_q`, `ik`, `ping`). Malformed messages are
-//! answered with `{"type":"error"}` and counted.
+//! answered with `{"type":"error"}` and counted. A page silent for [`IDLE_LIMIT`] is closed.
 
 use std::net::TcpStream;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 use tungstenite::protocol::{Role, WebSocketConfig};
@@ -24,6 +24,14 @@ const POLL: Duration = Duration::from_millis(5);
 
 /// Largest message a page may send.
 const MAX_MESSAGE: usize = 1 << 20;
+
+/// A page that sends nothing (no message, no pong) for this long is closed: the page pings every
+/// 5 s, and the server sends a WebSocket ping every [`PING_PERIOD`], which browsers answer by
+/// themselves. An idle client no longer holds a page slot forever ([`crate::admission`]).
+pub const IDLE_LIMIT: Duration = Duration::from_secs(30);
+
+/// How often the server pings a page that has been quiet.
+pub const PING_PERIOD: Duration = Duration::from_secs(10);
 
 /// Locks, ignoring poisoning (the data stays consistent: every update is one assignment).
 pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -172,8 +180,14 @@ pub(crate) fn serve(stream: TcpStream, shared: &Shared) {
         json!({"type": "hello", "scene": e.scene().clone(), "state": e.snapshot_json()})
     };
     let mut ok = ws.send(Message::text(hello.to_string())).is_ok();
+    let mut heard = Instant::now();
+    let mut pinged = Instant::now();
     while ok && !shared.stop.load(Ordering::Relaxed) {
-        match ws.read() {
+        let read = ws.read();
+        if read.is_ok() {
+            heard = Instant::now();
+        }
+        match read {
             Ok(Message::Text(t)) => {
                 if let Some(r) = handle(shared, t.as_str()) {
                     ok = ws.send(Message::text(r.to_string())).is_ok();
@@ -195,6 +209,16 @@ pub(crate) fn serve(stream: TcpStream, shared: &Shared) {
         let next = lock(&slot.latest).take();
         if let Some(s) = next {
             ok = ok && ws.send(Message::text(s.to_string())).is_ok();
+        }
+        let idle = Duration::from_millis(shared.page_idle_ms.load(Ordering::Relaxed));
+        let ping = PING_PERIOD.min(idle / 3);
+        let quiet = heard.elapsed();
+        if quiet > idle {
+            break;
+        }
+        if quiet > ping && pinged.elapsed() > ping {
+            pinged = Instant::now();
+            ok = ok && ws.send(Message::Ping(Vec::new().into())).is_ok();
         }
     }
     slot.closed.store(true, Ordering::Relaxed);

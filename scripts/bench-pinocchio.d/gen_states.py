@@ -59,6 +59,7 @@ def main():
     ap.add_argument("--seed", type=int, default=20261122)
     ap.add_argument("--floating-base", action="store_true")
     ap.add_argument("--fix", default="")
+    ap.add_argument("--frame", default="", help="the Jacobian's frame (recorded for flops.py)")
     a = ap.parse_args()
 
     fix = [j for j in a.fix.split(",") if j]
@@ -95,6 +96,24 @@ def main():
         lines.append("state " + " ".join(repr(float(x)) for x in np.concatenate([q, v, acc])))
     with open(a.out_states, "w") as f:
         f.write("\n".join(lines) + "\n")
+    # The tree for flops.py: per joint (Pinocchio order) its parent (-1: the world), kind and nv.
+    import json
+    tree = []
+    for j in range(1, model.njoints):
+        t = short_type(model.joints[j])
+        kind = {"FreeFlyer": "free", "RevoluteUnaligned": "revolute_unaligned",
+                "PrismaticUnaligned": "prismatic", "PX": "prismatic", "PY": "prismatic",
+                "PZ": "prismatic"}.get(t, "revolute" if t in ONE_DOF else t)
+        tree.append({"parent": model.parents[j] - 1, "kind": kind, "nv": model.joints[j].nv,
+                     "placed": not model.jointPlacements[j].isIdentity()})
+    tool_joint = None
+    if a.frame:
+        fid = model.getFrameId(a.frame)
+        if fid >= model.nframes:
+            sys.exit(f"gen_states: no frame named {a.frame}")
+        tool_joint = model.frames[fid].parentJoint - 1
+    with open(a.out_states[:-len(".states")] + ".tree.json", "w") as f:
+        json.dump({"joints": tree, "tool_joint": tool_joint}, f)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
-// Pinocchio's side of scripts/bench-pinocchio: times fk, jacobian, rnea, nle, gravity, crba and
-// aba on the states of a states file (written by gen_states.py) exactly as `rl model bench`
+// Pinocchio's side of scripts/bench-pinocchio: times fk, jacobian, rnea, nle, gravity, crba,
+// aba and the derivatives of RNEA and ABA (computeRNEADerivatives: dtau/dq, dtau/dv, M;
+// computeABADerivatives: dqdd/dq, dqdd/dv, Minv) on the states of a states file (written by gen_states.py) exactly as `rl model bench`
 // times rl-core: per algorithm, enough repetitions over all states for ~2 ms per round, the
 // median of `rounds` rounds, in ns per call. Prints one JSON line with the same keys.
 //
@@ -8,11 +9,13 @@
 // Compiled header-only (no PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION), so the algorithms are
 // instantiated here with this program's flags (-O3 -DNDEBUG, the script's -march) rather than
 // taken precompiled from libpinocchio_default; libpinocchio_parsers only loads the URDF.
+#include <pinocchio/algorithm/aba-derivatives.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/kinematics.hpp>
+#include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/parsers/urdf.hpp>
@@ -105,6 +108,11 @@ double time_per_call(std::size_t states, int rounds, F &&f) {
 }  // namespace
 
 int main(int argc, char **argv) {
+#ifndef NDEBUG
+  // A benchmark of a debug build measures the assertions, not Pinocchio.
+  std::fprintf(stderr, "pinocchio_bench: built without -DNDEBUG (a debug build): refusing to time\n");
+  return 1;
+#endif
   if (argc < 4) {
     std::fprintf(stderr,
                  "usage: %s URDF STATES FRAME [--floating-base] [--rounds N]\n", argv[0]);
@@ -154,7 +162,7 @@ int main(int argc, char **argv) {
 
     Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.nv);
     J.setZero();
-    double ns[7];
+    double ns[9];
     ns[0] = time_per_call(n, rounds, [&](std::size_t s) {
       pin::forwardKinematics(model, data, st.q[s]);
       keep(data.oMi.back());
@@ -178,9 +186,18 @@ int main(int argc, char **argv) {
     ns[6] = time_per_call(n, rounds, [&](std::size_t s) {
       keep(pin::aba(model, data, st.q[s], st.v[s], tau[s])[0]);
     });
-    const char *keys[7] = {"fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba"};
+    ns[7] = time_per_call(n, rounds, [&](std::size_t s) {
+      pin::computeRNEADerivatives(model, data, st.q[s], st.v[s], st.a[s]);
+      keep(data.dtau_dq(0, 0));
+    });
+    ns[8] = time_per_call(n, rounds, [&](std::size_t s) {
+      pin::computeABADerivatives(model, data, st.q[s], st.v[s], tau[s]);
+      keep(data.ddq_dq(0, 0));
+    });
+    const char *keys[9] = {"fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba", "drnea",
+                           "daba"};
     std::printf("{");
-    for (int k = 0; k < 7; ++k) std::printf("\"%s_ns\": %.1f, ", keys[k], ns[k]);
+    for (int k = 0; k < 9; ++k) std::printf("\"%s_ns\": %.1f, ", keys[k], ns[k]);
     std::printf("\"dof\": %d, \"tool\": \"%s\", \"rnea_check\": %.17g}\n", model.nv,
                 frame.c_str(), check);
   } catch (const std::exception &e) {

@@ -110,25 +110,9 @@ fn read_and_load<J: WithModel>(
     options: &LoadOptions,
     job: J,
 ) -> Result<Result<J::Output, CliError>, CliError> {
-    let in_file = |kind| LoadError {
-        path: Some(path.to_path_buf()),
-        element: None,
-        kind,
-    };
-    let bytes =
-        std::fs::read(path).map_err(|e| load_error(in_file(LoadErrorKind::Io(e.to_string()))))?;
-    if bytes.len() as u64 > options.input.max_bytes {
-        return Err(load_error(in_file(LoadErrorKind::TooLarge {
-            what: "file size",
-            limit: options.input.max_bytes,
-        })));
-    }
-    let text = String::from_utf8(bytes).map_err(|e| {
-        load_error(in_file(LoadErrorKind::Io(format!(
-            "not UTF-8 text (byte {})",
-            e.utf8_error().valid_up_to()
-        ))))
-    })?;
+    // At most the size limit is read; a FIFO or a device is refused unread.
+    let text = rl_core::loader::read_text(path, options.input.max_bytes)
+        .map_err(|e| load_error(LoadError::from(e)))?;
     load_in(path, &text, options, job)
 }
 

@@ -73,9 +73,69 @@ pub struct EthercatArgs {
     /// SYNC0 is configured.
     #[arg(long)]
     pub free_run: bool,
+    #[command(flatten)]
+    pub units: DriveUnitsArgs,
     /// Stop after this many seconds instead of waiting for Ctrl-C.
     #[arg(long)]
     pub seconds: Option<u64>,
+}
+
+/// The units of the fake drives (`rl fake-robot canopen` and `ethercat`): what they report in
+/// 0x608F, 0x6091 and 0x6092, and how their counts relate to the joint.
+#[derive(Args, Debug)]
+pub struct DriveUnitsArgs {
+    /// Encoder counts per motor revolution, reported in 0x608F. The drives' position unit is
+    /// the encoder count: 0x6092 (feed constant) = counts per revolution × gear.
+    #[arg(long, value_name = "N", default_value_t = 1 << 20)]
+    pub counts_per_rev: u32,
+    /// Gear ratio, motor revolutions per joint revolution, reported in 0x6091 (up to six
+    /// decimals: 50.5 is 0x6091 = 505000/10000).
+    #[arg(long, value_name = "N", default_value_t = 100.0)]
+    pub gear: f64,
+    /// Drives without the factor-group objects 0x608F, 0x6091 and 0x6092: reading them is
+    /// aborted with 0x06020000 "object does not exist", so a master must be given the units.
+    #[arg(long)]
+    pub no_unit_objects: bool,
+}
+
+impl DriveUnitsArgs {
+    /// The drives' units, refused (exit 2) when the objects cannot hold them.
+    fn units(&self) -> Result<rl_drivers::cia402::AxisUnits, CliError> {
+        use rl_drivers::cia402::{AxisUnits, units::ratio};
+        let u = AxisUnits {
+            counts_per_rev: f64::from(self.counts_per_rev),
+            gear_ratio: self.gear,
+            ..AxisUnits::default()
+        };
+        if self.counts_per_rev == 0 || ratio(self.gear).is_none() {
+            return Err(CliError::usage(format!(
+                "--counts-per-rev {} --gear {}: give a positive count and a positive gear ratio \
+                 with at most six decimals",
+                self.counts_per_rev, self.gear
+            )));
+        }
+        if ratio(u.units_per_rev()).is_none() {
+            return Err(CliError::usage(format!(
+                "--counts-per-rev {} --gear {}: {} counts per joint revolution do not fit the \
+                 feed constant 0x6092 (32 bits)",
+                self.counts_per_rev,
+                self.gear,
+                u.units_per_rev()
+            )));
+        }
+        Ok(u)
+    }
+
+    fn describe(&self) -> String {
+        if self.no_unit_objects {
+            format!(
+                "{} counts/rev, gear {}, without 0x608F/0x6091/0x6092",
+                self.counts_per_rev, self.gear
+            )
+        } else {
+            format!("{} counts/rev, gear {}", self.counts_per_rev, self.gear)
+        }
+    }
 }
 
 /// Arguments of `rl fake-robot h7`.
@@ -87,12 +147,14 @@ pub struct H7Args {
     /// TCP address of the R3 command responder.
     #[arg(long, default_value = "127.0.0.1:10001")]
     pub r3_bind: SocketAddr,
-    /// Number of simulated joints (1 to 8; taken from --model when one is given).
+    /// Number of simulated joints (1 to 8; taken from --model when one is given). Six without
+    /// --model simulate the embedded RV-6SL that `rl run` drives; another number, plain ±π
+    /// joints.
     #[arg(long, default_value_t = 6)]
     pub dof: usize,
     /// A robot model (URDF or RL XML) whose joint count, position and speed limits the
     /// simulated arm takes, and whose forward kinematics (to its last frame) the pose replies
-    /// come from.
+    /// come from [default: the embedded Mitsubishi RV-6SL, as `rl run`].
     #[arg(long)]
     pub model: Option<std::path::PathBuf>,
     /// Filter time constant in ms until a client's program sets its own (MXT's third argument).
@@ -202,6 +264,29 @@ impl Arm {
     }
 }
 
+impl Arm {
+    /// The embedded RV-6SL that `rl run` drives by default.
+    fn embedded() -> Result<Self, CliError> {
+        let loaded = rl::controller::rv6sl()
+            .map_err(|e| CliError::failed(format!("the embedded RV-6SL: {e}")))?;
+        ArmJob.run(Box::new(loaded))
+    }
+
+    /// `--model`'s arm, or the embedded RV-6SL when there is none and `count` (the joints,
+    /// nodes or devices asked for) is its six; `None`: plain joints.
+    fn for_fake(
+        path: Option<&std::path::Path>,
+        count: usize,
+        what: &str,
+    ) -> Result<Option<Self>, CliError> {
+        match path {
+            Some(p) => Self::load(p, what).map(Some),
+            None if count == 6 => Self::embedded().map(Some),
+            None => Ok(None),
+        }
+    }
+}
+
 /// The [`WithModel`] job behind [`Arm::load`].
 struct ArmJob;
 
@@ -251,9 +336,10 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     let mut limits = None;
     let mut kinematics = None;
     let mut dof = args.dof;
-    if let Some(path) = &args.model {
-        let arm = Arm::load(path, "the fake H7 simulates")?;
+    let mut home = None;
+    if let Some(arm) = Arm::for_fake(args.model.as_deref(), args.dof, "the fake H7 simulates")? {
         dof = arm.limits.len();
+        home = Some(arm.home.clone());
         let limit = |f: fn(&rl_core::model::JointLimits) -> f64| -> Vec<f64> {
             arm.limits.iter().map(f).collect()
         };
@@ -279,6 +365,12 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     // A real arm lags its command by its servo loop.
     config.servo_time_constant_s = rl_drivers::fake::h7_controller::SERVO_TIME_CONSTANT_S;
     config.kinematics = kinematics;
+    if let Some(home) = &home {
+        for (k, q) in home.iter().enumerate().take(dof) {
+            config.initial_rad[k] = q.clamp(config.lower_rad[k], config.upper_rad[k]);
+        }
+    }
+    fake_threads_realtime("fake-h7");
     let mut fake = FakeH7::spawn(config).map_err(|e| {
         CliError::failed(format!("fake H7 on {} / {}: {e}", args.bind, args.r3_bind))
     })?;
@@ -389,9 +481,12 @@ pub struct CanopenArgs {
     #[arg(long)]
     pub nodes: Option<String>,
     /// A robot model (URDF or RL XML) whose joint position and speed limits the simulated
-    /// motors take (one node per joint).
+    /// motors take (one node per joint), standing at its home position [default: six nodes
+    /// simulate the embedded RV-6SL that `rl run` drives; another number, plain ±π axes].
     #[arg(long)]
     pub model: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub units: DriveUnitsArgs,
     /// An EDS to give every node (default: the one shipped for this fake).
     #[arg(long)]
     pub eds: Option<std::path::PathBuf>,
@@ -422,13 +517,16 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
 
     let address =
         CanAddress::parse(&args.bus).map_err(|e| CliError::usage(format!("--bus: {e}")))?;
-    let mut limits = None;
-    if let Some(path) = &args.model {
-        limits = Some(Arm::load(path, "the fake drives simulate")?.limits);
-    }
-    let nodes = match (&args.nodes, &limits) {
-        (Some(text), _) => parse_nodes(text)?,
-        (None, Some(l)) => (1..=l.len() as u8).collect(),
+    let units = args.units.units()?;
+    let mut nodes = match &args.nodes {
+        Some(text) => Some(parse_nodes(text)?),
+        None => None,
+    };
+    let count = nodes.as_ref().map_or(6, Vec::len);
+    let arm = Arm::for_fake(args.model.as_deref(), count, "the fake drives simulate")?;
+    let nodes = match (nodes.take(), &arm) {
+        (Some(n), _) => n,
+        (None, Some(a)) => (1..=a.limits.len() as u8).collect(),
         (None, None) => (1..=6).collect(),
     };
     if nodes.is_empty() || nodes.len() > rl_drivers::canopen::MAX_AXES {
@@ -439,15 +537,19 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
         )));
     }
     let mut config = FakeCia402Config::new(&nodes).map_err(|e| CliError::failed(e.to_string()))?;
-    if let Some(l) = &limits {
-        if l.len() != nodes.len() {
+    for a in &mut config.axes {
+        a.units = units;
+        a.unit_objects = !args.units.no_unit_objects;
+    }
+    if let Some(arm) = &arm {
+        if arm.limits.len() != nodes.len() {
             return Err(CliError::usage(format!(
                 "--model has {} joints but --nodes names {} nodes",
-                l.len(),
+                arm.limits.len(),
                 nodes.len()
             )));
         }
-        for (a, j) in config.axes.iter_mut().zip(l) {
+        for ((a, j), home) in config.axes.iter_mut().zip(&arm.limits).zip(&arm.home) {
             if !j.wraparound {
                 a.lower = j.lower;
                 a.upper = j.upper;
@@ -456,7 +558,7 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
             if j.velocity.is_finite() && j.velocity > 0.0 {
                 a.max_velocity = j.velocity;
             }
-            a.initial = 0.0_f64.clamp(a.lower, a.upper);
+            a.initial = home.clamp(a.lower, a.upper);
         }
     }
     if let Some(path) = &args.eds {
@@ -466,6 +568,7 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
     config.tpdo_delay = args.tpdo_delay;
     config.pcap = args.pcap.clone();
     config.candump = args.candump.clone();
+    fake_threads_realtime("fake-cia402");
     let mut fake = FakeCia402::serve(config, &address)
         .map_err(|e| CliError::failed(format!("fake CiA 402 drives on {}: {e}", args.bus)))?;
     let shown = match (&address, fake.local_addr()) {
@@ -474,7 +577,14 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
         _ => address.to_string(),
     };
     let printed = outln!(
-        "fake CiA 402 drives, nodes {nodes:?}, on {shown}; TPDOs {} µs after SYNC; Ctrl-C to stop",
+        "fake CiA 402 drives, nodes {nodes:?}, on {shown}; {}; {}; TPDOs {} µs after SYNC; Ctrl-C \
+         to stop",
+        match (&args.model, &arm) {
+            (Some(p), _) => format!("limits of {}", p.display()),
+            (None, Some(_)) => "limits of the embedded RV-6SL".to_owned(),
+            (None, None) => "±π axes".to_owned(),
+        },
+        args.units.describe(),
         args.tpdo_delay.as_micros()
     );
     let mut last = 0;
@@ -514,21 +624,23 @@ fn fake_segment_thread() {
         .apply_to_current();
 }
 
+/// Real drives and controllers answer on their own CPUs, unhindered by the machine's other
+/// programs: where the process may (root), the fake's threads run SCHED_FIFO at 79, one below
+/// `rl run`'s loop (they inherit the policy of the thread that starts them); else as they are.
+fn fake_threads_realtime(name: &str) {
+    let _ = rl_rt::RtThreadBuilder::new(name)
+        .policy(rl_rt::Policy::Fifo)
+        .priority(79)
+        .best_effort(true)
+        .apply_to_current();
+}
+
 fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::ecat_segment::description::Profile;
     use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
-    let mut devices = args.devices;
-    let mut limits = None;
-    if let Some(path) = &args.model {
-        let arm = Arm::load(path, "the fake drives move")?;
-        devices = arm.limits.len();
-        limits = Some(
-            arm.limits
-                .iter()
-                .map(|l| (l.lower, l.upper))
-                .collect::<Vec<_>>(),
-        );
-    }
+    let units = args.units.units()?;
+    let arm = Arm::for_fake(args.model.as_deref(), args.devices, "the fake drives move")?;
+    let devices = arm.as_ref().map_or(args.devices, |a| a.limits.len());
     if devices == 0 || devices > 64 {
         return Err(CliError::usage(format!(
             "--devices {devices}: must be 1 to 64"
@@ -544,14 +656,22 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
         } = &mut d.profile
         {
             *requires_dc = !args.free_run;
-            if let Some(lim) = &limits {
-                let per_rad = motor.counts_per_rev / std::f64::consts::TAU;
-                let (lo, hi) = lim[k];
-                if lo.is_finite() && hi.is_finite() && lo < hi {
-                    *l = ((lo * per_rad) as i32, (hi * per_rad) as i32);
-                    // Start inside the limits.
-                    *initial_position = (*initial_position).clamp(l.0, l.1);
+            motor.units = units;
+            motor.unit_objects = !args.units.no_unit_objects;
+            if let Some(arm) = &arm {
+                let per_rad = motor.per_rad();
+                let j = &arm.limits[k];
+                if !j.wraparound && j.lower.is_finite() && j.upper.is_finite() && j.lower < j.upper
+                {
+                    *l = ((j.lower * per_rad) as i32, (j.upper * per_rad) as i32);
                 }
+                // Standing at the model's home, inside the limits.
+                let home = (arm.home[k] * per_rad).round() as i32;
+                *initial_position = if l.0 < l.1 {
+                    home.clamp(l.0, l.1)
+                } else {
+                    home
+                };
             }
         }
     }
@@ -567,8 +687,9 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
         CliError::failed(msg)
     })?;
     let printed = outln!(
-        "fake EtherCAT segment: {devices} CiA 402 drives on {}{}; Ctrl-C to stop",
+        "fake EtherCAT segment: {devices} CiA 402 drives on {}, {}{}; Ctrl-C to stop",
         args.interface,
+        args.units.describe(),
         if args.free_run {
             " (free run)"
         } else {

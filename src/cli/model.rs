@@ -12,6 +12,7 @@ use std::time::Instant;
 use clap::{Args, Subcommand, ValueEnum};
 use rl_core::algo;
 use rl_core::loader::{self, InertiaCheck, JointOrder, LoadOptions, LoadedModel, UrdfOptions};
+use rl_core::model::DerivativeData;
 use rl_core::model::ROOT;
 use rl_core::{Data, Model};
 use serde_json::json;
@@ -158,6 +159,11 @@ pub struct EvalArgs {
     /// Normalise the quaternions in --q instead of refusing ones that are not of unit norm.
     #[arg(long)]
     normalize: bool,
+    /// Add the analytical derivatives (row-major nested lists, dof × dof, Pinocchio's
+    /// tangent-space convention): drnea_dq, drnea_dv of RNEA at (q, qd, qdd) and daba_dq,
+    /// daba_dv of ABA at (q, qd, tau).
+    #[arg(long)]
+    derivatives: bool,
 }
 
 /// Arguments of `rl model bench`.
@@ -165,7 +171,8 @@ pub struct EvalArgs {
 pub struct BenchArgs {
     #[command(flatten)]
     model: ModelFile,
-    /// Print JSON (keys fk_ns, jacobian_ns, rnea_ns, nle_ns, gravity_ns, crba_ns, aba_ns).
+    /// Print JSON (keys fk_ns, jacobian_ns, rnea_ns, nle_ns, gravity_ns, crba_ns, aba_ns,
+    /// drnea_ns, daba_ns).
     #[arg(long)]
     json: bool,
     /// Number of random states (1 to 100 000).
@@ -486,6 +493,26 @@ fn eval<const N: usize>(a: &EvalArgs, mut loaded: Box<LoadedModel<N>>) -> CliRes
         "dof": n, "nq": m.nq(), "q": q, "tau": tau, "gravity": gravity, "coriolis": coriolis,
         "qdd": qdd_out, "mass_matrix": mass, "tools": tools,
     });
+    if a.derivatives {
+        let rows = |m: rl_core::model::MatrixView<'_, N>| -> Vec<Vec<f64>> {
+            m.rows().map(<[f64]>::to_vec).collect()
+        };
+        let mut deriv = Box::new(DerivativeData::<N>::new());
+        let r = algo::rnea_derivatives(m, &mut d, &mut deriv, &q, &qd, &qdd).map_err(fail)?;
+        out["drnea_dq"] = json!(rows(r.dtau_dq));
+        out["drnea_dv"] = json!(rows(r.dtau_dv));
+        // Like "qdd": null when forward dynamics are undefined (the error is in "qdd_error").
+        match algo::aba_derivatives(m, &mut d, &mut deriv, &q, &qd, &tau_in) {
+            Ok(r) => {
+                out["daba_dq"] = json!(rows(r.ddq_dq));
+                out["daba_dv"] = json!(rows(r.ddq_dv));
+            }
+            Err(_) => {
+                out["daba_dq"] = json!(null);
+                out["daba_dv"] = json!(null);
+            }
+        }
+    }
     if let Some(e) = forward_error {
         out["qdd_error"] = json!(e);
     }
@@ -563,7 +590,9 @@ fn time_per_call(states: usize, rounds: usize, mut f: impl FnMut(usize)) -> f64 
 }
 
 /// The algorithms `rl model bench` times, with their JSON keys.
-pub const BENCH_KEYS: [&str; 7] = ["fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba"];
+pub const BENCH_KEYS: [&str; 9] = [
+    "fk", "jacobian", "rnea", "nle", "gravity", "crba", "aba", "drnea", "daba",
+];
 
 /// Benchmark states in the model's own layout: `n` states of `q` (nq), `q̇` and `q̈` (dof).
 #[derive(Debug, Clone, PartialEq)]
@@ -726,14 +755,16 @@ pub fn rnea_check<const N: usize>(model: &Model<N>, states: &BenchStates) -> Res
 }
 
 /// Median ns per call for each of [`BENCH_KEYS`] on `model` over `states`, with the
-/// Jacobian of tool index `tool` (`None`: a model without tools, no Jacobian timed). ABA is
-/// not timed (`None`) when the mass matrix is singular.
+/// Jacobian of tool index `tool` (`None`: a model without tools, no Jacobian timed). ABA and
+/// its derivatives are not timed (`None`) when the mass matrix is singular. `drnea` is
+/// [`algo::rnea_derivatives`] (∂τ/∂q, ∂τ/∂q̇, M), `daba` [`algo::aba_derivatives`] (∂q̈/∂q,
+/// ∂q̈/∂q̇, M⁻¹) at the same τ as ABA.
 pub fn bench_states<const N: usize>(
     model: &Model<N>,
     states: &BenchStates,
     rounds: usize,
     tool: Option<usize>,
-) -> Result<[Option<f64>; 7], CliError> {
+) -> Result<[Option<f64>; 9], CliError> {
     let nstates = states.n;
     let rounds = rounds.max(1);
     let (nq, nv) = (model.nq(), model.dof());
@@ -764,7 +795,8 @@ pub fn bench_states<const N: usize>(
     }
     let tau = |s: usize| &taus[s * nv..(s + 1) * nv];
     let first = |t: &[f64]| t.first().copied().unwrap_or(0.0);
-    let mut out = [None; 7];
+    let mut deriv = Box::new(DerivativeData::<N>::new());
+    let mut out = [None; 9];
     out[0] = Some(time_per_call(nstates, rounds, |s| {
         let _ = black_box(algo::forward_position(model, &mut d, black_box(q(s))));
     }));
@@ -792,16 +824,52 @@ pub fn bench_states<const N: usize>(
     out[5] = Some(time_per_call(nstates, rounds, |s| {
         let _ = black_box(algo::crba(model, &mut d, black_box(q(s))));
     }));
+    out[7] = Some(time_per_call(nstates, rounds, |s| {
+        let _ = black_box(
+            algo::rnea_derivatives(model, &mut d, &mut deriv, black_box(q(s)), qd(s), qdd(s))
+                .map(|r| r.dtau_dq.dim()),
+        );
+    }));
     match algo::aba(model, &mut d, q(0), qd(0), tau(0)) {
         Ok(_) => {
             out[6] = Some(time_per_call(nstates, rounds, |s| {
                 let _ =
                     black_box(algo::aba(model, &mut d, black_box(q(s)), qd(s), tau(s)).map(first));
-            }))
+            }));
+            out[8] = Some(time_per_call(nstates, rounds, |s| {
+                let _ = black_box(
+                    algo::aba_derivatives(
+                        model,
+                        &mut d,
+                        &mut deriv,
+                        black_box(q(s)),
+                        qd(s),
+                        tau(s),
+                    )
+                    .map(|r| r.ddq_dq.dim()),
+                );
+            }));
         }
-        Err(e) => errln!("rl: warning: ABA not timed: {}", algo_error(model, e)),
+        Err(e) => errln!(
+            "rl: warning: ABA not timed, nor its derivatives: {}",
+            algo_error(model, e)
+        ),
     }
     Ok(out)
+}
+
+/// `rl model bench` refuses to time a debug build: its numbers would describe the debug
+/// assertions and the missing optimisation, not the algorithms (the most common cause of "why is
+/// it so slow" with any dynamics library).
+pub fn refuse_debug_build(debug_build: bool) -> Result<(), CliError> {
+    if debug_build {
+        return Err(CliError::failed(
+            "rl model bench: this rl is a debug build (unoptimised, debug assertions on); its \
+             timings would not describe the algorithms, so none are reported. Build it with \
+             `cargo build --release` (or run `cargo run --release -- model bench …`)",
+        ));
+    }
+    Ok(())
 }
 
 fn bench(a: BenchArgs) -> CliResult {
@@ -817,12 +885,13 @@ fn bench(a: BenchArgs) -> CliResult {
             a.rounds
         )));
     }
+    refuse_debug_build(cfg!(debug_assertions))?;
     // A states file is read before anything is timed, so a bad one fails at once.
     let states_text = match &a.states_file {
         None => None,
         Some(path) => Some(
-            std::fs::read_to_string(path)
-                .map_err(|e| CliError::usage(format!("--states-file {}: {e}", path.display())))?,
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| CliError::usage(format!("--states-file {e}")))?,
         ),
     };
     let extra = a.tool.iter().cloned().collect();
@@ -977,5 +1046,12 @@ mod tests {
             "{ns:?}"
         );
         assert!(bench_states(&m, &s, 1, Some(m.tools().len())).is_err());
+    }
+
+    #[test]
+    fn a_debug_build_refuses_to_bench() {
+        let e = refuse_debug_build(true).unwrap_err().to_string();
+        assert!(e.contains("debug build") && e.contains("--release"), "{e}");
+        assert!(refuse_debug_build(false).is_ok());
     }
 }

@@ -105,7 +105,8 @@ pub struct CommonArgs {
     /// Sampler: halton (VAMP's), uniform, gaussian, bridge.
     #[arg(long, default_value = "halton")]
     pub sampler: String,
-    /// Optimiser: simple (shortcutting), advanced (RL's), none.
+    /// Optimiser: simple (RL's shortcutting), shortcut (VAMP's greedy shortcutting), advanced
+    /// (RL's), none.
     #[arg(long, default_value = "simple")]
     pub optimizer: String,
     /// Edge check resolution, rad (largest step between checked configurations).
@@ -186,6 +187,10 @@ pub struct BenchArgs {
     /// Write OMPL benchmark logs (one per problem) and RL's benchmark.csv into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write every solved problem's returned (optimised) path of run 0 as CSV into this
+    /// directory (SCENARIO_NNNN.csv, the format of `rl plan --out`), for an independent check.
+    #[arg(long)]
+    pub paths: Option<PathBuf>,
     /// Print one line per run.
     #[arg(long)]
     pub verbose: bool,
@@ -204,9 +209,12 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     let mut planner =
         PlannerKind::parse(&c.planner).map_err(|e| usage(format!("--planner: {e}")))?;
     if let Some(s) = planner.rrt_settings_mut() {
-        // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain.
+        // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain; the
+        // f32 k-d tree for nearest neighbours (where the space has circles or rotations, the
+        // exact structures).
         s.delta = c.range.unwrap_or(1.0);
         s.balance = true;
+        s.nn = rl_plan::nn::NnKind::Fast;
         if !c.no_dynamic_domain {
             s.dynamic_domain = Some(DynamicDomain::VAMP);
         }
@@ -224,7 +232,7 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     };
     let optimizer = OptimizerKind::parse(&c.optimizer).ok_or_else(|| {
         usage(format!(
-            "--optimizer {}: use simple, advanced or none",
+            "--optimizer {}: use simple, shortcut, advanced or none",
             c.optimizer
         ))
     })?;
@@ -276,9 +284,10 @@ pub fn run(args: PlanArgs) -> CliResult {
     let model = args.model.as_ref().ok_or_else(|| {
         usage("give a robot (URDF with --scene and --request) or an rlplan scenario")
     })?;
-    let is_scenario = std::fs::read_to_string(model)
+    let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+    let is_scenario = rl_core::loader::read_text(model, max)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
-        .map_err(|e| usage(format!("{}: {e}", model.display())))?;
+        .map_err(|e| usage(e.to_string()))?;
     let (space, result, checker_name, certified) = if is_scenario {
         let sc = Scenario::load(model).map_err(failed)?;
         let (mut space, mut checker) = sc.build().map_err(failed)?;
@@ -566,6 +575,15 @@ fn run_bench(b: BenchArgs) -> CliResult {
     })
     .map_err(failed)?;
     println!("{}", bench::vamp_table(&runs));
+    if let Some(dir) = &b.paths {
+        std::fs::create_dir_all(dir).map_err(|e| failed(format!("{}: {e}", dir.display())))?;
+        for r in runs.iter().filter(|r| r.run == 0) {
+            if let Some(path) = r.result.as_ref().and_then(|x| x.optimized.as_ref()) {
+                let file = dir.join(format!("{}.csv", r.problem.replace(['/', '.'], "_")));
+                write_path(&file, &robot.space, path)?;
+            }
+        }
+    }
     if let Some(out) = &b.out {
         std::fs::create_dir_all(out).map_err(|e| failed(format!("{}: {e}", out.display())))?;
         let setup = format!(

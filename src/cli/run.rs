@@ -116,6 +116,20 @@ pub struct RunArgs {
     /// only: a real arm needs supervision.
     #[arg(long)]
     pub no_supervision: bool,
+    /// Lost replies in a row that are a short loss: the arm is brought to rest along its path
+    /// and the run fails [default: 3].
+    #[arg(long, value_name = "N")]
+    pub rest_after_lost: Option<u32>,
+    /// Lost replies in a row that mean the link is dead: the run stops at once (the device's
+    /// own bound is set one above) [default: 10].
+    #[arg(long, value_name = "N")]
+    pub stop_after_lost: Option<u32>,
+    /// Units of CiA 402 drives (CANopen, EtherCAT), replacing what they report in 0x608F,
+    /// 0x6091, 0x6092, 0x6076 (read from each drive otherwise; a drive that cannot give them is
+    /// refused before it is enabled): cpr:N,gear:G[,feed:F][,torque:NM][,lead:M], one value
+    /// for every axis or one per axis joined by `/`. The same as the address's `units=`.
+    #[arg(long, value_name = "cpr:N,gear:G,…")]
+    pub units: Option<String>,
     /// Longest trajectory to accept: e.g. 10m, 1h [default: 1h].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION")]
     pub max_plan_duration: Option<Duration>,
@@ -256,7 +270,23 @@ fn model_name<const B: usize>(model: &Model<B>, path: &Path) -> String {
 
 /// Validates flags and files (exit code 2 for anything wrong) before anything starts.
 fn check(args: &RunArgs) -> Result<Setup, CliError> {
-    let device = DeviceSpec::parse(args.device.as_deref().unwrap_or("fake-h7"))?;
+    let mut device = DeviceSpec::parse(args.device.as_deref().unwrap_or("fake-h7"))?;
+    if let Some(text) = &args.units {
+        let spec = device::UnitsSpec::parse(text).map_err(|e| CliError::usage(format!("--{e}")))?;
+        device.set_units(spec)?;
+    }
+    let rest = args
+        .rest_after_lost
+        .unwrap_or(Supervision::default().rest_after_lost);
+    let stop = args
+        .stop_after_lost
+        .unwrap_or(Supervision::default().max_consecutive_lost);
+    if rest == 0 || stop < rest || stop > 10_000 {
+        return Err(CliError::usage(format!(
+            "--rest-after-lost {rest} --stop-after-lost {stop}: give 1 ≤ rest ≤ stop ≤ 10000 \
+             lost replies in a row"
+        )));
+    }
     let mut period = None;
     if let Some(hz) = args.rate {
         if !(hz.is_finite() && (0.1..=20_000.0).contains(&hz)) {
@@ -575,14 +605,25 @@ fn drive<const B: usize, const J: usize>(
             (planned.motion, Some(start))
         }
     };
-    let opened = setup.device.build(&loaded, setup.period, home.as_deref())?;
-    let fake = opened.fake;
-    let period = setup.period.unwrap_or_else(|| opened.robot.update_period());
-    let mut cell = super::cell::RunCell::<J>::open(&args.zenoh, model, period, &stop)?;
     let mut supervision = Supervision::default();
     if args.no_supervision {
         supervision.enabled = false;
     }
+    if let Some(n) = args.rest_after_lost {
+        supervision.rest_after_lost = n;
+    }
+    if let Some(n) = args.stop_after_lost {
+        supervision.max_consecutive_lost = n;
+    }
+    let opened = setup.device.build(
+        &loaded,
+        setup.period,
+        home.as_deref(),
+        supervision.device_failure_limit(),
+    )?;
+    let fake = opened.fake;
+    let period = setup.period.unwrap_or_else(|| opened.robot.update_period());
+    let mut cell = super::cell::RunCell::<J>::open(&args.zenoh, model, period, &stop)?;
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {
             [one] => vec![*one; joints.len()],
@@ -630,7 +671,7 @@ fn drive<const B: usize, const J: usize>(
                     return Ok(ExitCode::from(130));
                 }
                 RunError::Options(why) => CliError::usage(why),
-                e => CliError::failed(e.to_string()),
+                e => CliError::failed(setup.device.explain(&e)),
             });
         }
     };
@@ -762,12 +803,15 @@ fn read_waypoints<const B: usize>(
 ) -> Result<Vec<Vec<f64>>, CliError> {
     let shown = path.display();
     let usage = |m: String| CliError::usage(format!("--waypoints {shown}{m}"));
+    // Read within the loaders' size limit (a FIFO or a device is refused unread).
+    let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+    let bytes = rl_core::loader::read_bytes(path, max)
+        .map_err(|e| usage(format!(": cannot read: {}", e.kind)))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(|e| usage(format!(": cannot read: {e}")))?;
+        .from_reader(bytes.as_slice());
     let headers = reader
         .headers()
         .map_err(|e| usage(format!(":1: bad header row: {e}")))?

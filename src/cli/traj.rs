@@ -211,12 +211,15 @@ fn in_file(e: CliError, path: &Path) -> CliError {
 
 fn read_waypoints(path: &Path) -> Result<Waypoints, CliError> {
     let shown = path.display();
+    // Read within the loaders' size limit (a FIFO or a device is refused unread).
+    let max = rl_core::loader::InputLimits::DEFAULT.max_bytes;
+    let bytes = rl_core::loader::read_bytes(path, max)
+        .map_err(|e| CliError::usage(format!("cannot read {e}")))?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(|e| CliError::usage(format!("cannot read {shown}: {e}")))?;
+        .from_reader(bytes.as_slice());
     let headers = reader
         .headers()
         .map_err(|e| CliError::usage(format!("{shown}:1: bad header row: {e}")))?

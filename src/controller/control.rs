@@ -400,7 +400,9 @@ impl<R: JointRobot, const B: usize, const J: usize> Controller<R, B, J> {
         }
         if fault.stops_at_once() {
             if self.end.is_none() {
-                self.end = Some(RunEnd::Fault(self.fault.unwrap_or(fault)));
+                self.end = Some(RunEnd::Fault(
+                    self.fault.map_or(fault, |f| f.ended_by(fault)),
+                ));
             }
         } else {
             self.clock.request_halt_for(HaltReason::Fault);

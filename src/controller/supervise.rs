@@ -8,12 +8,20 @@
 //! - the tracking error `commanded − measured` against a bound per joint;
 //! - the commanded step against what the speed limit allows in one cycle;
 //! - a limit the device reports (a clamped or refused command, a limit switch);
-//! - the link: a lost connection, lost replies in a row, the loss rate over a window;
+//! - the link: a lost connection, lost replies in a row (a short loss, then a dead link), the
+//!   loss rate over a window;
 //! - the loop: deadlines missed and overruns in a row.
 //!
 //! Any of these is a [`Fault`]. A fault that leaves a working link brings the arm to rest along
 //! its path; one that does not ([`Fault::stops_at_once`]) ends the run at once. Either way the
 //! device is then stopped (end of motion, power off) and the run fails with the reason.
+//!
+//! Lost replies in a row are two faults: [`Supervision::rest_after_lost`] of them (3) are a
+//! short loss ([`Fault::LinkInterrupted`]): the arm is brought to rest along its path, the
+//! commands going on every cycle, so a link that comes back finds the arm slowing down on the
+//! path it was on; [`Supervision::max_consecutive_lost`] of them (10) are a dead link
+//! ([`Fault::ConsecutiveLost`]): the run stops at once. A device that gives up on its own after
+//! lost replies (its own bound) is a dead link too.
 //!
 //! Default bounds, per joint `k` with speed limit `v_k` (the model's, or the assumed speed),
 //! control period `P` and device cycle `D`:
@@ -29,7 +37,7 @@
 
 use core::fmt;
 
-use rl_drivers::{DeviceError, Error as DeviceErrorValue, LinkStatistics};
+use rl_drivers::{DeviceError, Error as DeviceErrorValue, ErrorKind, LinkStatistics};
 
 /// What the supervisor checks and its bounds. [`Supervision::default`] is on, with the bounds
 /// in the module documentation.
@@ -45,7 +53,10 @@ pub struct Supervision {
     pub jump_factor: f64,
     /// Identical replies in a row, while the command moves, that count as a frozen device.
     pub frozen_cycles: u32,
-    /// Lost replies in a row that mean the link is gone (stop at once).
+    /// Lost replies in a row that are a short loss: the arm is brought to rest along its path.
+    pub rest_after_lost: u32,
+    /// Lost replies in a row that mean the link is dead: the run stops at once (at least
+    /// [`rest_after_lost`](Self::rest_after_lost)).
     pub max_consecutive_lost: u32,
     /// Cycles over which the loss rate is measured (at most [`LOSS_WINDOW_MAX`]).
     pub loss_window: u32,
@@ -70,7 +81,8 @@ impl Default for Supervision {
             tracking_cycles: 4.0,
             jump_factor: 2.0,
             frozen_cycles: 10,
-            max_consecutive_lost: 3,
+            rest_after_lost: 3,
+            max_consecutive_lost: 10,
             loss_window: 100,
             max_loss_rate: 0.1,
             max_consecutive_missed_deadlines: 3,
@@ -87,6 +99,12 @@ impl Supervision {
             enabled: false,
             ..Self::default()
         }
+    }
+
+    /// The bound to give the device on its own failed steps in a row: one above the dead-link
+    /// bound, so that the supervisor names the loss first.
+    pub fn device_failure_limit(&self) -> u32 {
+        self.max_consecutive_lost.saturating_add(1)
     }
 }
 
@@ -156,7 +174,14 @@ pub enum Fault {
         /// The error that showed it.
         error: DeviceErrorValue,
     },
-    /// Too many replies lost in a row.
+    /// Replies lost in a row: a short loss; the arm is brought to rest along its path.
+    LinkInterrupted {
+        /// Lost in a row.
+        count: u32,
+        /// The bound ([`Supervision::rest_after_lost`]).
+        bound: u32,
+    },
+    /// So many replies lost in a row that the link is dead ([`Supervision::max_consecutive_lost`]).
     ConsecutiveLost {
         /// Lost in a row.
         count: u32,
@@ -201,6 +226,16 @@ impl Fault {
             self,
             Fault::LinkLost { .. } | Fault::ConsecutiveLost { .. } | Fault::Device { .. }
         )
+    }
+
+    /// The fault that ends a run which `self` began: a short loss that became a dead link (or
+    /// a lost connection) is one incident, ended by the later fault; any other first fault
+    /// stays the run's reason.
+    pub fn ended_by(self, later: Fault) -> Fault {
+        match self {
+            Fault::LinkInterrupted { .. } if later.stops_at_once() => later,
+            first => first,
+        }
     }
 
     /// The joint it concerns, if one.
@@ -269,9 +304,14 @@ impl fmt::Display for Fault {
                 "the device sent the same reply {cycles} times in a row while the command moved"
             ),
             Fault::LinkLost { error } => write!(f, "the link to the device is lost: {error}"),
+            Fault::LinkInterrupted { count, bound } => write!(
+                f,
+                "{count} replies lost in a row ({bound} are a short loss): brought to rest along \
+                 the path"
+            ),
             Fault::ConsecutiveLost { count, bound } => write!(
                 f,
-                "{count} replies lost in a row (at most {bound} allowed): the link is lost"
+                "{count} replies lost in a row (at most {bound} allowed): the link is dead"
             ),
             Fault::LossRate {
                 lost,
@@ -398,6 +438,7 @@ pub struct Supervisor<const J: usize> {
     bounds: Bounds<J>,
     frozen_cycles: u32,
     device_limits: bool,
+    rest_after_lost: u32,
     max_consecutive_lost: u32,
     max_loss_rate: f64,
     max_missed: u32,
@@ -440,7 +481,11 @@ impl<const J: usize> Supervisor<J> {
             bounds,
             frozen_cycles: config.frozen_cycles.max(2),
             device_limits: config.device_limits,
-            max_consecutive_lost: config.max_consecutive_lost.max(1),
+            rest_after_lost: config.rest_after_lost.max(1),
+            max_consecutive_lost: config
+                .max_consecutive_lost
+                .max(config.rest_after_lost)
+                .max(1),
             max_loss_rate: config.max_loss_rate,
             max_missed: config.max_consecutive_missed_deadlines,
             max_overruns: config.max_consecutive_overruns.max(1),
@@ -480,6 +525,12 @@ impl<const J: usize> Supervisor<J> {
             return Some(Fault::ConsecutiveLost {
                 count: o.link.consecutive_failures,
                 bound: self.max_consecutive_lost,
+            });
+        }
+        if o.link.consecutive_failures >= self.rest_after_lost {
+            return Some(Fault::LinkInterrupted {
+                count: o.link.consecutive_failures,
+                bound: self.rest_after_lost,
             });
         }
         if self.window.filled == self.window.window
@@ -621,14 +672,16 @@ impl<const J: usize> Supervisor<J> {
             .map(|joint| Fault::DeviceLimit { joint })
     }
 
-    /// The fault for a failed step, if it is one: a lost connection or a faulted device.
+    /// The fault for a failed step, if it is one: a lost connection or a faulted device (one
+    /// that faulted on a lost reply gave up on the link: the link is lost).
     pub fn check_step_error(
         &self,
         error: &DeviceErrorValue,
         device_faulted: bool,
     ) -> Option<Fault> {
         if device_faulted {
-            Some(if error.kind().is_link_loss() {
+            let kind = error.kind();
+            Some(if kind.is_link_loss() || kind == ErrorKind::Timeout {
                 Fault::LinkLost { error: *error }
             } else {
                 Fault::Device { error: *error }
@@ -770,21 +823,78 @@ mod tests {
 
     #[test]
     fn link_bounds() {
-        let mut s = supervisor();
-        let link = LinkStatistics {
-            consecutive_failures: 3,
-            lost: 3,
+        // Two lost in a row: nothing; three: a short loss, come to rest; ten: a dead link.
+        let lost = |n: u32| LinkStatistics {
+            consecutive_failures: n,
+            lost: u64::from(n),
             ..LinkStatistics::default()
         };
-        let f = s.observe(&Observation {
-            fresh: false,
-            ..obs(&[0.0, 0.0], &[0.0, 0.0], link)
-        });
+        let mut s = supervisor();
+        let mut seen = Vec::new();
+        for n in 1..=10 {
+            seen.push(s.observe(&Observation {
+                fresh: false,
+                ..obs(&[0.0, 0.0], &[0.0, 0.0], lost(n))
+            }));
+        }
+        assert_eq!(seen[..2], [None, None]);
+        let short = seen[2].expect("a short loss");
+        assert_eq!(short, Fault::LinkInterrupted { count: 3, bound: 3 });
+        assert!(!short.stops_at_once());
         assert!(matches!(
-            f,
-            Some(Fault::ConsecutiveLost { count: 3, bound: 3 })
+            seen[8],
+            Some(Fault::LinkInterrupted { count: 9, .. })
         ));
-        assert!(f.is_some_and(|f| f.stops_at_once()));
+        let dead = seen[9].expect("a dead link");
+        assert_eq!(
+            dead,
+            Fault::ConsecutiveLost {
+                count: 10,
+                bound: 10
+            }
+        );
+        assert!(dead.stops_at_once());
+        // The short loss that became a dead link ends the run as a dead link; another first
+        // fault stays the reason.
+        assert_eq!(short.ended_by(dead), dead);
+        let tracking = Fault::TrackingError {
+            joint: 0,
+            error: 1.0,
+            bound: 0.1,
+        };
+        assert_eq!(tracking.ended_by(dead), tracking);
+        // The bounds are the caller's.
+        let config = Supervision {
+            rest_after_lost: 5,
+            max_consecutive_lost: 6,
+            ..Supervision::default()
+        };
+        let mut s = Supervisor::new(&config, *supervisor().bounds());
+        let at = |s: &mut Supervisor<4>, n| {
+            s.observe(&Observation {
+                fresh: false,
+                ..obs(&[0.0, 0.0], &[0.0, 0.0], lost(n))
+            })
+        };
+        assert_eq!(at(&mut s, 4), None);
+        assert_eq!(
+            at(&mut s, 5),
+            Some(Fault::LinkInterrupted { count: 5, bound: 5 })
+        );
+        assert_eq!(
+            at(&mut s, 6),
+            Some(Fault::ConsecutiveLost { count: 6, bound: 6 })
+        );
+        // A device that gave up on lost replies has lost the link.
+        let timeout = DeviceErrorValue::Timeout {
+            operation: rl_drivers::Operation::Step,
+            waited: core::time::Duration::from_millis(7),
+        };
+        assert!(matches!(
+            s.check_step_error(&timeout, true),
+            Some(Fault::LinkLost { .. })
+        ));
+        assert_eq!(s.check_step_error(&timeout, false), None);
 
         // Every other reply lost: 50 % over the window of 100.
         let mut s = supervisor();

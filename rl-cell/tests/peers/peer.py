@@ -14,6 +14,7 @@ tracking PC or a ROS 2 tool on another machine does.
 """
 
 import argparse
+import collections
 import json
 import os
 import struct
@@ -47,41 +48,55 @@ def attachment(seq, ts, gid):
     return struct.pack('<qqB', seq, ts, 16) + gid
 
 
+def decode(key, now, att, payload):
+    """One recorded sample as a JSON-able dict: key, arrival, attachment, decoded message."""
+    parts = key.split('/')
+    typename = TYPES.get(parts[-2])
+    rec = {'key': key, 'recv_ns': now}
+    if att is not None and len(att) == 33:
+        seq, ts, n = struct.unpack_from('<qqB', att)
+        rec.update(seq=seq, ts=ts, gid=att[17:].hex(), gid_len=n)
+    if typename:
+        m = store.deserialize_cdr(payload, typename)
+        if typename == 'sensor_msgs/msg/JointState':
+            # The IEEE 754 bits too: JSON readers may round decimal text by an ulp.
+            bits = lambda a: [int(b) for b in np.asarray(a, dtype='<f8').view('<u8')]
+            rec.update(stamp=[m.header.stamp.sec, m.header.stamp.nanosec], name=list(m.name),
+                       position=m.position.tolist(), velocity=m.velocity.tolist(),
+                       effort=m.effort.tolist(), position_bits=bits(m.position),
+                       velocity_bits=bits(m.velocity), effort_bits=bits(m.effort))
+        elif typename == 'std_msgs/msg/String':
+            rec.update(text=m.data)
+    return rec
+
+
 def subscribe(args):
     out = open(args.out, 'w', buffering=1)
     s = session(args)
     state = {'first': None, 'last': time.monotonic()}
+    # The callbacks only keep the bytes (in arrival order): decoding with rosbags at 1-2 kHz
+    # on Zenoh's receive thread would make this peer the bottleneck that the publisher's
+    # congestion control then drops for. The main loop decodes and writes every 20 ms.
+    pending = collections.deque()
 
     def on_sample(sample):
-        now = time.time_ns()
-        key = str(sample.key_expr)
-        parts = key.split('/')
-        typename = TYPES.get(parts[-2])
-        rec = {'key': key, 'recv_ns': now}
         att = sample.attachment
-        if att is not None:
-            b = att.to_bytes()
-            if len(b) == 33:
-                seq, ts, n = struct.unpack_from('<qqB', b)
-                rec.update(seq=seq, ts=ts, gid=b[17:].hex(), gid_len=n)
-        if typename:
-            m = store.deserialize_cdr(sample.payload.to_bytes(), typename)
-            if typename == 'sensor_msgs/msg/JointState':
-                # The IEEE 754 bits too: JSON readers may round decimal text by an ulp.
-                bits = lambda a: [int(b) for b in np.asarray(a, dtype='<f8').view('<u8')]
-                rec.update(stamp=[m.header.stamp.sec, m.header.stamp.nanosec], name=list(m.name),
-                           position=m.position.tolist(), velocity=m.velocity.tolist(),
-                           effort=m.effort.tolist(), position_bits=bits(m.position),
-                           velocity_bits=bits(m.velocity), effort_bits=bits(m.effort))
-            elif typename == 'std_msgs/msg/String':
-                rec.update(text=m.data)
-        out.write(json.dumps(rec) + '\n')
+        pending.append(('s', str(sample.key_expr), time.time_ns(),
+                        att.to_bytes() if att is not None else None, sample.payload.to_bytes()))
         state['first'] = state['first'] or time.monotonic()
         state['last'] = time.monotonic()
 
     def on_token(sample):
-        out.write(json.dumps({'token': str(sample.key_expr), 'kind': str(sample.kind),
-                              'recv_ns': time.time_ns()}) + '\n')
+        pending.append(('t', str(sample.key_expr), time.time_ns(), str(sample.kind), None))
+
+    def flush():
+        while pending:
+            kind, key, now, extra, payload = pending.popleft()
+            if kind == 's':
+                rec = decode(key, now, extra, payload)
+            else:
+                rec = {'token': key, 'kind': extra, 'recv_ns': now}
+            out.write(json.dumps(rec) + '\n')
 
     sub = s.declare_subscriber(args.key, on_sample)
     lv = s.liveliness().declare_subscriber('@ros2_lv/0/**', on_token, history=True)
@@ -89,6 +104,7 @@ def subscribe(args):
     start = time.monotonic()
     while True:
         time.sleep(0.02)
+        flush()
         now = time.monotonic()
         if now - start > args.duration or os.path.exists(args.out + '.stop'):
             break
@@ -96,6 +112,7 @@ def subscribe(args):
             break
     sub.undeclare()
     lv.undeclare()
+    flush()
     s.close()
     out.close()
 
@@ -109,7 +126,10 @@ def publish(args):
         time.sleep(item.get('after_s', 0.0))
         key = item['key']
         if key not in pubs:
-            pubs[key] = s.declare_publisher(key, express=True)
+            # Block, not the default Drop: a test peer that never loses what it was asked to
+            # send, even when its send thread is kept off the CPU (a burst of samples).
+            pubs[key] = s.declare_publisher(key, express=True,
+                                            congestion_control=zenoh.CongestionControl.BLOCK)
         payload = bytes(store.serialize_cdr(build(item['type'], item['msg']), item['type'],
                                             little_endian=True))
         ts = time.time_ns() - int(item.get('age_s', 0.0) * 1e9)

@@ -93,7 +93,65 @@ fn run<const N: usize>(
         }
         data.f[i] = pa;
     }
-    // Pass 2: articulated inertias and bias forces, leaves to root.
+    articulated_inertias(model, data, tau)?;
+    // Pass 3: accelerations, root to leaves.
+    let base = MotionVector::new(glam::DVec3::ZERO, -model.gravity);
+    for i in 0..model.nbodies {
+        let p = model.parents[i];
+        let a = if p == ROOT { base } else { data.a[p] } + data.c[i];
+        let (x, a) = joint_accelerations(model, data, i, a);
+        let sv = model.idx_v[i];
+        let nv = model.joints[i].nv();
+        data.qdd[sv..sv + nv].copy_from_slice(&x[..nv]);
+        data.a[i] = a;
+    }
+    Ok(())
+}
+
+/// Pass 3 for body `i`: its joint accelerations `q̈ = D⁻¹ (u − Uᵀ a)` (the first `nv` of the
+/// array) and its own acceleration `a + S q̈`, where `a` is the parent's acceleration plus the
+/// body's bias `c`. Shared with [`super::aba_derivatives`].
+#[inline(always)]
+pub(crate) fn joint_accelerations<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    i: usize,
+    mut a: MotionVector,
+) -> ([f64; 6], MotionVector) {
+    let sv = model.idx_v[i];
+    let nv = model.joints[i].nv();
+    let d_inv = &data.d_inv[i];
+    let mut out = [0.0; 6];
+    if nv == 1 {
+        let x = d_inv[0][0] * (data.u_bias[sv] - a.dot(&data.u[sv]));
+        out[0] = x;
+        return (out, a + data.world_subspace[sv] * x);
+    }
+    let mut rhs = [0.0; 6];
+    for (k, r) in rhs.iter_mut().enumerate().take(nv) {
+        *r = data.u_bias[sv + k] - a.dot(&data.u[sv + k]);
+    }
+    for k in 0..nv {
+        let mut x = 0.0;
+        for (l, r) in rhs.iter().enumerate().take(nv) {
+            x += d_inv[k][l] * r;
+        }
+        out[k] = x;
+        a += data.world_subspace[sv + k] * x;
+    }
+    (out, a)
+}
+
+/// Pass 2, leaves to root: each joint's `U = Iᴬ S`, `D⁻¹` and `u = τ − Sᵀ pᴬ`, and the
+/// articulated inertias and bias forces handed to the parents (world coordinates, after pass 1
+/// left each body's rigid inertia in `data.articulated` and its bias force in `data.f`). Shared
+/// with [`super::aba_derivatives`].
+#[inline]
+pub(crate) fn articulated_inertias<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    tau: &[f64],
+) -> Result<(), Error> {
     for i in (0..model.nbodies).rev() {
         let sv = model.idx_v[i];
         let nv = model.joints[i].nv();
@@ -156,35 +214,6 @@ fn run<const N: usize>(
         pa_child += ia_child.mul_motion(&data.c[i]);
         data.articulated[p] += ia_child;
         data.f[p] += pa_child;
-    }
-    // Pass 3: accelerations, root to leaves.
-    let base = MotionVector::new(glam::DVec3::ZERO, -model.gravity);
-    for i in 0..model.nbodies {
-        let sv = model.idx_v[i];
-        let nv = model.joints[i].nv();
-        let p = model.parents[i];
-        let mut a = if p == ROOT { base } else { data.a[p] } + data.c[i];
-        let d_inv = &data.d_inv[i];
-        if nv == 1 {
-            let x = d_inv[0][0] * (data.u_bias[sv] - a.dot(&data.u[sv]));
-            data.qdd[sv] = x;
-            a += data.world_subspace[sv] * x;
-            data.a[i] = a;
-            continue;
-        }
-        let mut rhs = [0.0; 6];
-        for (k, r) in rhs.iter_mut().enumerate().take(nv) {
-            *r = data.u_bias[sv + k] - a.dot(&data.u[sv + k]);
-        }
-        for k in 0..nv {
-            let mut x = 0.0;
-            for (l, r) in rhs.iter().enumerate().take(nv) {
-                x += d_inv[k][l] * r;
-            }
-            data.qdd[sv + k] = x;
-            a += data.world_subspace[sv + k] * x;
-        }
-        data.a[i] = a;
     }
     Ok(())
 }

@@ -6,6 +6,7 @@
 //! coordinates at the tool's origin, with Jacobian rows `[linear xyz; angular xyz]`.
 
 mod aba;
+mod aba_derivatives;
 mod coriolis;
 mod crba;
 mod forward_acceleration;
@@ -18,8 +19,11 @@ mod mass_solve;
 mod mimic;
 mod operational;
 mod rnea;
+mod rnea_derivatives;
+mod static_torque_derivatives;
 
 pub use aba::{aba, aba_with_external_forces};
+pub use aba_derivatives::{AbaDerivatives, aba_derivatives, aba_derivatives_with_external_forces};
 pub use coriolis::{coriolis, nonlinear_effects};
 pub use crba::crba;
 pub use forward_acceleration::{forward_acceleration, tool_acceleration};
@@ -30,3 +34,9 @@ pub use jacobian::{Jacobian, jacobian, jacobian_derivative_times_qd, jacobians};
 pub use mass_solve::{factor_mass_matrix, solve_mass_matrix};
 pub use operational::operational_inverse_inertia;
 pub use rnea::{rnea, rnea_with_external_forces};
+pub use rnea_derivatives::{
+    RneaDerivatives, rnea_derivatives, rnea_derivatives_with_external_forces,
+};
+pub use static_torque_derivatives::{
+    static_torque_derivatives, static_torque_derivatives_with_external_forces,
+};

@@ -162,18 +162,16 @@ fn run<const MIMIC: bool, const N: usize>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::joint::{Joint, Revolute};
     use crate::model::ModelBuilder;
     use crate::spatial::{PlueckerTransform, RigidBodyInertia};
     use glam::{DMat3, DVec3};
 
-    /// A point mass m on a massless rod of length l, pivoting about y, hanging along −z
-    /// at q = 0: τ = m l² q̈ + m g l sin q.
-    #[test]
-    fn pendulum_matches_the_closed_form() {
-        let (m, l, g) = (2.0, 0.5, 9.81);
+    /// A point mass `m` on a massless rod of length `l`, pivoting about y, hanging along −z at
+    /// q = 0, under gravity `g` along −z (also the derivatives' test model).
+    pub(crate) fn pendulum(m: f64, l: f64, g: f64) -> crate::Model<1> {
         let mut b = ModelBuilder::<1>::new();
         b.gravity(DVec3::new(0.0, 0.0, -g));
         b.add_body(
@@ -185,7 +183,14 @@ mod tests {
             RigidBodyInertia::from_com(m, DVec3::new(0.0, 0.0, -l), DMat3::ZERO),
         )
         .unwrap();
-        let model = b.build();
+        b.build()
+    }
+
+    /// τ = m l² q̈ + m g l sin q.
+    #[test]
+    fn pendulum_matches_the_closed_form() {
+        let (m, l, g) = (2.0, 0.5, 9.81);
+        let model = pendulum(m, l, g);
         let mut data = Data::new();
         let (q, qd, qdd) = (0.3, 0.7, -1.1);
         let tau = rnea(&model, &mut data, &[q], &[qd], &[qdd]).unwrap()[0];

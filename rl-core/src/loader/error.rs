@@ -5,6 +5,7 @@ use std::fmt;
 use std::path::PathBuf;
 use std::string::String;
 
+use super::file::{Clipped, FirstNames, ReadError, ReadErrorKind};
 use crate::model::ModelError;
 use crate::spatial::InertiaProblem;
 
@@ -23,9 +24,15 @@ pub struct ElementRef {
 
 impl fmt::Display for ElementRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}: <{}", self.line, self.column, self.tag)?;
+        write!(
+            f,
+            "{}:{}: <{}",
+            self.line,
+            self.column,
+            Clipped(&self.tag, Clipped::NAME)
+        )?;
         if let Some(id) = &self.id {
-            write!(f, " \"{id}\"")?;
+            write!(f, " \"{}\"", Clipped(id, Clipped::NAME))?;
         }
         f.write_str(">")
     }
@@ -34,8 +41,11 @@ impl fmt::Display for ElementRef {
 /// What went wrong.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LoadErrorKind {
-    /// The file could not be read.
+    /// The file could not be read (an I/O error other than those of [`LoadErrorKind::File`]).
     Io(String),
+    /// The file was not read: missing, not a regular file (a FIFO, a device), above the size
+    /// limit, not UTF-8 ([`super::read_text`]).
+    File(ReadErrorKind),
     /// The text is not well-formed XML (the message carries roxmltree's line:column).
     Xml(String),
     /// The root element is neither RL's `rlmdl`/`rlkin`/`rl` nor URDF's `robot`.
@@ -93,8 +103,10 @@ pub enum LoadErrorKind {
     },
     /// The document has no root (world/root link) or more than one.
     NoSingleRoot {
-        /// The candidate roots found.
+        /// The first few candidate roots found (at most [`LoadErrorKind::ROOTS_KEPT`]).
         roots: std::vec::Vec<String>,
+        /// How many there are.
+        count: usize,
     },
     /// A body whose inertia no rigid body can have (see
     /// [`crate::spatial::RigidBodyInertia::check_physical`]).
@@ -133,14 +145,20 @@ impl fmt::Display for LoadErrorKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             LoadErrorKind::Io(e) => write!(f, "cannot read the file: {e}"),
+            LoadErrorKind::File(e) => write!(f, "{e}"),
             LoadErrorKind::Xml(e) => write!(f, "XML syntax error: {e}"),
             LoadErrorKind::UnknownFormat { root } => write!(
                 f,
-                "unknown model format: the root element is <{root}>, expected <rlmdl>, <rlkin>, \
-                 <rl> (RL XML) or <robot> (URDF)"
+                "unknown model format: the root element is <{}>, expected <rlmdl>, <rlkin>, \
+                 <rl> (RL XML) or <robot> (URDF)",
+                Clipped(root, Clipped::NAME)
             ),
             LoadErrorKind::UnknownJointType { joint_type } => {
-                write!(f, "unknown joint type \"{joint_type}\"")
+                write!(
+                    f,
+                    "unknown joint type \"{}\"",
+                    Clipped(joint_type, Clipped::NAME)
+                )
             }
             LoadErrorKind::MissingAttribute { attribute } => {
                 write!(f, "missing attribute \"{attribute}\"")
@@ -151,28 +169,44 @@ impl fmt::Display for LoadErrorKind {
                 value,
                 reason,
             } => {
-                write!(f, "invalid {what} \"{value}\": {reason}")
+                write!(
+                    f,
+                    "invalid {} \"{}\": {reason}",
+                    Clipped(what, Clipped::NAME),
+                    Clipped(value, Clipped::NAME)
+                )
             }
             LoadErrorKind::MissingInertia { part } => {
                 write!(f, "<inertial> without its <{part}>: missing inertia")
             }
             LoadErrorKind::UnresolvedReference { target } => {
-                write!(f, "reference to \"{target}\", which does not exist")
+                write!(
+                    f,
+                    "reference to \"{}\", which does not exist",
+                    Clipped(target, Clipped::NAME)
+                )
             }
-            LoadErrorKind::DuplicateName { name } => write!(f, "name \"{name}\" is used twice"),
+            LoadErrorKind::DuplicateName { name } => {
+                write!(f, "name \"{}\" is used twice", Clipped(name, Clipped::NAME))
+            }
             LoadErrorKind::Cycle => f.write_str("the transforms form a cycle: not a tree"),
             LoadErrorKind::TwoParents { frame, other } => write!(
                 f,
-                "\"{frame}\" has two parents (it is also the child of \"{other}\"): not a tree"
+                "\"{}\" has two parents (it is also the child of \"{}\"): not a tree",
+                Clipped(frame, Clipped::NAME),
+                Clipped(other, Clipped::NAME)
             ),
-            LoadErrorKind::NoSingleRoot { roots } => {
+            LoadErrorKind::NoSingleRoot { roots, count } => {
                 if roots.is_empty() {
                     f.write_str("no root: every frame has a parent")
                 } else {
                     write!(
                         f,
                         "several roots ({}); a model needs exactly one",
-                        roots.join(", ")
+                        FirstNames {
+                            names: roots,
+                            total: *count
+                        }
                     )
                 }
             }
@@ -181,7 +215,11 @@ impl fmt::Display for LoadErrorKind {
                 merged_links,
                 problem,
             } => {
-                write!(f, "the inertia of link \"{link}\"")?;
+                write!(
+                    f,
+                    "the inertia of link \"{}\"",
+                    Clipped(link, Clipped::NAME)
+                )?;
                 match merged_links {
                     0 => {}
                     1 => f.write_str(" (with the link fixed to it)")?,
@@ -196,10 +234,28 @@ impl fmt::Display for LoadErrorKind {
                 )
             }
             LoadErrorKind::Mimic { joint, reason } => {
-                write!(f, "mimic joint \"{joint}\": {reason}")
+                write!(
+                    f,
+                    "mimic joint \"{}\": {reason}",
+                    Clipped(joint, Clipped::NAME)
+                )
             }
             LoadErrorKind::Model(e) => write!(f, "{e}"),
             LoadErrorKind::Unsupported { feature } => write!(f, "unsupported: {feature}"),
+        }
+    }
+}
+
+impl LoadErrorKind {
+    /// How many root names [`LoadErrorKind::NoSingleRoot`] keeps.
+    pub const ROOTS_KEPT: usize = 5;
+
+    /// [`LoadErrorKind::NoSingleRoot`] from every root's name (the first few kept).
+    pub(crate) fn roots<'s>(names: impl ExactSizeIterator<Item = &'s str>) -> Self {
+        let count = names.len();
+        Self::NoSingleRoot {
+            roots: names.take(Self::ROOTS_KEPT).map(String::from).collect(),
+            count,
         }
     }
 }
@@ -256,3 +312,9 @@ impl fmt::Display for LoadError {
 }
 
 impl std::error::Error for LoadError {}
+
+impl From<ReadError> for LoadError {
+    fn from(e: ReadError) -> Self {
+        Self::new(LoadErrorKind::File(e.kind)).in_file(e.path)
+    }
+}

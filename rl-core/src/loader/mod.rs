@@ -18,6 +18,7 @@
 //! wrong with it. Nothing here panics on bad input.
 
 mod error;
+pub mod file;
 mod physical;
 mod rlkin;
 mod rlmdl;
@@ -30,6 +31,7 @@ use std::string::{String, ToString};
 use std::vec::Vec;
 
 pub use error::{ElementRef, LoadError, LoadErrorKind};
+pub use file::{Clipped, FirstNames, ReadError, ReadErrorKind, read_bytes, read_text};
 
 use crate::model::{Model, ROOT};
 use crate::spatial::PlueckerTransform;
@@ -128,26 +130,40 @@ pub enum InertiaCheck {
 }
 
 /// Bounds on what a loader reads, so a huge or hostile file is refused early with a clear
-/// error instead of taking the machine's memory ([`LoadErrorKind::TooLarge`]).
+/// error instead of taking the machine's memory or time ([`LoadErrorKind::TooLarge`]). rl-sg's
+/// XML readers (URDF geometry, SRDF, rlsg) use the same bounds through [`check_xml`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InputLimits {
-    /// Largest file (or text) in bytes.
+    /// Largest file (or text) in bytes; a file above it is not read ([`read_text`]).
     pub max_bytes: u64,
     /// Deepest element nesting (URDF and RL XML need about 6).
     pub max_depth: usize,
     /// Most XML nodes (elements, text and comments) the parser builds.
     pub max_nodes: u32,
+    /// Most attributes on one element (URDF's `<inertia>` has six). The XML parser checks each
+    /// new attribute against the element's earlier ones, so an element's cost grows with the
+    /// square of its attribute count: 100 000 attributes on one element took 22 s.
+    pub max_attributes: usize,
 }
 
 impl InputLimits {
-    /// 64 MiB, depth 256, 8 million nodes: about 300 times the largest URDF of
-    /// example-robot-data and 700 000 URDF links; the parsed tree of such a file takes well
-    /// under 1 GB.
+    /// 64 MiB, depth 256, 8 million nodes, 256 attributes per element: about 300 times the
+    /// largest URDF of example-robot-data and 700 000 URDF links; the parsed tree of such a file
+    /// takes well under 1 GB, and the attribute checks at most 128 comparisons per byte.
     pub const DEFAULT: Self = Self {
         max_bytes: 64 << 20,
         max_depth: 256,
         max_nodes: 8_000_000,
+        max_attributes: 256,
     };
+}
+
+/// Checks XML `text` against `limits` before a tree is built, in one linear pass without
+/// allocating: its size, its nesting depth and the attributes of each element (the error names
+/// the element's line and column). The loaders here and rl-sg's XML readers call it; the node
+/// limit is the parser's ([`InputLimits::max_nodes`]).
+pub fn check_xml(text: &str, limits: &InputLimits) -> Result<(), LoadError> {
+    xml::check(text, limits)
 }
 
 impl Default for InputLimits {
@@ -414,39 +430,8 @@ pub fn load_file_options<const N: usize>(
     options: &LoadOptions,
 ) -> Result<LoadedModel<N>, LoadError> {
     let path = path.as_ref();
-    let text =
-        read_text(path, options.input.max_bytes).map_err(|e| e.in_file(path.to_path_buf()))?;
+    let text = read_text(path, options.input.max_bytes).map_err(LoadError::from)?;
     load_str_options(&text, options).map_err(|e| e.in_file(path.to_path_buf()))
-}
-
-/// The file's text, refused above `max_bytes` (checked on the size and while reading, for files
-/// that grow or report no size).
-fn read_text(path: &Path, max_bytes: u64) -> Result<String, LoadError> {
-    use std::io::Read;
-    let io = |e: std::io::Error| LoadError::new(LoadErrorKind::Io(e.to_string()));
-    let too_large = || {
-        LoadError::new(LoadErrorKind::TooLarge {
-            what: "file size",
-            limit: max_bytes,
-        })
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    if file.metadata().map_err(io)?.len() > max_bytes {
-        return Err(too_large());
-    }
-    let mut bytes = Vec::new();
-    file.take(max_bytes.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > max_bytes {
-        return Err(too_large());
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        LoadError::new(LoadErrorKind::Io(std::format!(
-            "not UTF-8 text (byte {})",
-            e.utf8_error().valid_up_to()
-        )))
-    })
 }
 
 /// The directory holding example-robot-data's `robots/` (for tests and tools): `$RL_ROBOT_DATA`

@@ -358,9 +358,7 @@ pub(crate) fn from_document<const N: usize>(
     if roots.len() != 1 {
         return Err(err(
             robot,
-            LoadErrorKind::NoSingleRoot {
-                roots: roots.iter().map(|&i| links[i].name.clone()).collect(),
-            },
+            LoadErrorKind::roots(roots.iter().map(|&i| links[i].name.as_str())),
         ));
     }
 

@@ -12,20 +12,14 @@ use roxmltree::{Document, Node, ParsingOptions};
 
 use super::error::{ElementRef, LoadError, LoadErrorKind};
 
-/// Parses `text` within `limits` (DTDs allowed: roxmltree bounds entity expansion). The size
-/// and the nesting depth are checked first, in one pass over the bytes, so a huge or deeply
-/// nested input is refused before a tree is built.
+/// Parses `text` within `limits` (DTDs allowed: roxmltree bounds entity expansion). The size,
+/// the nesting depth and the attributes per element are checked first ([`check`]), so a huge,
+/// deeply nested or attribute-laden input is refused before a tree is built.
 pub(crate) fn parse<'i>(
     text: &'i str,
     limits: &super::InputLimits,
 ) -> Result<Document<'i>, LoadError> {
-    if text.len() as u64 > limits.max_bytes {
-        return Err(LoadError::new(LoadErrorKind::TooLarge {
-            what: "size in bytes",
-            limit: limits.max_bytes,
-        }));
-    }
-    check_depth(text.as_bytes(), limits.max_depth)?;
+    check(text, limits)?;
     let opt = ParsingOptions {
         allow_dtd: true,
         nodes_limit: limits.max_nodes,
@@ -40,15 +34,51 @@ pub(crate) fn parse<'i>(
     })
 }
 
-/// Refuses element nesting deeper than `max` (an error naming line:column of the element that
-/// goes too deep). Skips comments, CDATA, processing instructions, the DOCTYPE and quoted
+/// Refuses `text` above the size limit, element nesting deeper than the depth limit and
+/// elements with more attributes than the attribute limit (an error naming line:column of the
+/// element at fault). Skips comments, CDATA, processing instructions, the DOCTYPE and quoted
 /// attribute values; malformed markup is left for the parser to report. Linear, no allocation.
-fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
+pub(crate) fn check(text: &str, limits: &super::InputLimits) -> Result<(), LoadError> {
+    if text.len() as u64 > limits.max_bytes {
+        return Err(LoadError::new(LoadErrorKind::TooLarge {
+            what: "size in bytes",
+            limit: limits.max_bytes,
+        }));
+    }
+    let b = text.as_bytes();
     let find = |from: usize, pat: &[u8]| {
         b[from.min(b.len())..]
             .windows(pat.len())
             .position(|w| w == pat)
             .map_or(b.len(), |p| from + p + pat.len())
+    };
+    // The element starting at byte `start`, for an error.
+    let element_at = |start: usize| {
+        let line_start = b[..start]
+            .iter()
+            .rposition(|&c| c == b'\n')
+            .map_or(0, |p| p + 1);
+        let name_len = b[start + 1..]
+            .iter()
+            .position(|c| c.is_ascii_whitespace() || matches!(c, b'/' | b'>'))
+            .unwrap_or(0)
+            .min(200);
+        let tag = String::from_utf8_lossy(&b[start + 1..start + 1 + name_len]);
+        ElementRef {
+            tag: tag.into_owned(),
+            id: None,
+            line: (b[..start].iter().filter(|&&c| c == b'\n').count() + 1) as u32,
+            column: (text[line_start..start].chars().count() + 1) as u32,
+        }
+    };
+    let too_large = |start: usize, what: &'static str, limit: usize| {
+        LoadError::at(
+            element_at(start),
+            LoadErrorKind::TooLarge {
+                what,
+                limit: limit as u64,
+            },
+        )
     };
     let mut depth = 0usize;
     let mut i = 0;
@@ -89,6 +119,8 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
             let start = i;
             let mut quote = 0u8;
             let mut last = 0u8;
+            // Every attribute's value is quoted: one opening quote per attribute.
+            let mut attributes = 0usize;
             i += 1;
             while i < b.len() {
                 let c = b[i];
@@ -99,6 +131,14 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
                     }
                 } else if c == b'"' || c == b'\'' {
                     quote = c;
+                    attributes += 1;
+                    if attributes > limits.max_attributes {
+                        return Err(too_large(
+                            start,
+                            "number of attributes of one element",
+                            limits.max_attributes,
+                        ));
+                    }
                 } else if c == b'>' {
                     break;
                 } else if !c.is_ascii_whitespace() {
@@ -107,29 +147,8 @@ fn check_depth(b: &[u8], max: usize) -> Result<(), LoadError> {
             }
             if last != b'/' {
                 depth += 1;
-                if depth > max {
-                    let line_start = b[..start]
-                        .iter()
-                        .rposition(|&c| c == b'\n')
-                        .map_or(0, |p| p + 1);
-                    let name_len = b[start + 1..]
-                        .iter()
-                        .position(|c| c.is_ascii_whitespace() || matches!(c, b'/' | b'>'))
-                        .unwrap_or(0);
-                    let tag = String::from_utf8_lossy(&b[start + 1..start + 1 + name_len]);
-                    let at = ElementRef {
-                        tag: tag.into_owned(),
-                        id: None,
-                        line: (b[..start].iter().filter(|&&c| c == b'\n').count() + 1) as u32,
-                        column: (start - line_start + 1) as u32,
-                    };
-                    return Err(LoadError::at(
-                        at,
-                        LoadErrorKind::TooLarge {
-                            what: "nesting depth",
-                            limit: max as u64,
-                        },
-                    ));
+                if depth > limits.max_depth {
+                    return Err(too_large(start, "nesting depth", limits.max_depth));
                 }
             }
         }
@@ -156,11 +175,23 @@ fn element_ref(node: Node, line: u32, column: u32) -> ElementRef {
     }
 }
 
-/// Where the lines of a document start, so that an element's line and column cost a binary
-/// search instead of a scan from the start (which made loading quadratic in the file's size).
+/// Where the lines of a document start, and how many characters precede every 256-byte block, so
+/// that an element's line and column cost a binary search and two scans of at most 256 bytes instead
+/// of a scan from the start of the document or of its line (either made loading quadratic: the
+/// first in the file's size, the second in the length of a line, for files on one line).
 pub(crate) struct Lines<'i> {
     text: &'i str,
     starts: std::vec::Vec<usize>,
+    /// Characters in `text[..k · BLOCK]`, for every block `k`.
+    chars_before_block: std::vec::Vec<usize>,
+}
+
+/// The block size of [`Lines`]' character counts.
+const BLOCK: usize = 256;
+
+/// Whether byte `b` starts a character (is not a UTF-8 continuation byte).
+fn starts_char(b: u8) -> bool {
+    b & 0xC0 != 0x80
 }
 
 impl<'i> Lines<'i> {
@@ -173,19 +204,36 @@ impl<'i> Lines<'i> {
                 .filter(|&(_, b)| b == b'\n')
                 .map(|(i, _)| i + 1),
         );
-        Self { text, starts }
+        let mut chars_before_block = std::vec![0];
+        let mut chars = 0;
+        for block in text.as_bytes().chunks(BLOCK) {
+            chars += block.iter().filter(|&&b| starts_char(b)).count();
+            chars_before_block.push(chars);
+        }
+        Self {
+            text,
+            starts,
+            chars_before_block,
+        }
+    }
+
+    /// Characters in `text[..at]` (`at` at a character boundary).
+    fn chars_before(&self, at: usize) -> usize {
+        let block = at / BLOCK;
+        let from = block * BLOCK;
+        self.chars_before_block[block]
+            + self.text.as_bytes()[from..at]
+                .iter()
+                .filter(|&&b| starts_char(b))
+                .count()
     }
 
     /// The reference of `node` (of this document), line and column (in characters) from 1.
     pub(crate) fn elem(&self, node: Node) -> ElementRef {
-        let at = node.range().start;
+        let at = node.range().start.min(self.text.len());
         let line = self.starts.partition_point(|&s| s <= at).max(1);
         let start = self.starts[line - 1];
-        let column = self
-            .text
-            .get(start..at)
-            .map_or(at - start, |s| s.chars().count())
-            + 1;
+        let column = self.chars_before(at) - self.chars_before(start) + 1;
         element_ref(node, line as u32, column as u32)
     }
 }
@@ -322,5 +370,38 @@ pub(crate) fn unit_axis(node: Node, what: &str, v: DVec3) -> Result<DVec3, LoadE
             &std::format!("{} {} {}", v.x, v.y, v.z),
             "zero axis",
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::format;
+
+    #[test]
+    fn line_index_columns_count_characters() {
+        // Long lines with multi-byte characters across block boundaries: every element's line
+        // and column as a scan from the start of the text finds them.
+        let mut text = String::from("<r>\n");
+        for k in 0..3000 {
+            text.push_str(&format!("<é n=\"ü{k}\"/>"));
+            if k % 700 == 699 {
+                text.push('\n');
+            }
+        }
+        text.push_str("</r>");
+        let doc = Document::parse(&text).unwrap();
+        let lines = Lines::new(&text);
+        let mut checked = 0;
+        for n in doc.descendants().filter(|n| n.is_element()) {
+            let at = n.range().start;
+            let before = &text[..at];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().unwrap().chars().count() + 1;
+            let e = lines.elem(n);
+            assert_eq!((e.line, e.column), (line as u32, column as u32), "{at}");
+            checked += 1;
+        }
+        assert_eq!(checked, 3001);
     }
 }

@@ -16,7 +16,8 @@ mod model;
 mod name;
 
 pub use builder::ModelBuilder;
-pub use data::Data;
+pub(crate) use data::DerivativeWorkspace;
+pub use data::{Data, DerivativeData, MatrixView};
 pub use error::ModelError;
 pub use limits::JointLimits;
 pub use mimic::Mimic;

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::bus_load::BusLoad;
-use crate::cia402::{AxisUnits, Mode, object as obj};
+use crate::cia402::{Mode, UnitsOverride, object as obj};
 use crate::proto::canopen::eds::Eds;
 use crate::proto::canopen::pdo::Mapping;
 use crate::transport::can::CanAddress;
@@ -18,8 +18,9 @@ pub const MAX_AXES: usize = 8;
 pub struct AxisConfig {
     /// Node id (1..=127).
     pub node: u8,
-    /// Counts ↔ joint units and rated torque.
-    pub units: AxisUnits,
+    /// The units the user gives; the rest are read from the drive at `open` (0x608F, 0x6091,
+    /// 0x6092, 0x6076), and a drive that cannot give them is refused before it is enabled.
+    pub units: UnitsOverride,
     /// This node's heartbeat consumer time, if it differs from
     /// [`Cia402Config::heartbeat_timeout`].
     pub heartbeat_timeout: Option<Duration>,
@@ -64,8 +65,8 @@ pub struct Cia402Config {
 }
 
 impl Cia402Config {
-    /// `nodes` in CSP at 2 ms on 1 Mbit/s with default units, heartbeats every 50 ms, 20 ms
-    /// SDO answers, 1 s transitions, torque feed-forward mapped.
+    /// `nodes` in CSP at 2 ms on 1 Mbit/s with the units read from the drives, heartbeats
+    /// every 50 ms, 20 ms SDO answers, 1 s transitions, torque feed-forward mapped.
     pub fn new(bus: CanAddress, nodes: &[u8]) -> Self {
         let period = Duration::from_millis(2);
         Self {
@@ -74,7 +75,7 @@ impl Cia402Config {
                 .iter()
                 .map(|&node| AxisConfig {
                     node,
-                    units: AxisUnits::default(),
+                    units: UnitsOverride::NONE,
                     heartbeat_timeout: None,
                 })
                 .collect(),

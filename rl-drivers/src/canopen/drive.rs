@@ -3,8 +3,11 @@
 //! Session:
 //! - `open`: connect the bus; per node NMT "enter pre-operational", then by SDO the device
 //!   type (0x1000, must be profile 402), the identity (0x1018), the supported drive modes
-//!   (0x6502, must include the configured mode) and the position (0x6064) — so `dof()` and
-//!   `joint_position()` are right before anything is enabled.
+//!   (0x6502, must include the configured mode), the units — position encoder resolution
+//!   (0x608F), gear ratio (0x6091), feed constant (0x6092) and motor rated torque (0x6076),
+//!   each unless the configuration gives it; a node that cannot give one is refused with
+//!   [`CanopenError::Units`] naming the object — and the position (0x6064): so `dof()` and
+//!   `joint_position()` are right, in joint units, before anything is enabled.
 //! - `start`: per node by SDO, checked against the EDS when one is configured: all PDOs
 //!   disabled; RPDO1 and TPDO1 (and TPDO2 for velocity feedback) mapped and set to
 //!   synchronous (transmission type 1), then enabled; the mode (0x6060, confirmed in 0x6061),
@@ -37,7 +40,9 @@ use crate::capability::{
     LinkStatistics, LinkStatisticsSensor,
 };
 use crate::cia402::state::Goal;
-use crate::cia402::{Command, Controlword, Mode, PowerState, Statusword, object as obj};
+use crate::cia402::{
+    AxisUnits, Command, Controlword, Mode, PowerState, Statusword, UnitsError, object as obj,
+};
 use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::can::Frame;
 use crate::proto::canopen::emcy::Emergency;
@@ -84,7 +89,7 @@ pub struct Cia402Counters {
 }
 
 /// What `open` learned about a node.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodeReport {
     /// The node id.
     pub node: u8,
@@ -94,6 +99,9 @@ pub struct NodeReport {
     pub identity: [u32; 4],
     /// 0x6502 supported drive modes.
     pub supported_modes: u32,
+    /// The units in use: read from the node (0x608F, 0x6091, 0x6092, 0x6076) where the
+    /// configuration gives none.
+    pub units: AxisUnits,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -114,6 +122,8 @@ struct Axis {
     emcy: Option<Emergency>,
     heartbeat: Option<Instant>,
     heartbeat_lost: bool,
+    /// The units in use (known from `open`).
+    units: AxisUnits,
     report: NodeReport,
 }
 
@@ -136,6 +146,7 @@ impl Axis {
             emcy: None,
             heartbeat: None,
             heartbeat_lost: false,
+            units: AxisUnits::default(),
             report: NodeReport {
                 node: node.get(),
                 ..NodeReport::default()
@@ -242,8 +253,20 @@ impl Cia402 {
                     usize::from(a.node),
                 ));
             }
-            if !a.units.is_valid() {
-                return Err(invalid("axis units (positive, finite)", k, k));
+            let u = a.units;
+            let given = [
+                u.counts_per_rev,
+                u.gear_ratio,
+                u.feed,
+                u.rated_torque_nm,
+                u.lead_m,
+            ];
+            if given
+                .into_iter()
+                .flatten()
+                .any(|v| !(v.is_finite() && v > 0.0))
+            {
+                return Err(invalid("axis units given (positive, finite; axis)", k, k));
             }
             axes[k] = Axis::new(node);
         }
@@ -691,6 +714,59 @@ impl Cia402 {
         Ok(u64::from_le_bytes(b))
     }
 
+    /// Reads `index:sub` of axis `k` without the EDS check: `Ok(Err)` when the node refuses
+    /// or does not answer.
+    fn sdo_read_raw(
+        &mut self,
+        op: Operation,
+        k: usize,
+        index: u16,
+        sub: u8,
+    ) -> Result<Result<u64, SdoError>, Error> {
+        let first = self.sdo.upload(Address::new(index, sub));
+        if let Err(e) = self.sdo_run(op, k, first)? {
+            return Ok(Err(e));
+        }
+        let d = self.sdo.data();
+        let mut b = [0u8; 8];
+        let n = d.len().min(8);
+        b[..n].copy_from_slice(&d[..n]);
+        Ok(Ok(u64::from_le_bytes(b)))
+    }
+
+    /// Axis `k`'s units: those the configuration gives, the rest read from the node (the node
+    /// itself says whether it has the objects: the EDS is not asked). A node that cannot give
+    /// one is refused, naming the object.
+    fn read_units(&mut self, op: Operation, k: usize) -> Result<AxisUnits, Error> {
+        let given = self.config.axes[k].units;
+        let mut read = [None; 8];
+        for (slot, o) in read.iter_mut().zip(given.objects_to_read()) {
+            let r = self.sdo_read_raw(op, k, o.index, o.sub)?;
+            let failed = r.is_err();
+            *slot = Some((o, r));
+            if failed {
+                break;
+            }
+        }
+        given
+            .resolve(|o| {
+                read.iter()
+                    .flatten()
+                    .find(|(r, _)| *r == o)
+                    .map_or(Err(SdoError::Idle), |(_, r)| *r)
+            })
+            .map_err(|error: UnitsError<SdoError>| {
+                Error::device(
+                    op,
+                    "CiA 402 units",
+                    &CanopenError::Units {
+                        node: self.axes[k].node.get(),
+                        error,
+                    },
+                )
+            })
+    }
+
     fn sdo_write_raw(
         &mut self,
         op: Operation,
@@ -956,7 +1032,7 @@ impl Cia402 {
     /// the values beyond what the command holds (they are clamped).
     fn set_torques(&mut self, tau: &[f64], slot: fn(&mut Axis) -> &mut i16) {
         for (k, v) in tau.iter().enumerate() {
-            let u = &self.config.axes[k].units;
+            let u = &self.axes[k].units;
             if (v / u.per_permille()).abs() > f64::from(i16::MAX) {
                 self.counters.commands_clamped += 1;
             }
@@ -972,7 +1048,8 @@ impl Cia402 {
         self.lifecycle.check(Operation::Get)?;
         Error::check_len("joint vector length", self.dof, out.len())?;
         for (k, o) in out.iter_mut().enumerate() {
-            *o = f(&self.axes[k], &self.config.axes[k].units);
+            let a = &self.axes[k];
+            *o = f(a, &a.units);
         }
         Ok(())
     }
@@ -997,8 +1074,7 @@ struct BudgetError {
 
 impl std::fmt::Display for BudgetError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        // Compact (the generic error keeps a few dozen bytes); `BusLoad`'s own text says it in
-        // full, with the bits.
+        // Compact; `BusLoad`'s own text says it in full, with the bits.
         let l = &self.load;
         write!(
             f,
@@ -1059,9 +1135,12 @@ impl Driver for Cia402 {
                     },
                 ));
             }
+            let units = self.read_units(OP, k)?;
             let position = self.sdo_read(OP, k, obj::POSITION_ACTUAL.index, 0)? as u32 as i32;
             let sw = self.sdo_read(OP, k, obj::STATUSWORD.index, 0)? as u16;
             let a = &mut self.axes[k];
+            a.units = units;
+            a.report.units = units;
             a.report.device_type = device_type;
             a.report.identity = identity;
             a.report.supported_modes = supported;
@@ -1271,10 +1350,9 @@ impl JointPositionSensor for Cia402 {
         self.read_each(q, |a, u| u.position(a.position))
     }
 
-    /// Half an encoder count of the first axis with the coarsest resolution.
+    /// The coarsest axis's resolution (half a position unit or half an encoder increment).
     fn joint_position_resolution(&self, _q: f64) -> f64 {
-        self.config
-            .axes
+        self.axes[..self.dof]
             .iter()
             .map(|a| a.units.position_resolution())
             .fold(0.0, f64::max)
@@ -1285,7 +1363,7 @@ impl JointPositionActuator for Cia402 {
     fn set_joint_position(&mut self, q: &[f64]) -> Result<(), Error> {
         self.check_mode(Mode::CyclicPosition, q.len())?;
         for (k, v) in q.iter().enumerate() {
-            let u = &self.config.axes[k].units;
+            let u = &self.axes[k].units;
             if (v / u.per_count()).abs() > f64::from(i32::MAX) {
                 self.counters.commands_clamped += 1;
             }
@@ -1312,7 +1390,7 @@ impl JointVelocityActuator for Cia402 {
     fn set_joint_velocity(&mut self, qd: &[f64]) -> Result<(), Error> {
         self.check_mode(Mode::CyclicVelocity, qd.len())?;
         for (k, v) in qd.iter().enumerate() {
-            self.axes[k].target_velocity = self.config.axes[k].units.velocity_counts(*v);
+            self.axes[k].target_velocity = self.axes[k].units.velocity_counts(*v);
         }
         Ok(())
     }

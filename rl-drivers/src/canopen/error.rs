@@ -1,13 +1,13 @@
 //! What can go wrong between a CANopen master and its CiA 402 drives, typed, each naming the
-//! node (and the state, object or code). The texts are short, the most telling part (node,
-//! code) first: the generic error keeps a few dozen bytes of them. The device reports them through the generic
+//! node (and the state, object or code), the most telling part (node, code) first. The generic
+//! error keeps each whole (`tests/error_texts.rs` renders the longest). The device reports them through the generic
 //! [`Error`](crate::Error) with the source `"CANopen"`, `"CiA 402"`, `"EMCY"`, `"SDO"`,
 //! `"heartbeat"` or `"EDS"`.
 
 use core::fmt;
 use core::time::Duration;
 
-use crate::cia402::{Mode, PowerState};
+use crate::cia402::{Mode, PowerState, UnitsError};
 use crate::proto::canopen::eds::CheckError;
 use crate::proto::canopen::emcy::{self, Emergency};
 use crate::proto::canopen::nmt;
@@ -117,6 +117,14 @@ pub enum CanopenError {
         /// The mapped length.
         expected: usize,
     },
+    /// The drive's units (position encoder resolution, gear ratio, feed constant, rated
+    /// torque) cannot be read and were not given.
+    Units {
+        /// The node.
+        node: u8,
+        /// Which object, and why.
+        error: UnitsError<SdoError>,
+    },
     /// The node's EDS refuses what the master would configure.
     Eds {
         /// The node.
@@ -130,7 +138,7 @@ impl fmt::Display for CanopenError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             CanopenError::Sdo { node, error } => match error {
-                // Compact: the generic error keeps 88 bytes; the code comes before the name.
+                // The code comes before the name.
                 SdoError::Aborted { address, code } => {
                     write!(f, "node {node}: {address} aborted {code}")
                 }
@@ -230,6 +238,20 @@ impl fmt::Display for CanopenError {
                 expected,
             } => write!(f, "node {node}: TPDO of {len} bytes, {expected} mapped"),
             CanopenError::Eds { node, error } => write!(f, "node {node}: EDS: {error}"),
+            CanopenError::Units {
+                node,
+                error: UnitsError::Unreadable { object, error },
+            } => {
+                write!(
+                    f,
+                    "node {node}: cannot read {:#06x}:{} ({}): {}; give the axis units instead",
+                    object.index,
+                    object.sub,
+                    object.name,
+                    error.reason()
+                )
+            }
+            CanopenError::Units { node, error } => write!(f, "node {node}: {error}"),
         }
     }
 }

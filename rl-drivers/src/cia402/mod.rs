@@ -13,4 +13,4 @@ pub mod units;
 
 pub use mode::Mode;
 pub use state::{Command, Controlword, PowerState, Statusword};
-pub use units::AxisUnits;
+pub use units::{AxisUnits, UnitsError, UnitsOverride};

@@ -82,6 +82,22 @@ pub const SOFTWARE_LIMIT_MIN: Object = Object::new(0x607D, 1, Integer32, "min po
 pub const SOFTWARE_LIMIT_MAX: Object = Object::new(0x607D, 2, Integer32, "max position limit");
 /// 0x607F max profile velocity (counts/s).
 pub const MAX_PROFILE_VELOCITY: Object = Object::new(0x607F, 0, Unsigned32, "max profile velocity");
+/// 0x608F:1 position encoder resolution: encoder increments (per 0x608F:2 motor revolutions).
+pub const ENCODER_INCREMENTS: Object = Object::new(0x608F, 1, Unsigned32, "encoder increments");
+/// 0x608F:2 position encoder resolution: motor revolutions.
+pub const ENCODER_MOTOR_REVOLUTIONS: Object =
+    Object::new(0x608F, 2, Unsigned32, "encoder motor revolutions");
+/// 0x6091:1 gear ratio: motor shaft revolutions (per 0x6091:2 driving shaft revolutions).
+pub const GEAR_MOTOR_REVOLUTIONS: Object =
+    Object::new(0x6091, 1, Unsigned32, "gear motor revolutions");
+/// 0x6091:2 gear ratio: driving shaft revolutions.
+pub const GEAR_SHAFT_REVOLUTIONS: Object =
+    Object::new(0x6091, 2, Unsigned32, "gear shaft revolutions");
+/// 0x6092:1 feed constant: feed in position units (per 0x6092:2 driving shaft revolutions).
+pub const FEED: Object = Object::new(0x6092, 1, Unsigned32, "feed constant");
+/// 0x6092:2 feed constant: driving shaft revolutions.
+pub const FEED_SHAFT_REVOLUTIONS: Object =
+    Object::new(0x6092, 2, Unsigned32, "feed shaft revolutions");
 /// 0x60B1 velocity offset (counts/s).
 pub const VELOCITY_OFFSET: Object = Object::new(0x60B1, 0, Integer32, "velocity offset");
 /// 0x60B2 torque offset (‰ of rated torque): the feed-forward torque in CSP and CSV.

@@ -58,8 +58,11 @@ pub trait DeviceError: fmt::Debug + fmt::Display {
     fn kind(&self) -> ErrorKind;
 }
 
-/// Bytes a [`Description`] holds; longer text is cut at a character boundary and marked `…`.
-pub const DESCRIPTION_CAPACITY: usize = 64;
+/// Bytes a [`Description`] holds: room for the longest reason any driver of this crate gives
+/// (a drive's fault with its EMCY code and name, a unit object it cannot give with the SDO abort
+/// code and its name; `tests/error_texts.rs` renders the worst case of each and fails if one is
+/// cut). Longer text from elsewhere is cut at a character boundary and marked `…`.
+pub const DESCRIPTION_CAPACITY: usize = 248;
 
 /// A short text in a fixed buffer: the description of a protocol error, written with
 /// [`core::fmt::Write`] without allocating. Text beyond [`DESCRIPTION_CAPACITY`] bytes is cut at
@@ -126,6 +129,7 @@ impl fmt::Write for Description {
         };
         self.bytes[len..len + take].copy_from_slice(&s.as_bytes()[..take]);
         // `take <= room <= DESCRIPTION_CAPACITY < 256`.
+        const _: () = assert!(DESCRIPTION_CAPACITY < 256);
         self.len = (len + take) as u8;
         Ok(())
     }

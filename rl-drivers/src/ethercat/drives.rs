@@ -5,7 +5,8 @@
 //!
 //! - `open`: scan, distributed clocks (delays, offsets, drift compensation), INIT → PRE-OP,
 //!   find the drives, map their PDOs (our mapping written by SDO, or the drive's own if it
-//!   refuses), read their units (0x608F, 0x6091, 0x6076) and positions (0x6064), configure sync
+//!   refuses), read their units (0x608F, 0x6091, 0x6092, 0x6076: a drive that cannot give one
+//!   the configuration does not give is refused, naming the object) and positions (0x6064), configure sync
 //!   managers and FMMUs, start SYNC0 at the period, PRE-OP → SAFE-OP, and exchange process data
 //!   once: [`JointDevice::dof`] and [`JointPositionSensor::joint_position`] are valid from here,
 //!   before any drive is enabled.
@@ -33,7 +34,8 @@ use crate::capability::{
 use crate::cia402::object as obj;
 use crate::cia402::state::Goal;
 use crate::cia402::{
-    AxisUnits, Command as DriveCommand, Controlword, Mode, PowerState, Statusword,
+    AxisUnits, Command as DriveCommand, Controlword, Mode, PowerState, Statusword, UnitsError,
+    UnitsOverride,
 };
 use crate::device::{Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::canopen::pdo::Entry;
@@ -50,8 +52,10 @@ pub struct EthercatConfig {
     pub period: Duration,
     /// The mode of every drive.
     pub mode: Mode,
-    /// Units per drive (missing entries: read from the drive, else [`AxisUnits::default`]).
-    pub units: Vec<AxisUnits>,
+    /// Units the user gives per drive, in joint order; what an entry leaves out (and every
+    /// unit of a drive without an entry) is read from the drive (0x608F, 0x6091, 0x6092,
+    /// 0x6076), and a drive that cannot give it is refused before it is enabled.
+    pub units: Vec<UnitsOverride>,
     /// Whether to set up distributed clocks and SYNC0 (drives in CSP usually need it).
     pub distributed_clocks: bool,
     /// SYNC0 shift after the cycle start.
@@ -550,27 +554,61 @@ fn offsets(rx: &[Entry], tx: &[Entry]) -> Option<Offsets> {
     })
 }
 
-/// The drive's units from 0x608F (encoder increments per motor revolutions), 0x6091 (motor
-/// revolutions per shaft revolutions) and 0x6076 (rated torque, mN·m); defaults where absent.
-fn read_units(m: &mut Master, k: usize) -> AxisUnits {
-    let mut u = AxisUnits::default();
-    let mut ratio = |index: u16| -> Option<f64> {
-        let a = m.sdo_read_u64(k, index, 1).ok()?;
-        let b = m.sdo_read_u64(k, index, 2).ok()?;
-        (a > 0 && b > 0).then(|| a as f64 / b as f64)
-    };
-    if let Some(c) = ratio(0x608F) {
-        u.counts_per_rev = c;
+/// The drive's units: those `given`, the rest read by CoE SDO from 0x608F (encoder increments
+/// per motor revolutions), 0x6091 (motor revolutions per shaft revolutions), 0x6092 (position
+/// units per shaft revolutions) and 0x6076 (rated torque, mN·m).
+fn read_units(
+    m: &mut Master,
+    k: usize,
+    given: &UnitsOverride,
+) -> Result<AxisUnits, UnitsError<EcError>> {
+    given.resolve(|o| m.sdo_read_u64(k, o.index, o.sub))
+}
+
+/// No device answers on the interface, for the generic error.
+struct NoDevicesOn<'a>(&'a str);
+
+impl core::fmt::Display for NoDevicesOn<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "no EtherCAT device answers on `{}`: no frame came back (is a segment's IN port \
+             connected to this interface?)",
+            self.0
+        )
     }
-    if let Some(g) = ratio(0x6091) {
-        u.gear_ratio = g;
-    }
-    if let Ok(t) = m.sdo_read_u64(k, 0x6076, 0) {
-        if t > 0 {
-            u.rated_torque_nm = t as f64 / 1000.0;
+}
+
+/// A drive refused for its units, as the generic error describes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnitsRefused {
+    /// The joint.
+    pub axis: usize,
+    /// Its device.
+    pub device: DeviceRef,
+    /// Which object, and why.
+    pub error: UnitsError<EcError>,
+}
+
+impl core::fmt::Display for UnitsRefused {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "joint {} ({}): ", self.axis, self.device)?;
+        match self.error {
+            // Compact: the object is named once.
+            UnitsError::Unreadable {
+                object,
+                error: EcError::Sdo { error, .. },
+            } => write!(
+                f,
+                "cannot read {:#06x}:{} ({}): {}; give the axis units instead",
+                object.index,
+                object.sub,
+                object.name,
+                error.reason()
+            ),
+            e => write!(f, "{e}"),
         }
     }
-    u
 }
 
 /// Output and input bytes of a device that is no drive, from its SII PDOs.
@@ -601,7 +639,14 @@ impl Driver for EthercatDrives {
         let e = |e| to_error(OP, e);
         self.origin = Instant::now();
         let mut m = Master::open(self.config.master.clone()).map_err(e)?;
-        m.scan().map_err(e)?;
+        m.scan().map_err(|error| match error {
+            EcError::NoDevices => Error::device(
+                OP,
+                "EtherCAT",
+                &NoDevicesOn(self.config.master.interface.as_str()),
+            ),
+            error => to_error(OP, error),
+        })?;
         self.names = m.devices.iter().map(|d| d.name.clone()).collect();
         self.dc = if self.config.distributed_clocks {
             m.dc_setup(self.origin, self.config.dc_static_frames)
@@ -635,17 +680,23 @@ impl Driver for EthercatDrives {
                         },
                     )
                 })?;
-                let units = match self.config.units.get(axis) {
-                    Some(u) => *u,
-                    None => read_units(&mut m, k),
-                };
-                if !units.is_valid() {
-                    return Err(Error::InvalidArgument {
-                        what: "axis units (finite, positive factors; joint index)",
-                        expected: axis,
-                        got: axis,
-                    });
-                }
+                let given = self
+                    .config
+                    .units
+                    .get(axis)
+                    .copied()
+                    .unwrap_or(UnitsOverride::NONE);
+                let units = read_units(&mut m, k, &given).map_err(|error| {
+                    Error::device(
+                        OP,
+                        "CiA 402 units",
+                        &UnitsRefused {
+                            axis,
+                            device: m.devices[k].reference(),
+                            error,
+                        },
+                    )
+                })?;
                 if self.dc.is_some() {
                     // DC-synchronous mode where the drive has the object (best effort).
                     let _ = m.sdo_download(k, Address::new(0x1C32, 1), &2u16.to_le_bytes(), false);

@@ -216,7 +216,7 @@ impl fmt::Display for EcError {
                 device,
                 status,
                 code,
-                // Device and code first: a driver error's description keeps 64 bytes.
+                // Device and code first.
             } => write!(f, "{device}: {code}, AL {status}"),
             EcError::DevicesLost {
                 expected,

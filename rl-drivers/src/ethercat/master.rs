@@ -301,7 +301,12 @@ impl Master {
         self.link.drain()?;
         // INIT with error acknowledge, twice: the AL control handshake may refuse the first.
         let init = AlControl::acknowledge(AlState::Init).to_u16().to_le_bytes();
-        self.bwr(reg::AL_CONTROL, &init)?;
+        // A segment returns every frame, devices or not; a frame that never comes back means
+        // nothing is there.
+        self.bwr(reg::AL_CONTROL, &init).map_err(|e| match e {
+            EcError::Timeout { .. } => EcError::NoDevices,
+            e => e,
+        })?;
         let mut type_reg = [0u8; 1];
         let count = self.brd(reg::TYPE, &mut type_reg)?;
         if count == 0 {

@@ -17,6 +17,6 @@ pub mod mailbox;
 pub mod master;
 pub mod process;
 
-pub use drives::{DriveFault, EthercatConfig, EthercatDrives};
+pub use drives::{DriveFault, EthercatConfig, EthercatDrives, UnitsRefused};
 pub use error::{DeviceRef, EcError};
 pub use master::{Master, MasterConfig, SubDevice};

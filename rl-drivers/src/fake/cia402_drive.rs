@@ -11,7 +11,9 @@
 //! than its mapping is an EMCY 0x8210. Faults can be injected ([`FakeFault`]).
 //!
 //! The fake runs its own thread (it imitates remote hardware); it serves on any
-//! [`CanTransport`] — cannelloni UDP or TCP on loopback, SocketCAN, or the in-process bus.
+//! [`CanTransport`] — cannelloni UDP or TCP on loopback, SocketCAN, or the in-process bus. On
+//! cannelloni UDP it serves one master, the first sender, and ignores (counts) datagrams from
+//! other addresses while that master is active, as a gateway with one remote would.
 
 mod motor;
 mod node;
@@ -48,8 +50,13 @@ pub const FAKE_EDS: &str = include_str!("../../data/rl-fake-cia402.eds");
 pub struct FakeAxis {
     /// Node id.
     pub node: u8,
-    /// Counts ↔ joint units (as the master is configured).
+    /// The drive's units: its encoder, gear, feed constant (position units per joint
+    /// revolution) and rated torque, which it reports in 0x608F, 0x6091, 0x6092 and 0x6076 and
+    /// which convert its counts to joint units.
     pub units: AxisUnits,
+    /// Whether the drive has the factor-group objects 0x608F, 0x6091 and 0x6092 (`false`: an
+    /// SDO upload of them is aborted with "object does not exist", as on a drive without them).
+    pub unit_objects: bool,
     /// Position at power-up, rad (or m).
     pub initial: f64,
     /// Lowest position, rad.
@@ -68,6 +75,7 @@ impl FakeAxis {
         Self {
             node,
             units: AxisUnits::default(),
+            unit_objects: true,
             initial: 0.0,
             lower: -core::f64::consts::PI,
             upper: core::f64::consts::PI,
@@ -159,6 +167,51 @@ impl FakeCia402Config {
             pcap: None,
             candump: None,
         })
+    }
+}
+
+fn invalid_input(text: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, text)
+}
+
+/// The factor-group objects of an axis: encoder resolution, gear ratio, feed constant.
+fn unit_objects(a: &FakeAxis) -> io::Result<Option<[(u32, u32); 3]>> {
+    if !a.units.is_valid() {
+        return Err(invalid_input(format!(
+            "node {}: units must be finite and positive: {:?}",
+            a.node, a.units
+        )));
+    }
+    if !a.unit_objects {
+        return Ok(None);
+    }
+    let u = &a.units;
+    let mut out = [(0, 0); 3];
+    for (slot, (value, object)) in out.iter_mut().zip([
+        (u.counts_per_rev, "0x608F (counts per revolution)"),
+        (u.gear_ratio, "0x6091 (gear ratio)"),
+        (u.units_per_rev(), "0x6092 (feed constant)"),
+    ]) {
+        *slot = crate::cia402::units::ratio(value).ok_or_else(|| {
+            invalid_input(format!(
+                "node {}: {value} does not fit {object} as a ratio of 32-bit integers",
+                a.node
+            ))
+        })?;
+    }
+    Ok(Some(out))
+}
+
+/// 0x6076 of an axis, mN·m.
+fn rated_torque_mnm(a: &FakeAxis) -> io::Result<u32> {
+    let mnm = (a.units.rated_torque_nm * 1000.0).round();
+    if mnm >= 1.0 && mnm <= f64::from(u32::MAX) {
+        Ok(mnm as u32)
+    } else {
+        Err(invalid_input(format!(
+            "node {}: rated torque {} N·m does not fit 0x6076 (mN·m)",
+            a.node, a.units.rated_torque_nm
+        )))
     }
 }
 
@@ -286,6 +339,9 @@ pub struct FakeStatus {
     pub frames_sent: u64,
     /// Master connections accepted (TCP).
     pub connections: u64,
+    /// Frames or datagrams the transport refused: from another sender than the master it
+    /// serves (a bus would not deliver them), or malformed.
+    pub rejected: u64,
     /// The longest the fake's own thread woke after it meant to (a wait's deadline, a frame's
     /// due time, a received frame's kernel timestamp where the transport has one): real drives have their own CPU; a fake that shares one may be held up, and
     /// a test can tell that apart from a defect of the master.
@@ -376,14 +432,16 @@ impl FakeCia402 {
                 ));
             }
             let position = a.initial / a.units.per_count();
-            nodes.push(Node::new(
+            let mut node = Node::new(
                 id,
                 &config.eds,
                 position,
                 a.limits(),
                 (config.tpdo_delay, config.sync_loss_periods),
                 now,
-            ));
+            );
+            node.set_units(unit_objects(a)?, rated_torque_mnm(a)?);
+            nodes.push(node);
         }
         let pcap = config.pcap.as_deref().map(PcapLog::create).transpose()?;
         let candump = config
@@ -667,12 +725,23 @@ impl Worker {
                 counters: n.counters,
             })
             .collect();
+        let rejected = match &self.link {
+            Link::Transport(t) => {
+                let c = t.counters();
+                c.rejected + c.corrupt
+            }
+            Link::Tcp { peer, .. } => peer.as_ref().map_or(0, |p| {
+                let c = p.counters();
+                c.rejected + c.corrupt
+            }),
+        };
         let mut s = lock(&self.shared);
         s.status = FakeStatus {
             nodes,
             frames_received: self.frames_received,
             frames_sent: self.frames_sent,
             connections: self.connections,
+            rejected,
             max_lateness: self.max_lateness,
             last_error: self.last_error.clone(),
         };

@@ -12,6 +12,11 @@
 //! Fault injection ([`Fault`]): lost frames, a wrong working counter, a device falling back to
 //! SAFE-OP with an AL status code.
 //!
+//! The link: when the interface goes down (a cable pulled, `ip link set … down`) or away, the
+//! segment keeps its state and waits for it, reopening its socket if the interface was
+//! recreated; frames are answered again once it is back. The devices meanwhile do what their
+//! firmware does without frames: the process data watchdog drops a device in OP to SAFE-OP.
+//!
 //! Timing: frames are answered as soon as they are processed (an EtherCAT segment processes on
 //! the fly); each device's firmware runs after every frame and every `pdi_tick`, so AL
 //! transitions and mailbox answers are ready for the master's next frame unless a description
@@ -79,6 +84,8 @@ pub struct SegmentCounters {
     /// Frames ignored because they were already processed (the source's forwarded bit set: a
     /// returning frame or our own echo).
     pub ignored: u64,
+    /// Times the interface went down or away (the segment waited for it to come back).
+    pub link_down: u64,
 }
 
 /// What one device looks like from outside, for status lines and tests.
@@ -349,7 +356,25 @@ impl FakeSegment {
     /// Opens the raw socket on the configured interface (in the caller's network namespace)
     /// and starts the segment's thread.
     pub fn spawn(config: FakeSegmentConfig) -> io::Result<Self> {
+        for (k, d) in config.devices.iter().enumerate() {
+            if let description::Profile::Cia402 { motor, .. } = &d.profile {
+                let u = &motor.units;
+                let fits = [u.counts_per_rev, u.gear_ratio, u.units_per_rev()]
+                    .into_iter()
+                    .all(|v| crate::cia402::units::ratio(v).is_some());
+                if !(u.is_valid() && fits) {
+                    return Err(io::Error::new(
+                        io::ErrorKind::InvalidInput,
+                        format!(
+                            "device {k}: units {u:?} do not fit 0x608F, 0x6091 and 0x6092 \
+                             (ratios of 32-bit integers)"
+                        ),
+                    ));
+                }
+            }
+        }
         let link = PacketLink::open(&config.interface, ETHERTYPE)?;
+        let interface = config.interface.clone();
         let mut segment = Segment::new(
             &config.devices,
             config.hop_delay_ns,
@@ -370,7 +395,7 @@ impl FakeSegment {
                 if let Some(f) = hook {
                     f();
                 }
-                run(link, &mut segment, &s, &sh, tick)
+                run(link, &interface, &mut segment, &s, &sh, tick)
             })?;
         Ok(Self {
             stop,
@@ -427,8 +452,20 @@ impl Drop for FakeSegment {
     }
 }
 
+/// Whether a socket error means the interface is down or gone (the segment waits for it).
+fn link_gone(e: &io::Error) -> bool {
+    matches!(
+        e.raw_os_error(),
+        Some(libc::ENETDOWN | libc::ENXIO | libc::ENODEV | libc::ENETUNREACH)
+    )
+}
+
+/// How often a segment whose interface went away tries to open it again.
+const REOPEN_EVERY: Duration = Duration::from_millis(100);
+
 fn run(
     mut link: PacketLink,
+    interface: &str,
     segment: &mut Segment,
     stop: &AtomicBool,
     shared: &Mutex<Shared>,
@@ -439,17 +476,54 @@ fn run(
     let mut buf = [0u8; MAX_FRAME_LEN + 64];
     let mut next_tick = Instant::now() + tick;
     let mut last_publish = Instant::now();
+    // Since when the link has been down, if it is.
+    let mut down: Option<Instant> = None;
     while !stop.load(Ordering::Relaxed) {
         if let Ok(mut s) = shared.try_lock() {
             for f in s.faults.drain(..) {
                 segment.inject(f);
             }
         }
-        let got = link.recv_until(&mut buf, next_tick)?;
+        if let Some(since) = down {
+            // Wait a tick; an interface that was deleted and made again has a new index, so
+            // the socket is opened again after a while.
+            std::thread::sleep(tick);
+            if since.elapsed() >= REOPEN_EVERY {
+                if let Ok(l) = PacketLink::open(interface, ETHERTYPE) {
+                    link = l;
+                }
+                down = Some(Instant::now());
+            }
+        }
+        let got = match link.recv_until(&mut buf, next_tick) {
+            Ok(got) => {
+                if got.is_some() {
+                    down = None;
+                }
+                got
+            }
+            Err(e) if link_gone(&e) => {
+                if down.is_none() {
+                    segment.counters.link_down += 1;
+                    down = Some(Instant::now());
+                }
+                None
+            }
+            Err(e) => return Err(e),
+        };
         if let Some(n) = got {
             let n = n.min(MAX_FRAME_LEN);
             if segment.process(&mut buf[..n], now()) {
-                link.send(&buf[..n])?;
+                match link.send(&buf[..n]) {
+                    Ok(()) => {}
+                    Err(e) if link_gone(&e) => {
+                        if down.is_none() {
+                            segment.counters.link_down += 1;
+                            down = Some(Instant::now());
+                        }
+                    }
+                    Err(e) => return Err(e),
+                }
             }
         }
         segment.pdi_step(now());

@@ -26,7 +26,17 @@
 //!   ±100 %.
 //! - **R3.** Several clients at once (one thread each). A command the fake does not implement
 //!   is answered `QeR<n>` with `ERRORMES<n>` explaining it — never a bare `QoK`. Replies end
-//!   with a carriage return unless [`FakeH7Config::r3_terminator`] is off.
+//!   with a carriage return unless [`FakeH7Config::r3_terminator`] is off. A read interrupted
+//!   by a signal goes on; it does not drop the client.
+//! - **Operation rights** (`CNTLON` … `CNTLOFF`) belong to the connection that took them and
+//!   end with it: another client's `CNTLON` meanwhile is refused (`QeR4002`), and its `SRVON`
+//!   or `RUN` without rights too (`QeR4000`, `QeR4001`). What the real controller does here is
+//!   not in the references at hand (RL's client and `shared/reference/mitsubishi-h7.md` only
+//!   show one client taking and giving back the rights; Mitsubishi's R protocol manual,
+//!   BFP-A4288, was not available); the fake takes the stricter reading — rights that outlive
+//!   their connection would let a second client switch the servo on unasked.
+//!   [`FakeH7::reset_r3_connections`] drops every R3 connection, as a controller that resets
+//!   them.
 
 use std::collections::{HashMap, VecDeque};
 use std::fmt;
@@ -63,6 +73,8 @@ pub mod r3_errors {
     pub const NO_CONTROL: u32 = 4000;
     /// `RUN` refused: no operation rights, servo off, or another program name.
     pub const CANNOT_RUN: u32 = 4001;
+    /// `CNTLON` while another connection holds the operation rights.
+    pub const CONTROL_HELD: u32 = 4002;
     /// Injected with [`FakeH7::set_r3_rejection`](super::FakeH7::set_r3_rejection).
     pub const REJECTED: u32 = 4100;
     /// The uploaded program has no usable `OPEN "ENET:…"` or `MXT` line.
@@ -383,10 +395,17 @@ struct Shared {
     frozen: bool,
     frozen_until: Option<Instant>,
     reject: Option<String>,
-    control: bool,
+    /// The R3 connection holding the operation rights, if one.
+    control: Option<u64>,
+    /// R3 connections accepted so far (each one's id).
+    r3_ids: u64,
+    /// Raised to drop every R3 connection open now ([`FakeH7::reset_r3_connections`]).
+    r3_reset: u64,
     servo_polls_left: Option<u32>,
     drop_fraction: f64,
     drop_seen: u64,
+    /// Replies still to drop in a row ([`FakeH7::drop_next`]).
+    drop_burst: u32,
     r3_split: Option<(usize, Duration)>,
     last_reply: Option<Packet>,
     handled: u64,
@@ -463,10 +482,13 @@ impl FakeH7 {
             frozen: false,
             frozen_until: None,
             reject: None,
-            control: false,
+            control: None,
+            r3_ids: 0,
+            r3_reset: 0,
             servo_polls_left: None,
             drop_fraction: 0.0,
             drop_seen: 0,
+            drop_burst: 0,
             r3_split: None,
             last_reply: None,
             handled: 0,
@@ -526,6 +548,18 @@ impl FakeH7 {
         let mut s = lock(&self.shared);
         s.drop_fraction = fraction.clamp(0.0, 1.0);
         s.drop_seen = 0;
+    }
+
+    /// Drops the next `count` replies in a row (a short loss on the link; the controller goes
+    /// on handling the packets).
+    pub fn drop_next(&self, count: u32) {
+        lock(&self.shared).drop_burst = count;
+    }
+
+    /// Drops every R3 connection open now (a controller that resets them); their operation
+    /// rights end with them. Clients may connect again.
+    pub fn reset_r3_connections(&self) {
+        lock(&self.shared).r3_reset += 1;
     }
 
     /// Freezes the controller: while frozen it reads real-time packets but neither handles
@@ -742,6 +776,10 @@ impl Cycle {
                 .fault
                 .filter(|f| f.every > 0 && count % u64::from(f.every) == 0)
                 .map(|f| f.fault);
+            if fault.is_none() && s.drop_burst > 0 {
+                s.drop_burst -= 1;
+                fault = Some(Fault::Drop);
+            }
             // Evenly spread drops: drop when the running share falls behind the fraction.
             if fault.is_none() && s.drop_fraction > 0.0 {
                 let due = (count as f64 * s.drop_fraction).floor() as u64;
@@ -989,8 +1027,8 @@ impl Shared {
         }
     }
 
-    /// Answers one R3 request body.
-    fn r3(&mut self, req: &Request<'_>) -> String {
+    /// Answers one R3 request body from connection `client`.
+    fn r3(&mut self, req: &Request<'_>, client: u64) -> String {
         self.status.r3_log.push(req.body.to_string());
         let error = |code: u32| format!("QeR{code}");
         if self.reject.as_deref() == Some(req.name()) {
@@ -1029,15 +1067,20 @@ impl Shared {
                     error(r3_errors::BAD_PROGRAM)
                 }
             },
-            "CNTLON" => {
-                self.control = true;
-                "QoK".into()
-            }
+            "CNTLON" => match self.control {
+                Some(holder) if holder != client => error(r3_errors::CONTROL_HELD),
+                _ => {
+                    self.control = Some(client);
+                    "QoK".into()
+                }
+            },
             "CNTLOFF" => {
-                self.control = false;
+                if self.control == Some(client) {
+                    self.control = None;
+                }
                 "QoK".into()
             }
-            "SRVON" if !self.control => error(r3_errors::NO_CONTROL),
+            "SRVON" if self.control != Some(client) => error(r3_errors::NO_CONTROL),
             "SRVON" => {
                 self.servo_polls_left = Some(self.config.servo_on_polls);
                 "QoK".into()
@@ -1049,7 +1092,7 @@ impl Shared {
             }
             "RUN" => {
                 let name = args.split(';').next().unwrap_or("");
-                if !self.control
+                if self.control != Some(client)
                     || !self.status.servo_on
                     || name != self.status.program_name
                     || self.status.program_info.is_none()
@@ -1109,6 +1152,7 @@ impl Shared {
                 let text = match args.trim().parse::<u32>() {
                     Ok(r3_errors::NO_CONTROL) => "no operation rights (CNTLON first)",
                     Ok(r3_errors::CANNOT_RUN) => "program cannot run",
+                    Ok(r3_errors::CONTROL_HELD) => "another connection holds the operation rights",
                     Ok(r3_errors::REJECTED) => "rejected (injected error)",
                     Ok(r3_errors::BAD_PROGRAM) => "program lacks an ENET or MXT line",
                     Ok(r3_errors::BAD_REQUEST) => "malformed request",
@@ -1140,20 +1184,50 @@ fn serve_r3(listener: &TcpListener, shared: &Arc<Mutex<Shared>>, stop: &Arc<Atom
 /// One R3 client: every receive is one request (the protocol has no request terminator;
 /// clients wait for each reply before the next request, as RL does; a trailing CR or LF, as
 /// serial clients send, is ignored).
-fn serve_r3_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool) {
+fn serve_r3_client(stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicBool) {
+    let (id, reset) = {
+        let mut s = lock(shared);
+        s.r3_ids += 1;
+        (s.r3_ids, s.r3_reset)
+    };
+    serve_r3_requests(stream, shared, stop, id, reset);
+    // The operation rights end with their connection.
+    let mut s = lock(shared);
+    if s.control == Some(id) {
+        s.control = None;
+    }
+}
+
+/// Serves connection `id` until it closes, the fake stops, or its connections are reset
+/// (`reset` is the reset count when it connected).
+fn serve_r3_requests(
+    mut stream: TcpStream,
+    shared: &Mutex<Shared>,
+    stop: &AtomicBool,
+    id: u64,
+    reset: u64,
+) {
     if !tcp_server::poll_reads(&stream, POLL) {
         return;
     }
     let mut buf = [0u8; 1024];
     while !stop.load(Ordering::Relaxed) {
+        if lock(shared).r3_reset != reset {
+            let _ = stream.shutdown(std::net::Shutdown::Both);
+            return;
+        }
         let n = match tcp_server::read_polled(&mut stream, &mut buf) {
             Polled::Bytes(n) => n,
             Polled::Idle => continue,
             Polled::Closed => return,
         };
-        // A frozen controller holds the request until it thaws.
+        // A frozen controller holds the request until it thaws (or drops the connection).
         while lock(shared).is_frozen() {
             if stop.load(Ordering::Relaxed) {
+                return;
+            }
+            if lock(shared).r3_reset != reset {
+                let _ = stream.shutdown(std::net::Shutdown::Both);
                 return;
             }
             std::thread::sleep(Duration::from_millis(5));
@@ -1161,7 +1235,7 @@ fn serve_r3_client(mut stream: TcpStream, shared: &Mutex<Shared>, stop: &AtomicB
         let mut s = lock(shared);
         let text = trim_request(&buf[..n]);
         let mut reply = match Request::parse(text) {
-            Ok(req) => s.r3(&req),
+            Ok(req) => s.r3(&req, id),
             Err(_) => format!("QeR{}", r3_errors::BAD_REQUEST),
         };
         if s.config.r3_terminator {

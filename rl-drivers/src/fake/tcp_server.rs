@@ -60,7 +60,9 @@ pub(crate) enum Polled {
     Closed,
 }
 
-/// Reads what the client sent into `buf`.
+/// Reads what the client sent into `buf`. A read interrupted by a signal (EINTR: a socket
+/// read with a timeout is never restarted by the kernel) is no reason to drop the client: it
+/// counts as an idle poll, and the next read goes on.
 pub(crate) fn read_polled(stream: &mut TcpStream, buf: &mut [u8]) -> Polled {
     match stream.read(buf) {
         Ok(0) => Polled::Closed,
@@ -68,7 +70,7 @@ pub(crate) fn read_polled(stream: &mut TcpStream, buf: &mut [u8]) -> Polled {
         Err(e)
             if matches!(
                 e.kind(),
-                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut | io::ErrorKind::Interrupted
             ) =>
         {
             Polled::Idle

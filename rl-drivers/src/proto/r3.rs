@@ -360,8 +360,7 @@ impl JointReport {
 }
 
 /// The controller status from a `DSTATE` reply: `QoK` + RunSts (2 hex digits) + StopSts (2 hex
-/// digits) + `errorNo;stepNo;mechNo`. (RL's `doDstate` reads StopSts from the RunSts digits
-/// again, a bug; this parser reads digits 3 and 4.)
+/// digits) + `errorNo;stepNo;mechNo`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct DState {
     /// RunSts bits ([`run_bits`]).

@@ -1,11 +1,34 @@
-//! Helpers shared by the EtherCAT tests: the real-hardware captures, read with the pcap-file
-//! crate (not our code), and the privileges some tests need.
+//! Helpers shared by the EtherCAT and CiA 402 tests: the real-hardware captures, read with the
+//! pcap-file crate (not our code), the privileges some tests need, and drive units unlike any
+//! default.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 pub mod netns;
+
+use rl_drivers::cia402::AxisUnits;
+
+/// A 12-bit encoder behind a 121:1 gear, rated 0.64 N·m, position unit = encoder count: units
+/// unlike any default.
+pub const GEARED_121: AxisUnits = AxisUnits {
+    counts_per_rev: 4096.0,
+    gear_ratio: 121.0,
+    feed: None,
+    lead_m: None,
+    rated_torque_nm: 0.64,
+};
+
+/// A 17-bit encoder behind a 50.5:1 gear, rated 2.4 N·m, scaled by the drive to millidegrees
+/// (0x6092 = 360 000 per joint revolution).
+pub const MILLIDEGREES: AxisUnits = AxisUnits {
+    counts_per_rev: 131_072.0,
+    gear_ratio: 50.5,
+    feed: Some(360_000.0),
+    lead_m: None,
+    rated_torque_nm: 2.4,
+};
 
 /// The directory of the captures (`tests/data/ecat`).
 pub fn capture_dir() -> PathBuf {

@@ -37,7 +37,9 @@ fn ip(args: &[&str]) -> Result<(), String> {
 }
 
 impl Veth {
-    /// Creates `rlecat-<pid>-<n>` with the pair `ecm<n>` (master) and `ecs<n>` (segment).
+    /// Creates `rlecat-<pid>-<n>` (the prefix from `RL_NETNS_PREFIX` when set, so that runs
+    /// beside each other on one machine can tell theirs apart) with the pair `ecm<n>` (master)
+    /// and `ecs<n>` (segment).
     pub fn create() -> Result<Self, String> {
         static NEXT: AtomicU32 = AtomicU32::new(0);
         if !super::is_root() {
@@ -46,7 +48,8 @@ impl Veth {
             );
         }
         let n = NEXT.fetch_add(1, Ordering::Relaxed);
-        let ns = format!("rlecat-{}-{n}", std::process::id());
+        let prefix = std::env::var("RL_NETNS_PREFIX").unwrap_or_else(|_| "rlecat".into());
+        let ns = format!("{prefix}-{}-{n}", std::process::id());
         let (a, b) = (format!("ecm{n}"), format!("ecs{n}"));
         ip(&["netns", "add", &ns])?;
         let v = Self { ns, a, b };
@@ -79,6 +82,18 @@ impl Veth {
         let r = f();
         setns(home.as_fd(), CloneFlags::CLONE_NEWNET).expect("setns back");
         r
+    }
+
+    /// Sets interface `dev` of the namespace up or down (a cable plugged or pulled).
+    pub fn set_link(&self, dev: &str, up: bool) -> Result<(), String> {
+        ip(&[
+            "-n",
+            &self.ns,
+            "link",
+            "set",
+            dev,
+            if up { "up" } else { "down" },
+        ])
     }
 
     /// A command run inside the namespace (`ip netns exec NS program`).

@@ -1,40 +1,41 @@
-//! The AVX2 + FMA lanes (x86-64 only). All unsafe code of rl-plan is in this file.
+//! The AVX2 + FMA lanes (x86-64 only). The unsafe code of rl-plan is in this file, in
+//! `avx512.rs` (the same for AVX-512) and in the dispatch's calls of target-feature functions.
 //!
 //! Safety argument, once for every block below: the intrinsics need the `avx` (register
 //! type), `avx2` and `fma` target features. An [`Avx2`] value is only ever created and
 //! used inside [`super::kernel`] instantiated for it, which [`super::dispatch`] calls only
 //! through a `#[target_feature(enable = "avx2,fma")]` function, and only after
 //! `is_x86_feature_detected!("avx2")` and `…("fma")` returned true on this CPU. So whenever an
-//! intrinsic here executes, the CPU has the features it needs. The operations touch no memory
-//! (loads and stores go through `transmute` of plain arrays of the same size and alignment
-//! requirements: `__m256` and `[f32; 8]` are both 32 bytes and every bit pattern is valid for
-//! both).
+//! intrinsic here executes, the CPU has the features it needs. The only memory touched is by
+//! `load` and `store`, within a `&Wide` / `&mut Wide` of 16 numbers (the first 8; unaligned
+//! intrinsics, so the array's alignment does not matter).
 
 #![allow(unsafe_code)]
 
 use std::arch::x86_64::*;
 
-use super::lanes::Lanes;
+use super::lanes::{Lanes, Wide};
 
 /// Eight `f32` in a `__m256`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx2(__m256);
 
 impl Lanes for Avx2 {
+    const N: usize = 8;
     #[inline(always)]
     fn splat(x: f32) -> Self {
         // SAFETY: see the module docs (AVX present whenever this runs).
         Self(unsafe { _mm256_set1_ps(x) })
     }
     #[inline(always)]
-    fn from_array(a: [f32; 8]) -> Self {
-        // SAFETY: same size, every bit pattern valid for both types.
-        Self(unsafe { std::mem::transmute::<[f32; 8], __m256>(a) })
+    fn load(a: &Wide) -> Self {
+        // SAFETY: see the module docs; an unaligned load of the first 8 of 16 numbers.
+        Self(unsafe { _mm256_loadu_ps(a.as_ptr()) })
     }
     #[inline(always)]
-    fn to_array(self) -> [f32; 8] {
-        // SAFETY: same size, every bit pattern valid for both types.
-        unsafe { std::mem::transmute::<__m256, [f32; 8]>(self.0) }
+    fn store(self, a: &mut Wide) {
+        // SAFETY: see the module docs; an unaligned store into the first 8 of 16 numbers.
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), self.0) }
     }
     #[inline(always)]
     fn add(self, b: Self) -> Self {

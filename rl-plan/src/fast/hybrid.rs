@@ -1,5 +1,5 @@
-//! Spheres first, exact geometry last: a checker whose every "valid" is the exact
-//! geometry's, at close to the sphere checker's speed.
+//! Spheres first, exact geometry last: a checker whose every verdict is the exact geometry's,
+//! at close to the sphere checker's speed where the robot is clear.
 //!
 //! Three models of the robot: `cover`, spheres that contain the collision meshes
 //! ([`super::SphereSet::cover`]); optionally `inner`, the original (not conservative)
@@ -7,13 +7,13 @@
 //!
 //! 1. the lanes where `cover` touches nothing are valid — the meshes cannot touch anything
 //!    either;
-//! 2. if `inner` touches something in any lane, the batch is invalid (VAMP's verdict: a
-//!    configuration its spheres reject is rejected here too — conservative, so it never lets a
-//!    collision through);
-//! 3. every remaining lane (touching with `cover`, clear with `inner`) is decided by `exact`.
+//! 2. every other lane is decided by `exact`: a sphere verdict is never final where the meshes
+//!    may disagree. `inner` only orders them: lanes its spheres find in collision are asked
+//!    first (most are in collision, so a batch that collides ends after one exact check).
 //!
-//! So a configuration reported valid is valid for the exact geometry; the exact check runs
-//! only in the thin band where the models disagree.
+//! So "valid" and "invalid" are both the exact geometry's at every checked configuration: the
+//! start and goal of a problem are refused only when the meshes collide (the inner spheres
+//! refused UR5 starts 7–14 mm from a self-contact that the meshes do not make).
 
 use super::SphereChecker;
 use crate::scene::SceneValidity;
@@ -49,29 +49,23 @@ impl HybridChecker {
         self.exact.checks()
     }
 
-    fn decide(
-        &mut self,
-        space: &JointSpace,
-        a: &[f64],
-        b: &[f64],
-        ts: &[f64],
-        scratch: &mut Vec<f64>,
-    ) -> bool {
+    fn decide(&mut self, space: &JointSpace, a: &[f64], b: &[f64], ts: &[f64]) -> bool {
         let band = self.cover.segment_mask(space, a, b, ts);
         if band == 0 {
             return true;
         }
-        if let Some(inner) = &mut self.inner {
-            if !inner.segment_valid(space, a, b, ts, scratch) {
-                return false;
-            }
-        }
+        let first = match &mut self.inner {
+            Some(inner) => inner.segment_mask(space, a, b, ts) & band,
+            None => 0,
+        };
         self.q.resize(space.nq(), 0.0);
-        for (i, &t) in ts.iter().enumerate() {
-            if band & (1 << i) != 0 {
-                space.interpolate(a, b, t, &mut self.q);
-                if !self.exact.is_valid(&self.q) {
-                    return false;
+        for lanes in [first, band & !first] {
+            for (i, &t) in ts.iter().enumerate() {
+                if lanes & (1 << i) != 0 {
+                    space.interpolate(a, b, t, &mut self.q);
+                    if !self.exact.is_valid(&self.q) {
+                        return false;
+                    }
                 }
             }
         }
@@ -86,14 +80,13 @@ impl Validity for HybridChecker {
         if !space.contains(q) {
             return false;
         }
-        let mut scratch = Vec::new();
-        let ok = self.decide(&space, q, q, &[0.0], &mut scratch);
+        let ok = self.decide(&space, q, q, &[0.0]);
         self.free += u64::from(ok);
         ok
     }
 
     fn lanes(&self) -> usize {
-        8
+        self.cover.batch()
     }
 
     fn segment_valid(
@@ -102,11 +95,11 @@ impl Validity for HybridChecker {
         a: &[f64],
         b: &[f64],
         ts: &[f64],
-        scratch: &mut Vec<f64>,
+        _scratch: &mut Vec<f64>,
     ) -> bool {
-        for chunk in ts.chunks(8) {
+        for chunk in ts.chunks(self.cover.batch()) {
             self.checks += chunk.len() as u64;
-            if !self.decide(space, a, b, chunk, scratch) {
+            if !self.decide(space, a, b, chunk) {
                 return false;
             }
             self.free += chunk.len() as u64;

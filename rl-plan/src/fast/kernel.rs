@@ -1,11 +1,11 @@
-//! The sphere kernel: forward kinematics of eight configurations in lanes, then sphere tests
-//! with early exit. Written once over [`Lanes`]; [`super::dispatch`] instantiates it for AVX2
-//! and for the portable lanes.
+//! The sphere kernel: forward kinematics of eight or sixteen configurations in lanes, then
+//! sphere tests with early exit. Written once over [`Lanes`]; [`super::dispatch`] instantiates
+//! it for AVX-512, AVX2 and the portable lanes.
 //!
 //! Per batch:
 //!
 //! 1. Forward kinematics, base to tip: every body frame (rotation columns and origin, twelve
-//!    lane vectors) from its parent's, for all eight configurations at once; each revolute
+//!    lane vectors) from its parent's, for all configurations at once; each revolute
 //!    joint costs one [`sin_cos`] and twelve multiply–adds (plus 27 when its placement's
 //!    rotation is not a signed permutation).
 //! 2. Environment, distal links first: a link's bounding sphere against the obstacles (sorted
@@ -15,11 +15,11 @@
 //! The batch is valid only if every lane is: the first touch anywhere ends the check.
 
 use super::environment::{Environment, Shape};
-use super::lanes::{Lanes, sin_cos};
+use super::lanes::{Lanes, Wide, sin_cos};
 use super::robot::{FastLink, Motion, Rot, SphereRobot};
 
 /// A body frame in lanes, stored: rotation columns `[0..9]` (column-major), origin `[9..12]`.
-pub(crate) type FrameStore = [[f32; 8]; 12];
+pub(crate) type FrameStore = [Wide; 12];
 
 struct Frame<L> {
     r: [[L; 3]; 3],
@@ -31,27 +31,11 @@ impl<L: Lanes> Frame<L> {
     fn load(s: &FrameStore) -> Self {
         Self {
             r: [
-                [
-                    L::from_array(s[0]),
-                    L::from_array(s[1]),
-                    L::from_array(s[2]),
-                ],
-                [
-                    L::from_array(s[3]),
-                    L::from_array(s[4]),
-                    L::from_array(s[5]),
-                ],
-                [
-                    L::from_array(s[6]),
-                    L::from_array(s[7]),
-                    L::from_array(s[8]),
-                ],
+                [L::load(&s[0]), L::load(&s[1]), L::load(&s[2])],
+                [L::load(&s[3]), L::load(&s[4]), L::load(&s[5])],
+                [L::load(&s[6]), L::load(&s[7]), L::load(&s[8])],
             ],
-            t: [
-                L::from_array(s[9]),
-                L::from_array(s[10]),
-                L::from_array(s[11]),
-            ],
+            t: [L::load(&s[9]), L::load(&s[10]), L::load(&s[11])],
         }
     }
 
@@ -59,9 +43,9 @@ impl<L: Lanes> Frame<L> {
     fn store(&self, s: &mut FrameStore) {
         for j in 0..3 {
             for i in 0..3 {
-                s[3 * j + i] = self.r[j][i].to_array();
+                self.r[j][i].store(&mut s[3 * j + i]);
             }
-            s[9 + j] = self.t[j].to_array();
+            self.t[j].store(&mut s[9 + j]);
         }
     }
 
@@ -86,7 +70,7 @@ fn scaled<L: Lanes>(v: [L; 3], s: L) -> [L; 3] {
 
 /// Forward kinematics of the batch `q` (eight values per coordinate) into `frames`.
 #[inline(always)]
-pub(crate) fn forward<L: Lanes>(robot: &SphereRobot, q: &[[f32; 8]], frames: &mut [FrameStore]) {
+pub(crate) fn forward<L: Lanes>(robot: &SphereRobot, q: &[Wide], frames: &mut [FrameStore]) {
     let base = Frame {
         r: [
             splat3(robot.base_rot[0]),
@@ -111,7 +95,7 @@ pub(crate) fn forward<L: Lanes>(robot: &SphereRobot, q: &[[f32; 8]], frames: &mu
                 }
             }
         }
-        let qv = L::from_array(q[j.q as usize]);
+        let qv = L::load(&q[j.q as usize]);
         let r = match (j.motion, j.rot) {
             (Motion::Revolute, Rot::Perm { col, sign }) => {
                 let (s, c) = sin_cos(qv);
@@ -343,10 +327,10 @@ fn centre<L: Lanes>(frame: Option<&Frame<L>>, s: &[f32; 4]) -> [L; 3] {
 pub(crate) fn batch_valid<L: Lanes>(
     robot: &SphereRobot,
     env: &Environment,
-    q: &[[f32; 8]],
+    q: &[Wide],
     frames: &mut [FrameStore],
 ) -> bool {
-    batch::<L, true>(robot, env, q, frames, 0xFF) == 0
+    batch::<L, true>(robot, env, q, frames, L::full()) == 0
 }
 
 /// The lanes of `live` in which the batch `q` collides (all of `live` checked).
@@ -354,7 +338,7 @@ pub(crate) fn batch_valid<L: Lanes>(
 pub(crate) fn batch_mask<L: Lanes>(
     robot: &SphereRobot,
     env: &Environment,
-    q: &[[f32; 8]],
+    q: &[Wide],
     frames: &mut [FrameStore],
     live: u32,
 ) -> u32 {
@@ -366,7 +350,7 @@ pub(crate) fn batch_mask<L: Lanes>(
 fn batch<L: Lanes, const ANY: bool>(
     robot: &SphereRobot,
     env: &Environment,
-    q: &[[f32; 8]],
+    q: &[Wide],
     frames: &mut [FrameStore],
     live: u32,
 ) -> u32 {
@@ -487,7 +471,7 @@ fn spheres_touch<L: Lanes>(a: [L; 3], b: [L; 3], rs: f32) -> u32 {
 pub(crate) fn contacts(
     robot: &SphereRobot,
     env: &Environment,
-    q: &[[f32; 8]],
+    q: &[Wide],
     frames: &mut [FrameStore],
 ) -> Vec<(usize, Option<usize>, usize)> {
     use super::lanes::Portable;
@@ -497,9 +481,9 @@ pub(crate) fn contacts(
     let lane0 = |p: [L; 3], f: &dyn Fn([L; 3]) -> u32| {
         // Lane 0 broadcast, so other lanes cannot answer for it.
         f([
-            L::splat(p[0].to_array()[0]),
-            L::splat(p[1].to_array()[0]),
-            L::splat(p[2].to_array()[0]),
+            L::splat(p[0].to_wide()[0]),
+            L::splat(p[1].to_wide()[0]),
+            L::splat(p[2].to_wide()[0]),
         ]) != 0
     };
     let mut out = Vec::new();
@@ -516,7 +500,7 @@ pub(crate) fn contacts(
                     origin: env.origin,
                     obstacles: vec![*ob],
                 };
-                if lane0(p, &|p| sphere_env::<L, true>(&single, p, s[3], 0xFF)) {
+                if lane0(p, &|p| sphere_env::<L, true>(&single, p, s[3], L::full())) {
                     out.push((li, None, oi));
                 }
             }
@@ -534,8 +518,8 @@ pub(crate) fn contacts(
                     .iter()
                     .any(|t| {
                         let (p, q) = (centre(fa, s), centre(fb, t));
-                        let p0 = p.map(|v| L::splat(v.to_array()[0]));
-                        let q0 = q.map(|v| L::splat(v.to_array()[0]));
+                        let p0 = p.map(|v| L::splat(v.to_wide()[0]));
+                        let q0 = q.map(|v| L::splat(v.to_wide()[0]));
                         spheres_touch(p0, q0, s[3] + t[3]) != 0
                     })
             });
@@ -549,7 +533,7 @@ pub(crate) fn contacts(
 /// Every sphere's world centre and radius in lane 0 of `q` (portable lanes).
 pub(crate) fn world_spheres(
     robot: &SphereRobot,
-    q: &[[f32; 8]],
+    q: &[Wide],
     frames: &mut [FrameStore],
 ) -> Vec<(usize, [f32; 3], f32)> {
     use super::lanes::Portable;
@@ -562,7 +546,7 @@ pub(crate) fn world_spheres(
             let c = centre(f, s);
             out.push((
                 li,
-                [c[0].to_array()[0], c[1].to_array()[0], c[2].to_array()[0]],
+                [c[0].to_wide()[0], c[1].to_wide()[0], c[2].to_wide()[0]],
                 s[3],
             ));
         }

@@ -1,24 +1,36 @@
-//! Eight `f32` lanes: the vector type the sphere kernel is written in, once, generically.
+//! `f32` lanes: the vector type the sphere kernel is written in, once, generically.
 //!
-//! Two implementations: [`Portable`] (`[f32; 8]` with plain loops, which the compiler
-//! vectorises for the target it builds for — SSE2 on any x86-64, NEON on aarch64) and, on
-//! x86-64 CPUs that have them, AVX2 with FMA ([`super::avx2::Avx2`]), chosen at run time. The
-//! kernel instantiated with `Avx2` is compiled inside a `#[target_feature(enable = "avx2,fma")]`
-//! function, so every lane operation inlines to one instruction.
+//! Three implementations: [`Portable`] (eight lanes, `[f32; 8]` with plain loops, which the
+//! compiler vectorises for the target it builds for — SSE2 on any x86-64, NEON on aarch64) and,
+//! on x86-64 CPUs that have them, AVX2 with FMA (eight lanes, [`super::avx2::Avx2`]) and
+//! AVX-512 (sixteen lanes, [`super::avx512::Avx512`]), chosen at run time. The kernel
+//! instantiated for a SIMD type is compiled inside a `#[target_feature]` function, so every
+//! lane operation inlines to one instruction.
+//!
+//! Lane values are stored in [`Wide`] arrays of [`WIDTH`] numbers whatever the lane count;
+//! a type of `N` lanes uses the first `N`.
 //!
 //! [`sin_cos`] is written on top of the trait (no lookup tables, no branches): Cody–Waite
 //! reduction by π/2 into `[−π/4, π/4]`, Cephes' single-precision minimax polynomials, and the
 //! quadrant applied arithmetically. Its error is below 1e-6 for |x| < 100 (tested against
 //! `f64`).
 
-/// The operations the kernel needs on eight lanes.
+/// The most lanes of any implementation.
+pub(crate) const WIDTH: usize = 16;
+
+/// Storage of one lane vector (the first [`Lanes::N`] used).
+pub(crate) type Wide = [f32; WIDTH];
+
+/// The operations the kernel needs on `N` lanes.
 pub(crate) trait Lanes: Copy {
+    /// The number of lanes.
+    const N: usize;
     /// All lanes `x`.
     fn splat(x: f32) -> Self;
-    /// Lanes from an array.
-    fn from_array(a: [f32; 8]) -> Self;
-    /// Lanes to an array.
-    fn to_array(self) -> [f32; 8];
+    /// Lanes from the first `N` numbers of `a`.
+    fn load(a: &Wide) -> Self;
+    /// The lanes into the first `N` numbers of `a`.
+    fn store(self, a: &mut Wide);
     /// `a + b`.
     fn add(self, b: Self) -> Self;
     /// `a − b`.
@@ -41,8 +53,22 @@ pub(crate) trait Lanes: Copy {
     fn abs(self) -> Self;
     /// Whether `a < b` in every lane.
     fn all_lt(self, b: Self) -> bool;
-    /// The lanes where `a < b`, as bits `0..8`.
+    /// The lanes where `a < b`, as bits `0..N`.
     fn lt_mask(self, b: Self) -> u32;
+
+    /// Every lane's bit.
+    #[inline(always)]
+    fn full() -> u32 {
+        (1u32 << Self::N) - 1
+    }
+
+    /// The lanes as an array (the first `N` numbers).
+    #[inline(always)]
+    fn to_wide(self) -> Wide {
+        let mut w = [0.0; WIDTH];
+        self.store(&mut w);
+        w
+    }
 
     /// `−a`.
     #[inline(always)]
@@ -74,17 +100,20 @@ macro_rules! lanewise {
 }
 
 impl Lanes for Portable {
+    const N: usize = 8;
     #[inline(always)]
     fn splat(x: f32) -> Self {
         Self([x; 8])
     }
     #[inline(always)]
-    fn from_array(a: [f32; 8]) -> Self {
-        Self(a)
+    fn load(a: &Wide) -> Self {
+        let mut o = [0.0; 8];
+        o.copy_from_slice(&a[..8]);
+        Self(o)
     }
     #[inline(always)]
-    fn to_array(self) -> [f32; 8] {
-        self.0
+    fn store(self, a: &mut Wide) {
+        a[..8].copy_from_slice(&self.0);
     }
     #[inline(always)]
     fn add(self, b: Self) -> Self {
@@ -190,13 +219,13 @@ mod tests {
         let mut worst = 0.0f64;
         let mut x = -40.0f32;
         while x < 40.0 {
-            let lanes: [f32; 8] = std::array::from_fn(|i| x + i as f32 * 0.0137);
-            let (s, c) = sin_cos(Portable::from_array(lanes));
+            let lanes: Wide = std::array::from_fn(|i| x + i as f32 * 0.0137);
+            let (s, c) = sin_cos(Portable::load(&lanes));
             for i in 0..8 {
                 let v = lanes[i] as f64;
                 worst = worst
-                    .max((s.to_array()[i] as f64 - v.sin()).abs())
-                    .max((c.to_array()[i] as f64 - v.cos()).abs());
+                    .max((s.to_wide()[i] as f64 - v.sin()).abs())
+                    .max((c.to_wide()[i] as f64 - v.cos()).abs());
             }
             x += 0.1013;
         }
@@ -205,7 +234,7 @@ mod tests {
 
     #[test]
     fn comparisons() {
-        let a = Portable::from_array([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let a = Portable(std::array::from_fn(|i| i as f32));
         assert_eq!(a.lt_mask(Portable::splat(0.5)), 1);
         assert_eq!(a.lt_mask(Portable::splat(0.0)), 0);
         assert_eq!(a.lt_mask(Portable::splat(6.5)), 0x7F);

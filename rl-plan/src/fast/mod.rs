@@ -18,6 +18,8 @@
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 mod dispatch;
 mod environment;
 mod hybrid;
@@ -36,6 +38,7 @@ use crate::error::PlanError;
 use crate::space::JointSpace;
 use crate::validity::Validity;
 use kernel::FrameStore;
+use lanes::{WIDTH, Wide};
 
 /// The self-collision link pairs of `robot` whose spheres touch in every one of `samples`
 /// configurations drawn uniformly from `space` (seeded): pairs the sphere model cannot tell
@@ -49,25 +52,24 @@ pub fn always_touching_pairs(
     seed: u64,
 ) -> Vec<(String, String)> {
     let mut hits = vec![0usize; robot.self_pairs.len()];
-    let mut frames = vec![[[0.0f32; 8]; 12]; robot.joints.len()];
-    let mut lanes = vec![[0.0f32; 8]; robot.dof()];
+    let mut frames = vec![[[0.0f32; WIDTH]; 12]; robot.joints.len()];
+    let mut lanes = vec![[0.0f32; WIDTH]; robot.dof()];
     let mut q = vec![0.0; space.nq()];
     let mut rng = crate::rng::Rng::seed_from(seed);
     let empty = Environment::new(glam::DVec3::ZERO);
     for _ in 0..samples {
         space.sample_uniform(&mut rng, &mut q);
         for (j, lane) in lanes.iter_mut().enumerate() {
-            *lane = [q[j] as f32; 8];
+            *lane = [q[j] as f32; WIDTH];
         }
         for (a, b, _) in kernel::contacts(robot, &empty, &lanes, &mut frames) {
-            if let Some(b) = b {
-                if let Some(k) = robot
+            if let Some(b) = b
+                && let Some(k) = robot
                     .self_pairs
                     .iter()
                     .position(|&(x, y)| (x as usize, y as usize) == (a, b))
-                {
-                    hits[k] += 1;
-                }
+            {
+                hits[k] += 1;
             }
         }
     }
@@ -96,7 +98,7 @@ pub struct SphereChecker {
     space: JointSpace,
     backend: Backend,
     frames: Vec<FrameStore>,
-    lanes: Vec<[f32; 8]>,
+    lanes: Vec<Wide>,
     diff: Vec<f64>,
     checks: u64,
     free: u64,
@@ -115,8 +117,8 @@ impl SphereChecker {
         }
         let n = robot.joints.len();
         Ok(Self {
-            frames: vec![[[0.0; 8]; 12]; n],
-            lanes: vec![[0.0; 8]; robot.dof()],
+            frames: vec![[[0.0; WIDTH]; 12]; n],
+            lanes: vec![[0.0; WIDTH]; robot.dof()],
             diff: vec![0.0; robot.dof()],
             robot,
             env,
@@ -163,7 +165,7 @@ impl SphereChecker {
     /// (empty when `q` is valid for the spheres). For messages; slow.
     pub fn contacts(&mut self, q: &[f64]) -> Vec<String> {
         for (j, lane) in self.lanes.iter_mut().enumerate() {
-            *lane = [q[j] as f32; 8];
+            *lane = [q[j] as f32; WIDTH];
         }
         kernel::contacts(&self.robot, &self.env, &self.lanes, &mut self.frames)
             .into_iter()
@@ -182,7 +184,7 @@ impl SphereChecker {
     /// viewers).
     pub fn world_spheres(&mut self, q: &[f64]) -> Vec<(String, glam::DVec3, f64)> {
         for (j, lane) in self.lanes.iter_mut().enumerate() {
-            *lane = [q[j] as f32; 8];
+            *lane = [q[j] as f32; WIDTH];
         }
         kernel::world_spheres(&self.robot, &self.lanes, &mut self.frames)
             .into_iter()
@@ -202,7 +204,13 @@ impl SphereChecker {
         &self.robot.unmodelled
     }
 
-    /// Whether all of up to eight configurations `qs` (each `dof` numbers) are valid.
+    /// Configurations checked in one pass (the backend's lanes: 8 or 16).
+    pub fn batch(&self) -> usize {
+        self.backend.lanes()
+    }
+
+    /// Whether all of up to [`SphereChecker::batch`] configurations `qs` (each `dof` numbers)
+    /// are valid.
     pub fn all_valid(&mut self, qs: &[&[f64]]) -> bool {
         let Some(last) = qs.last() else {
             return true;
@@ -233,9 +241,9 @@ impl SphereChecker {
 
 impl SphereChecker {
     /// The lanes (bit `i` for `ts[i]`) in which `space.interpolate(a, b, t)` collides, every
-    /// lane checked (`ts.len() ≤ 8`).
+    /// lane checked (`ts.len() ≤` [`SphereChecker::batch`]; more are ignored).
     pub fn segment_mask(&mut self, space: &JointSpace, a: &[f64], b: &[f64], ts: &[f64]) -> u32 {
-        let n = ts.len().min(8);
+        let n = ts.len().min(self.batch());
         if n == 0 {
             return 0;
         }
@@ -272,7 +280,7 @@ impl Validity for SphereChecker {
     }
 
     fn lanes(&self) -> usize {
-        8
+        self.batch()
     }
 
     fn segment_valid(
@@ -286,10 +294,11 @@ impl Validity for SphereChecker {
         if ts.is_empty() {
             return true;
         }
-        if ts.len() > 8 {
-            // Batches of eight, in order, stopping at the first with a collision.
+        let lanes = self.batch();
+        if ts.len() > lanes {
+            // Batches, in order, stopping at the first with a collision.
             return ts
-                .chunks(8)
+                .chunks(lanes)
                 .all(|c| self.segment_valid_batch(space, a, b, c));
         }
         self.segment_valid_batch(space, a, b, ts)
@@ -305,7 +314,7 @@ impl Validity for SphereChecker {
 }
 
 impl SphereChecker {
-    /// [`Validity::segment_valid`] for at most eight fractions.
+    /// [`Validity::segment_valid`] for at most [`SphereChecker::batch`] fractions.
     fn segment_valid_batch(
         &mut self,
         space: &JointSpace,

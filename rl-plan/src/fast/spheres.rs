@@ -147,8 +147,9 @@ impl SphereSet {
         path: &Path,
         kinematics: &LoadedModel<N>,
     ) -> Result<Self, PlanError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| PlanError::Load(format!("{}: {e}", path.display())))?;
+        let text =
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| PlanError::Load(e.to_string()))?;
         Self::from_spherized_urdf_str(&text, kinematics).map_err(|e| match e {
             PlanError::File {
                 line,
@@ -172,6 +173,8 @@ impl SphereSet {
         text: &str,
         kinematics: &LoadedModel<N>,
     ) -> Result<Self, PlanError> {
+        rl_core::loader::check_xml(text, &rl_core::loader::InputLimits::DEFAULT)
+            .map_err(|e| PlanError::file("", "XML", e.to_string()))?;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             let p = e.pos();
             PlanError::file("", "XML", e.to_string()).at_position(p.row, p.col)
@@ -199,18 +202,18 @@ impl SphereSet {
                     .filter(|r: &f64| r.is_finite() && *r > 0.0)
                     .ok_or_else(|| at(s, "radius missing or not a positive number".into()))?;
                 let mut xyz = DVec3::ZERO;
-                if let Some(o) = c.children().find(|n| n.has_tag_name("origin")) {
-                    if let Some(v) = o.attribute("xyz") {
-                        let p: Vec<f64> = v
-                            .split_whitespace()
-                            .map(str::parse)
-                            .collect::<Result<_, _>>()
-                            .map_err(|_| at(o, format!("xyz \"{v}\" is not three numbers")))?;
-                        if p.len() != 3 || !p.iter().all(|x| x.is_finite()) {
-                            return Err(at(o, format!("xyz \"{v}\" is not three numbers")));
-                        }
-                        xyz = DVec3::new(p[0], p[1], p[2]);
+                if let Some(o) = c.children().find(|n| n.has_tag_name("origin"))
+                    && let Some(v) = o.attribute("xyz")
+                {
+                    let p: Vec<f64> = v
+                        .split_whitespace()
+                        .map(str::parse)
+                        .collect::<Result<_, _>>()
+                        .map_err(|_| at(o, format!("xyz \"{v}\" is not three numbers")))?;
+                    if p.len() != 3 || !p.iter().all(|x| x.is_finite()) {
+                        return Err(at(o, format!("xyz \"{v}\" is not three numbers")));
                     }
+                    xyz = DVec3::new(p[0], p[1], p[2]);
                 }
                 spheres.push((xyz, r));
             }

@@ -11,6 +11,9 @@
 //!   circle for circle coordinates — exceeds the current k-th distance.
 //! - [`Gnat`]: Brin's geometric near-neighbour access tree (VLDB 1995) for any metric (also
 //!   rotations): split points with tables of distance ranges prune by the triangle inequality.
+//! - [`KdtreeF32`]: the fast path's k-d tree over `f32`, leaves laid out for vector lanes, for
+//!   spaces of intervals ([`NnKind::Fast`] takes it where the space allows, else [`Kdtree`] or
+//!   [`Gnat`]).
 //!
 //! Results are sorted by distance, ties by id, so the structures agree exactly
 //! (`tests/nearest_neighbors.rs` repeats RL's test: the same k nearest and radius results as
@@ -18,10 +21,12 @@
 
 mod gnat;
 mod kdtree;
+mod kdtree_f32;
 mod linear;
 
 pub use gnat::Gnat;
 pub use kdtree::Kdtree;
+pub use kdtree_f32::KdtreeF32;
 pub use linear::Linear;
 
 use crate::error::PlanError;
@@ -74,6 +79,9 @@ pub enum NnKind {
     Kdtree,
     /// [`Gnat`].
     Gnat,
+    /// [`KdtreeF32`] for spaces of intervals; [`Kdtree`] with circles, [`Gnat`] with
+    /// rotations.
+    Fast,
 }
 
 impl NnKind {
@@ -86,6 +94,7 @@ impl NnKind {
                 Some(Self::Kdtree)
             }
             "gnat" | "gnatNearestNeighbors" => Some(Self::Gnat),
+            "fast" | "kdtree-f32" => Some(Self::Fast),
             _ => None,
         }
     }
@@ -100,6 +109,8 @@ pub enum Nn {
     Kdtree(Kdtree),
     /// GNAT.
     Gnat(Gnat),
+    /// `f32` k-d tree.
+    KdtreeF32(KdtreeF32),
 }
 
 impl Nn {
@@ -109,6 +120,11 @@ impl Nn {
             NnKind::Linear => Self::Linear(Linear::new(space)),
             NnKind::Kdtree => Self::Kdtree(Kdtree::new(space)?),
             NnKind::Gnat => Self::Gnat(Gnat::new(space)),
+            NnKind::Fast => match KdtreeF32::new(space) {
+                Ok(t) => Self::KdtreeF32(t),
+                Err(_) if space.is_vector() => Self::Kdtree(Kdtree::new(space)?),
+                Err(_) => Self::Gnat(Gnat::new(space)),
+            },
         })
     }
 }
@@ -119,6 +135,7 @@ macro_rules! dispatch {
             Nn::Linear($n) => $e,
             Nn::Kdtree($n) => $e,
             Nn::Gnat($n) => $e,
+            Nn::KdtreeF32($n) => $e,
         }
     };
 }

@@ -6,11 +6,15 @@
 //! - [`AdvancedOptimizer`]: drop only waypoints that are real corners (their distance from the
 //!   chord `i–k` is more than `ratio` of the chord), then cut segments longer than `length` in
 //!   half and repeat, so corners are cut ever closer (RL's `AdvancedOptimizer`).
+//! - [`ShortcutOptimizer`]: greedy shortcutting — from each waypoint, straight to the farthest
+//!   one it sees (VAMP's `shortcut_path`).
 
 mod advanced;
+mod shortcut;
 mod simple;
 
 pub use advanced::AdvancedOptimizer;
+pub use shortcut::ShortcutOptimizer;
 pub use simple::SimpleOptimizer;
 
 use crate::path::Path;
@@ -33,6 +37,8 @@ pub enum OptimizerKind {
     /// [`SimpleOptimizer`].
     #[default]
     Simple,
+    /// [`ShortcutOptimizer`] (VAMP's, 5 passes).
+    Shortcut,
     /// [`AdvancedOptimizer`] with `length` and `ratio`.
     Advanced {
         /// Longest segment after subdivision.
@@ -48,15 +54,17 @@ impl OptimizerKind {
         match *self {
             Self::None => None,
             Self::Simple => Some(Box::new(SimpleOptimizer)),
+            Self::Shortcut => Some(Box::new(ShortcutOptimizer::default())),
             Self::Advanced { length, ratio } => Some(Box::new(AdvancedOptimizer { length, ratio })),
         }
     }
 
-    /// `none`, `simple`, `advanced` (RL's defaults: length 1, ratio 0.1).
+    /// `none`, `simple`, `shortcut`, `advanced` (RL's defaults: length 1, ratio 0.1).
     pub fn parse(s: &str) -> Option<Self> {
         match s {
             "none" => Some(Self::None),
             "simple" | "simpleOptimizer" => Some(Self::Simple),
+            "shortcut" => Some(Self::Shortcut),
             "advanced" | "advancedOptimizer" => Some(Self::Advanced {
                 length: 1.0,
                 ratio: 0.1,

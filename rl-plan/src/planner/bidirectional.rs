@@ -5,7 +5,7 @@
 //! `balance`, the smaller one grows). The variants differ only in how each tree grows
 //! ([`Growth`]); each keeps its own file as its public face, made by [`two_tree_planner!`].
 
-use super::rrt::{RrtSettings, Step, connect_with, extend, extend_with};
+use super::rrt::{RrtSettings, Step, connect_once, connect_with, extend, extend_with};
 use super::tree::{Pair, Tree};
 use super::{Context, Stats};
 use crate::error::PlanError;
@@ -19,8 +19,11 @@ pub(crate) enum Growth {
     Extend,
     /// One step of at most `delta`, within the settings' dynamic domain when they have one.
     ExtendInDomain,
-    /// Steps of at most `delta` until the target is reached or a step is invalid.
+    /// Steps of at most `delta` until the target is reached or a step is invalid, each a
+    /// vertex (OMPL, VAMP).
     Connect,
+    /// The same steps, one vertex at the last valid one (RL's `RrtCon::connect`).
+    ConnectOnce,
 }
 
 /// A growth step: the tree grows towards the target with the settings' step (and domain).
@@ -33,6 +36,9 @@ impl Growth {
             Growth::Extend => |ctx, tree, target, s, buf| extend(ctx, tree, target, s.delta, buf),
             Growth::ExtendInDomain => extend_with,
             Growth::Connect => connect_with,
+            Growth::ConnectOnce => {
+                |ctx, tree, target, s, buf| connect_once(ctx, tree, target, s.delta, buf)
+            }
         }
     }
 }

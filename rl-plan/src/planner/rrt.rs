@@ -3,7 +3,9 @@
 //!
 //! - *extend*: from the nearest vertex, one step of at most `delta` towards the target;
 //! - *connect*: steps of at most `delta` towards the target until it is reached or a step is
-//!   invalid, every step a vertex (as OMPL and VAMP add them; RL adds only the last).
+//!   invalid, every step a vertex (as OMPL and VAMP add them: [`connect`]), or only the last
+//!   valid one, joined to the nearest vertex by one edge (RL's `RrtCon::connect`:
+//!   [`connect_once`]).
 //!
 //! [`Rrt`] grows one tree from the start towards uniform samples and stops when a new vertex is
 //! within `epsilon` of the goal.
@@ -118,6 +120,18 @@ pub(crate) fn extend(
     let Some((n, d)) = tree.nearest(ctx.space, target) else {
         return Step::Trapped;
     };
+    extend_from(ctx, tree, (n, d), target, delta, buf)
+}
+
+/// [`extend`] from vertex `n` at distance `d` from `target` (its nearest).
+fn extend_from(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    (n, d): (u32, f64),
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+) -> Step {
     if d == 0.0 {
         return Step::Reached(n);
     }
@@ -158,7 +172,7 @@ pub(crate) fn extend_with(
     if r < d {
         return Step::Trapped;
     }
-    let step = extend(ctx, tree, target, s.delta, buf);
+    let step = extend_from(ctx, tree, (n, d), target, s.delta, buf);
     let r = match step {
         Step::Trapped if r.is_infinite() => dd.radius,
         Step::Trapped => (r * (1.0 - dd.alpha)).max(dd.min_radius),
@@ -180,14 +194,41 @@ pub(crate) fn connect_with(
     connect(ctx, tree, target, s.delta, buf)
 }
 
+/// RL's connect (`RrtCon::connect`): steps of at most `delta` from the vertex nearest to
+/// `target` until it is reached or a step is invalid, then *one* vertex at the last valid step,
+/// its edge from the nearest vertex. Every step's motion is verified (the steps lie on that
+/// edge, so the edge is verified at the resolution). A tree grows by one vertex per connect, as
+/// RL's does, not by one per step.
+pub(crate) fn connect_once(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+) -> Step {
+    connect_steps(ctx, tree, target, delta, buf, false)
+}
+
 /// Steps of at most `delta` from the vertex nearest to `target` until it is reached or a step
-/// is invalid.
+/// is invalid, each step a vertex.
 pub(crate) fn connect(
     ctx: &mut Context,
     tree: &mut Tree,
     target: &[f64],
     delta: f64,
     buf: &mut Vec<f64>,
+) -> Step {
+    connect_steps(ctx, tree, target, delta, buf, true)
+}
+
+/// The steps of a connect; a vertex for each valid step (`per_step`) or for the last one.
+fn connect_steps(
+    ctx: &mut Context,
+    tree: &mut Tree,
+    target: &[f64],
+    delta: f64,
+    buf: &mut Vec<f64>,
+    per_step: bool,
 ) -> Step {
     let Some((n, d)) = tree.nearest(ctx.space, target) else {
         return Step::Trapped;
@@ -197,11 +238,13 @@ pub(crate) fn connect(
     }
     let steps = ((d / delta).ceil() as usize).max(1);
     let nq = ctx.space.nq();
-    // `buf` holds the origin in its second half and the step in its first.
-    buf.resize(2 * nq, 0.0);
-    let (step, origin) = buf.split_at_mut(nq);
+    // `buf`: the step being tried, the last valid step, the origin.
+    buf.resize(3 * nq, 0.0);
+    let (step, rest) = buf.split_at_mut(nq);
+    let (last, origin) = rest.split_at_mut(nq);
     origin.copy_from_slice(tree.q(n));
-    let mut from = n;
+    last.copy_from_slice(origin);
+    let (mut from, mut valid) = (n, 0);
     for k in 1..=steps {
         if k == steps {
             step.copy_from_slice(target);
@@ -209,16 +252,26 @@ pub(crate) fn connect(
             ctx.space
                 .interpolate(origin, target, k as f64 / steps as f64, step);
         }
-        if !ctx.motion_valid(tree.q(from), step, true) {
-            return if from == n {
-                Step::Trapped
-            } else {
-                Step::Advanced(from)
-            };
+        if !ctx.motion_valid(last, step, true) {
+            break;
         }
-        from = tree.add(ctx.space, step, from);
+        if per_step {
+            from = tree.add(ctx.space, step, from);
+        }
+        last.copy_from_slice(step);
+        valid = k;
     }
-    Step::Reached(from)
+    if valid == 0 {
+        return Step::Trapped;
+    }
+    if !per_step {
+        from = tree.add(ctx.space, last, n);
+    }
+    if valid == steps {
+        Step::Reached(from)
+    } else {
+        Step::Advanced(from)
+    }
 }
 
 /// The path from the start tree's root to vertex `v` (within `epsilon` of the goal), then the
@@ -276,12 +329,11 @@ pub(crate) fn solve_single(
         }
         i += 1;
         choose(ctx, &mut chosen);
-        if let Some(v) = extend(ctx, tree, &chosen, settings.delta, &mut buf).vertex() {
-            if ctx.space.distance(tree.q(v), goal) <= settings.epsilon {
-                if let Some(p) = finish_at_goal(ctx, tree, v, goal) {
-                    break Some(p);
-                }
-            }
+        if let Some(v) = extend(ctx, tree, &chosen, settings.delta, &mut buf).vertex()
+            && ctx.space.distance(tree.q(v), goal) <= settings.epsilon
+            && let Some(p) = finish_at_goal(ctx, tree, v, goal)
+        {
+            break Some(p);
         }
     };
     stats.iterations = i;

@@ -137,8 +137,9 @@ impl MotionRequest {
 
     /// Reads the request file at `path`.
     pub fn load(path: &Path) -> Result<Self, PlanError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| PlanError::Load(format!("{}: {e}", path.display())))?;
+        let text =
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| PlanError::Load(e.to_string()))?;
         Self::parse(&text, path)
     }
 

@@ -102,15 +102,15 @@ fn resolve(dir: &Path, href: &str) -> PathBuf {
     if p.exists() {
         return p;
     }
-    if let (Some(parent), Some(name)) = (p.parent(), p.file_name().and_then(|n| n.to_str())) {
-        if let Ok(rd) = std::fs::read_dir(parent) {
-            for e in rd.flatten() {
-                if e.file_name()
-                    .to_str()
-                    .is_some_and(|f| f.eq_ignore_ascii_case(name))
-                {
-                    return e.path();
-                }
+    if let (Some(parent), Some(name)) = (p.parent(), p.file_name().and_then(|n| n.to_str()))
+        && let Ok(rd) = std::fs::read_dir(parent)
+    {
+        for e in rd.flatten() {
+            if e.file_name()
+                .to_str()
+                .is_some_and(|f| f.eq_ignore_ascii_case(name))
+            {
+                return e.path();
             }
         }
     }
@@ -120,13 +120,16 @@ fn resolve(dir: &Path, href: &str) -> PathBuf {
 impl Scenario {
     /// Reads the scenario at `path`.
     pub fn load(path: &Path) -> Result<Self, PlanError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| PlanError::Load(format!("{}: {e}", path.display())))?;
+        let text =
+            rl_core::loader::read_text(path, rl_core::loader::InputLimits::DEFAULT.max_bytes)
+                .map_err(|e| PlanError::Load(e.to_string()))?;
         Self::parse(&text, path)
     }
 
     /// Reads a scenario from `text` (the file `path`, for relative `href`s and messages).
     pub fn parse(text: &str, path: &Path) -> Result<Self, PlanError> {
+        rl_core::loader::check_xml(text, &rl_core::loader::InputLimits::DEFAULT)
+            .map_err(|e| PlanError::file(path, "XML", e.to_string()))?;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             let p = e.pos();
             PlanError::file(path, "XML", e.to_string()).at_position(p.row, p.col)

@@ -46,7 +46,7 @@ pub trait Sampler {
     ) -> bool {
         let mut i = 0u64;
         loop {
-            if i % 4 == 0 && budget.expired() {
+            if i.is_multiple_of(4) && budget.expired() {
                 return false;
             }
             i += 1;

@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::DVec3;
+use rl_core::loader::InputLimits;
 
+use super::SceneLimits;
 use crate::error::{SgError, SgErrorKind};
 use crate::geometry::{MeshStats, TriangleMesh};
 
@@ -67,7 +69,18 @@ pub fn mesh_from_bytes(bytes: &[u8], path: &Path) -> Result<(TriangleMesh, MeshS
             loader.load_stl_from_slice(&copy, path)
         }
         Format::Stl => loader.load_stl_from_slice(bytes, path),
-        Format::Collada => loader.load_collada_from_slice(bytes, path),
+        Format::Collada => {
+            // COLLADA is XML, read by roxmltree inside mesh-loader: the same attribute, depth
+            // and size bounds as every XML file here, checked first.
+            if let Ok(text) = std::str::from_utf8(bytes) {
+                let limits = InputLimits {
+                    max_bytes: u64::MAX,
+                    ..InputLimits::DEFAULT
+                };
+                super::xml::check(text, &limits).map_err(|e| e.in_file(path))?;
+            }
+            loader.load_collada_from_slice(bytes, path)
+        }
         // Materials are not needed: every `mtllib` reads as empty.
         Format::Obj => loader.load_obj_from_slice_with_reader(bytes, path, |_| Ok(Vec::new())),
     }
@@ -87,24 +100,45 @@ pub fn mesh_from_bytes(bytes: &[u8], path: &Path) -> Result<(TriangleMesh, MeshS
     TriangleMesh::new(vertices, triangles).map_err(|e| e.in_file(path))
 }
 
-/// Reads the mesh file at `path`.
+/// Reads the mesh file at `path` (at most [`SceneLimits::DEFAULT`]'s file size).
 pub fn load_mesh(path: &Path) -> Result<(TriangleMesh, MeshStats), SgError> {
+    load_mesh_within(path, SceneLimits::DEFAULT.max_file_bytes)
+}
+
+/// Reads the mesh file at `path`, refused above `max_bytes` (and unread when it is not a
+/// regular file: rl-core's bounded reader).
+pub fn load_mesh_within(path: &Path, max_bytes: u64) -> Result<(TriangleMesh, MeshStats), SgError> {
     format_of(path)?;
-    let bytes = std::fs::read(path).map_err(|e| SgError::io(path, &e))?;
+    let bytes = rl_core::loader::read_bytes(path, max_bytes)?;
     mesh_from_bytes(&bytes, path)
 }
 
 /// Meshes already read, by path: robot descriptions use one file for several links, and
-/// several descriptions of one robot share their files.
+/// several descriptions of one robot share their files. It carries the [`SceneLimits`] of the
+/// loads it serves ([`super::load_scene_file`], the URDF readers).
 #[derive(Clone, Debug, Default)]
 pub struct MeshCache {
     meshes: HashMap<PathBuf, (Arc<TriangleMesh>, MeshStats)>,
+    limits: SceneLimits,
 }
 
 impl MeshCache {
-    /// An empty cache.
+    /// An empty cache, with the default limits.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// An empty cache whose loads keep within `limits`.
+    pub fn with_limits(limits: SceneLimits) -> Self {
+        Self {
+            meshes: HashMap::new(),
+            limits,
+        }
+    }
+
+    /// The limits of the loads it serves.
+    pub fn limits(&self) -> &SceneLimits {
+        &self.limits
     }
 
     /// The mesh at `path`, read once.
@@ -112,7 +146,7 @@ impl MeshCache {
         if let Some(m) = self.meshes.get(path) {
             return Ok(m.clone());
         }
-        let (m, stats) = load_mesh(path)?;
+        let (m, stats) = load_mesh_within(path, self.limits.max_file_bytes)?;
         let entry = (Arc::new(m), stats);
         self.meshes.insert(path.to_path_buf(), entry.clone());
         Ok(entry)

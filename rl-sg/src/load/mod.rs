@@ -2,8 +2,10 @@
 //! scenes.
 //!
 //! Every loader reports bad input as an [`SgError`] with the file, the element and, where the
-//! format has lines, the line and column.
+//! format has lines, the line and column. Every file is read through rl-core's bounded reader
+//! and every load is bounded by [`SceneLimits`] (see [`limits`]).
 
+pub mod limits;
 pub mod mesh_file;
 pub mod moveit;
 pub mod rlsg;
@@ -13,6 +15,7 @@ pub mod urdf;
 pub mod vrml;
 mod xml;
 
+pub use limits::SceneLimits;
 pub use mesh_file::{MeshCache, load_mesh};
 pub use setup::{RobotScene, RobotSetup, is_urdf};
 pub use urdf::{GeometryKind, MeshMode, Robot, UrdfGeometryOptions, load_robot};
@@ -24,7 +27,8 @@ use crate::scene::Scene;
 
 /// Reads any scene file, by its extension and root element: URDF (`.urdf`, or `.xml` with a
 /// `<robot>` root: its geometry as one static model), RL's rlsg XML, VRML (`.wrl`), MoveIt
-/// planning-scene YAML (`.yaml`, `.yml`).
+/// planning-scene YAML (`.yaml`, `.yml`); within the limits of `cache`
+/// ([`MeshCache::limits`]).
 pub fn load_scene_file(
     path: &Path,
     urdf: &UrdfGeometryOptions,
@@ -42,16 +46,17 @@ pub fn load_scene_file(
         s.add_model(model)?;
         Ok(s)
     };
+    let limits = *cache.limits();
     match ext.as_str() {
         "yaml" | "yml" => {
             let mut s = Scene::new();
-            s.add_model(moveit::load_environment(path)?)?;
+            s.add_model(moveit::load_environment_with(path, &limits)?)?;
             Ok(s)
         }
-        "wrl" => rlsg::load_vrml(path),
+        "wrl" => rlsg::load_vrml_with(path, &limits),
         "urdf" => urdf_scene(cache),
         "xml" => {
-            let text = read_text(path)?;
+            let text = read_text_within(path, limits.max_file_bytes)?;
             let root = xml::parse(&text)
                 .map_err(|e| e.in_file(path))?
                 .root_element()
@@ -61,7 +66,7 @@ pub fn load_scene_file(
             if root == "robot" {
                 urdf_scene(cache)
             } else {
-                rlsg::load_scene(path)
+                rlsg::load_scene_with(path, &limits)
             }
         }
         _ => Err(SgError::new(SgErrorKind::UnsupportedFormat {
@@ -131,9 +136,15 @@ fn shorten(dirs: &[String]) -> String {
     }
 }
 
-/// Reads a text file.
+/// Reads a text file within the default file limit ([`SceneLimits::DEFAULT`]).
 pub(crate) fn read_text(path: &Path) -> Result<String, SgError> {
-    std::fs::read_to_string(path).map_err(|e| SgError::io(path, &e))
+    read_text_within(path, SceneLimits::DEFAULT.max_file_bytes)
+}
+
+/// Reads a text file of at most `max_bytes` through rl-core's bounded reader (a FIFO or a
+/// device is refused unread).
+pub(crate) fn read_text_within(path: &Path, max_bytes: u64) -> Result<String, SgError> {
+    rl_core::loader::read_text(path, max_bytes).map_err(SgError::from)
 }
 
 /// The directory of `path` (`.` for a bare file name).

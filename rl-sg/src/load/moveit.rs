@@ -16,7 +16,8 @@ use glam::DVec3;
 use rl_core::spatial::PlueckerTransform;
 use saphyr::{LoadableYamlNode, MarkedYaml, Scalar, YamlData};
 
-use super::read_text;
+use super::limits::{Budget, SceneLimits};
+use super::read_text_within;
 use crate::error::{SgError, SgErrorKind};
 use crate::geometry::{Geometry, TriangleMesh};
 use crate::pose;
@@ -177,13 +178,22 @@ fn primitive(node: &Node) -> Result<Geometry, SgError> {
     g.map_err(|e| at(dims_node, e))
 }
 
-fn mesh(node: &Node) -> Result<Geometry, SgError> {
+/// [`primitive`], counted as one shape.
+fn counted_primitive(node: &Node, budget: &mut Budget) -> Result<Geometry, SgError> {
+    budget.shape(0, 0).map_err(|e| at(node, e))?;
+    primitive(node)
+}
+
+fn mesh(node: &Node, budget: &mut Budget) -> Result<Geometry, SgError> {
     let vs = need(node, "vertices")?;
+    let ts = need(node, "triangles")?;
+    budget
+        .shape(seq(vs, "vertices")?.len(), seq(ts, "triangles")?.len())
+        .map_err(|e| at(node, e))?;
     let vertices = seq(vs, "vertices")?
         .iter()
         .map(|v| components(v, "vertex", ["x", "y", "z"]).map(DVec3::from_array))
         .collect::<Result<Vec<_>, _>>()?;
-    let ts = need(node, "triangles")?;
     let mut triangles = Vec::new();
     for t in seq(ts, "triangles")? {
         let idx = get(t, "vertex_indices").unwrap_or(t);
@@ -204,6 +214,16 @@ fn mesh(node: &Node) -> Result<Geometry, SgError> {
 /// Reads the collision objects of the planning scene in `text` into an environment model
 /// called `name`.
 pub fn environment_from_str(text: &str, name: &str) -> Result<Model, SgError> {
+    environment_from_str_with(text, name, &SceneLimits::DEFAULT)
+}
+
+/// [`environment_from_str`] within `limits` (shapes, mesh vertices and triangles).
+pub fn environment_from_str_with(
+    text: &str,
+    name: &str,
+    limits: &SceneLimits,
+) -> Result<Model, SgError> {
+    let mut budget = Budget::new(*limits);
     let docs = MarkedYaml::load_from_str(text).map_err(|e| {
         let m = e.marker();
         SgError::syntax(e.info().to_string()).at_position(m.line() as u32, m.col() as u32 + 1)
@@ -222,12 +242,12 @@ pub fn environment_from_str(text: &str, name: &str) -> Result<Model, SgError> {
             .unwrap_or("")
             .to_string();
         let what = format!("collision object #{k} \"{id}\"");
-        read_object(o, &id, &mut model).map_err(|e| e.at(what))?;
+        read_object(o, &id, &mut model, &mut budget).map_err(|e| e.at(what))?;
     }
     Ok(model)
 }
 
-fn read_object(o: &Node, id: &str, model: &mut Model) -> Result<(), SgError> {
+fn read_object(o: &Node, id: &str, model: &mut Model, budget: &mut Budget) -> Result<(), SgError> {
     if let Some(op) = get(o, "operation") {
         let add = match &op.data {
             YamlData::Value(Scalar::Integer(0)) => true,
@@ -265,7 +285,7 @@ fn read_object(o: &Node, id: &str, model: &mut Model) -> Result<(), SgError> {
         (
             "primitives",
             "primitive_poses",
-            primitive as fn(&Node) -> Result<Geometry, SgError>,
+            counted_primitive as fn(&Node, &mut Budget) -> Result<Geometry, SgError>,
         ),
         ("meshes", "mesh_poses", mesh),
     ] {
@@ -286,7 +306,7 @@ fn read_object(o: &Node, id: &str, model: &mut Model) -> Result<(), SgError> {
             ));
         }
         for (j, (item, p)) in items.iter().zip(pose_list).enumerate() {
-            let g = read(item)?;
+            let g = read(item, budget)?;
             let local = pose_of(p, poses)?;
             shapes.push((format!("{id}/{list}/{j}"), g, local));
         }
@@ -301,10 +321,15 @@ fn read_object(o: &Node, id: &str, model: &mut Model) -> Result<(), SgError> {
 
 /// Reads the planning scene file at `path` into a model named after the file (its stem).
 pub fn load_environment(path: &Path) -> Result<Model, SgError> {
-    let text = read_text(path)?;
+    load_environment_with(path, &SceneLimits::DEFAULT)
+}
+
+/// [`load_environment`] within `limits` (the file's size, shapes, mesh vertices and triangles).
+pub fn load_environment_with(path: &Path, limits: &SceneLimits) -> Result<Model, SgError> {
+    let text = read_text_within(path, limits.max_file_bytes)?;
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("environment");
-    environment_from_str(&text, name).map_err(|e| e.in_file(path))
+    environment_from_str_with(&text, name, limits).map_err(|e| e.in_file(path))
 }

@@ -31,12 +31,22 @@ use roxmltree::Node;
 
 use super::vrml::{VrmlScene, rigid};
 use super::xml::{at, attr, child, children, parse};
-use super::{dir_of, read_text};
+use super::{SceneLimits, dir_of, read_text, read_text_within};
 use crate::error::{SgError, SgErrorKind};
 use crate::scene::{KinematicLink, Model, Scene, Shape};
 
 /// Reads the rlsg XML in `text` (the file `path`, for the VRML's relative `href`).
 pub fn scene_from_str(text: &str, path: &Path) -> Result<Scene, SgError> {
+    scene_from_str_with(text, path, &SceneLimits::DEFAULT)
+}
+
+/// [`scene_from_str`] within `limits` (for the VRML and everything it inlines and expands
+/// into).
+pub fn scene_from_str_with(
+    text: &str,
+    path: &Path,
+    limits: &SceneLimits,
+) -> Result<Scene, SgError> {
     let doc = parse(text)?;
     let root = doc.root_element();
     let holder = match root.tag_name().name() {
@@ -55,11 +65,15 @@ pub fn scene_from_str(text: &str, path: &Path) -> Result<Scene, SgError> {
         child(holder, "scene").ok_or_else(|| at(holder, SgError::missing("<scene>")))?;
     let href = attr(scene_node, "href")?;
     let wrl = dir_of(path).join(href);
-    let vrml = VrmlScene::load(&wrl).map_err(|e| at(scene_node, SgError::nested(e)))?;
+    let vrml =
+        VrmlScene::load_with(&wrl, limits).map_err(|e| at(scene_node, SgError::nested(e)))?;
     let mut scene = Scene::new();
     for m in children(scene_node, "model") {
         let name = attr(m, "name")?;
-        let Some(model_path) = vrml.find(name, None) else {
+        let found = vrml
+            .find(name, None)
+            .map_err(|e| at(m, SgError::nested(e)))?;
+        let Some(model_path) = found else {
             return Err(at(
                 m,
                 SgError::new(SgErrorKind::UnknownName {
@@ -72,7 +86,10 @@ pub fn scene_from_str(text: &str, path: &Path) -> Result<Scene, SgError> {
         let mut model = Model::new(name);
         for b in children(m, "body") {
             let bname = attr(b, "name")?;
-            let Some(body_path) = vrml.find(bname, Some(model_node)) else {
+            let found = vrml
+                .find(bname, Some(model_node))
+                .map_err(|e| at(b, SgError::nested(e)))?;
+            let Some(body_path) = found else {
                 return Err(at(
                     b,
                     SgError::new(SgErrorKind::UnknownName {
@@ -119,13 +136,23 @@ pub fn scene_from_str(text: &str, path: &Path) -> Result<Scene, SgError> {
 
 /// Reads the rlsg file at `path` and the VRML it names.
 pub fn load_scene(path: &Path) -> Result<Scene, SgError> {
-    let text = read_text(path)?;
-    scene_from_str(&text, path).map_err(|e| e.in_file(path))
+    load_scene_with(path, &SceneLimits::DEFAULT)
+}
+
+/// [`load_scene`] within `limits`.
+pub fn load_scene_with(path: &Path, limits: &SceneLimits) -> Result<Scene, SgError> {
+    let text = read_text_within(path, limits.max_file_bytes)?;
+    scene_from_str_with(&text, path, limits).map_err(|e| e.in_file(path))
 }
 
 /// Reads a bare `.wrl` as a scene of one model (named after the file) with one body `""`.
 pub fn load_vrml(path: &Path) -> Result<Scene, SgError> {
-    let vrml = VrmlScene::load(path)?;
+    load_vrml_with(path, &SceneLimits::DEFAULT)
+}
+
+/// [`load_vrml`] within `limits`.
+pub fn load_vrml_with(path: &Path, limits: &SceneLimits) -> Result<Scene, SgError> {
+    let vrml = VrmlScene::load_with(path, limits)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("vrml");
     let mut scene = Scene::new();
     scene.add_model(vrml.to_model(name).map_err(|e| e.in_file(path))?)?;

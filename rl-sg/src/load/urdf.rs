@@ -20,9 +20,10 @@ use rl_core::loader::{self as core_loader, LoadedModel};
 use rl_core::spatial::PlueckerTransform;
 use roxmltree::Node;
 
+use super::limits::Budget;
 use super::mesh_file::MeshCache;
 use super::xml::{at, attr, child, children, number_attr, parse, robot_root, vec3_attr};
-use super::{dir_of, read_text, resolve};
+use super::{dir_of, read_text_within, resolve};
 use crate::error::{SgError, SgErrorKind};
 use crate::geometry::Geometry;
 use crate::pose;
@@ -90,6 +91,9 @@ struct Reader<'c> {
     dir: PathBuf,
     options: UrdfGeometryOptions,
     cache: &'c mut MeshCache,
+    /// Shapes, vertices and triangles so far: a mesh named by many links counts for each (each
+    /// link's shape is its own collision structure).
+    budget: Budget,
     warnings: Vec<String>,
 }
 
@@ -103,6 +107,9 @@ impl Reader<'_> {
             ));
         };
         let placed = |e: SgError| at(k, e);
+        if k.tag_name().name() != "mesh" {
+            self.budget.shape(0, 0).map_err(placed)?;
+        }
         let geometry = match k.tag_name().name() {
             "box" => Geometry::cuboid(vec3_attr(k, "size", DVec3::NAN).and_then(|s| {
                 if s.is_nan() {
@@ -122,6 +129,9 @@ impl Reader<'_> {
                     .cache
                     .get(&path)
                     .map_err(|e| placed(SgError::nested(e)))?;
+                self.budget
+                    .shape(mesh.vertices().len(), mesh.triangles().len())
+                    .map_err(placed)?;
                 if self.options.strict_meshes {
                     stats
                         .strict()
@@ -162,7 +172,8 @@ impl Reader<'_> {
 }
 
 /// Reads the geometry of every link of the URDF in `text` (from a file in `dir`, for relative
-/// mesh paths) into a model named after the robot: one body per link, in file order.
+/// mesh paths) into a model named after the robot: one body per link, in file order; within
+/// the limits of `cache` ([`MeshCache::limits`]: shapes, mesh vertices and triangles).
 pub fn geometry_from_str(
     text: &str,
     dir: &Path,
@@ -171,10 +182,12 @@ pub fn geometry_from_str(
 ) -> Result<Model, SgError> {
     let doc = parse(text)?;
     let robot = robot_root(&doc, "a URDF")?;
+    let budget = Budget::new(*cache.limits());
     let mut reader = Reader {
         dir: dir.to_path_buf(),
         options: options.clone(),
         cache,
+        budget,
         warnings: Vec::new(),
     };
     let mut model = Model::new(robot.attribute("name").unwrap_or("robot"));
@@ -211,8 +224,9 @@ pub fn geometry_from_str(
             body.push_shape(s);
         }
     }
+    let mut seen = std::collections::HashSet::new();
     for w in reader.warnings {
-        if !model.warnings().contains(&w) {
+        if seen.insert(w.clone()) {
             model.warn(w);
         }
     }
@@ -235,7 +249,7 @@ pub fn load_geometry(
     options: &UrdfGeometryOptions,
     cache: &mut MeshCache,
 ) -> Result<Model, SgError> {
-    let text = read_text(path)?;
+    let text = read_text_within(path, cache.limits().max_file_bytes)?;
     geometry_from_str(&text, &dir_of(path), options, cache).map_err(|e| e.in_file(path))
 }
 

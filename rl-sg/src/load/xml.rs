@@ -2,19 +2,48 @@
 //! and its line, attribute parsing.
 
 use glam::DVec3;
+use rl_core::loader::{Clipped, InputLimits, LoadErrorKind, check_xml};
 use roxmltree::{Document, Node, ParsingOptions};
 
 use crate::error::{SgError, SgErrorKind};
 
-/// Parses `text` (DTDs allowed: roxmltree bounds entity expansion).
+/// Parses `text` within rl-core's input limits ([`InputLimits::DEFAULT`]: size, nesting depth,
+/// attributes per element, nodes; DTDs allowed: roxmltree bounds entity expansion).
 pub(crate) fn parse(text: &str) -> Result<Document<'_>, SgError> {
+    let limits = InputLimits::DEFAULT;
+    check(text, &limits)?;
     let opt = ParsingOptions {
         allow_dtd: true,
+        nodes_limit: limits.max_nodes,
         ..ParsingOptions::default()
     };
-    Document::parse_with_options(text, opt).map_err(|e| {
-        let p = e.pos();
-        SgError::syntax(e.to_string()).at_position(p.row, p.col)
+    Document::parse_with_options(text, opt).map_err(|e| match e {
+        roxmltree::Error::NodesLimitReached => SgError::new(SgErrorKind::TooLarge {
+            what: "number of XML nodes",
+            limit: u64::from(limits.max_nodes),
+        }),
+        e => {
+            let p = e.pos();
+            SgError::syntax(e.to_string()).at_position(p.row, p.col)
+        }
+    })
+}
+
+/// rl-core's check of XML `text` against `limits` ([`check_xml`]), its error as an [`SgError`]
+/// at the element's line and column.
+pub(crate) fn check(text: &str, limits: &InputLimits) -> Result<(), SgError> {
+    check_xml(text, limits).map_err(|e| {
+        let kind = match e.kind {
+            LoadErrorKind::TooLarge { what, limit } => SgErrorKind::TooLarge { what, limit },
+            other => SgErrorKind::Syntax(other.to_string()),
+        };
+        let err = SgError::new(kind);
+        match e.element {
+            Some(el) => err
+                .at(format!("<{}>", Clipped(&el.tag, Clipped::NAME)))
+                .at_position(el.line, el.column),
+            None => err,
+        }
     })
 }
 
@@ -38,9 +67,9 @@ pub(crate) fn robot_root<'a, 'i>(
 
 /// `<tag name="…">` of `node`, for messages.
 pub(crate) fn describe(node: Node) -> String {
-    let tag = node.tag_name().name();
+    let tag = Clipped(node.tag_name().name(), Clipped::NAME);
     match node.attribute("name").or_else(|| node.attribute("id")) {
-        Some(n) => format!("<{tag} name=\"{n}\">"),
+        Some(n) => format!("<{tag} name=\"{}\">", Clipped(n, Clipped::NAME)),
         None => format!("<{tag}>"),
     }
 }

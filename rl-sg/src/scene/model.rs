@@ -1,5 +1,6 @@
 //! Models, bodies and shapes: RL's `rl::sg::Model`, `Body`, `Shape`.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
@@ -215,6 +216,9 @@ impl Body {
 pub struct Model {
     name: String,
     pub(crate) bodies: Vec<Body>,
+    /// The first body of each name (a hash map: a scene of 100 000 objects looked every name
+    /// up in a list, 50 s).
+    body_names: HashMap<String, usize>,
     pub(crate) allowed: AllowedCollisions,
     pub(crate) self_collision: bool,
     pub(crate) kinematics: Option<KinematicLink>,
@@ -242,6 +246,7 @@ impl Model {
         Self {
             name: name.into(),
             bodies: Vec::new(),
+            body_names: HashMap::new(),
             allowed: AllowedCollisions::default(),
             self_collision: false,
             kinematics: None,
@@ -253,7 +258,11 @@ impl Model {
 
     /// Adds a body and returns it for adding shapes.
     pub fn add_body(&mut self, name: impl Into<String>) -> &mut Body {
-        self.bodies.push(Body::new(name));
+        let body = Body::new(name);
+        self.body_names
+            .entry(body.name.clone())
+            .or_insert(self.bodies.len());
+        self.bodies.push(body);
         self.invalidate();
         self.self_pairs.take();
         self.bodies.last_mut().expect("just pushed")
@@ -281,9 +290,9 @@ impl Model {
         self.bodies.get_mut(i)
     }
 
-    /// The index of the body called `name`.
+    /// The index of the (first) body called `name`.
     pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
+        self.body_names.get(name).copied()
     }
 
     /// The pairs of its bodies not checked against each other.

@@ -5,17 +5,19 @@
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
-use rl::controller::JointRobot;
+use rl::controller::{JointRobot, RunError};
 use rl_core::loader::LoadedModel;
+use rl_drivers::Error as DeviceError;
 use rl_drivers::EthercatDrives;
 use rl_drivers::canopen::{Cia402, Cia402Config, DeviceAddress};
-use rl_drivers::cia402::{AxisUnits, PowerState};
+use rl_drivers::cia402::{AxisUnits, PowerState, UnitsOverride};
 use rl_drivers::coach::{Coach, CoachConfig};
 use rl_drivers::ethercat::EthercatConfig;
 use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
 use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::ecat::frame::ETHERTYPE;
+use rl_drivers::transport::can::socketcan::{EAFNOSUPPORT, NO_AF_CAN};
 use rl_drivers::transport::can::{CanAddress, default_local};
 use rl_drivers::transport::{PacketLink, packet};
 
@@ -28,11 +30,126 @@ const R3_PORT: u16 = 10001;
 
 /// The devices `--device` accepts, for messages.
 pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PORT], fake-cia402, \
-     cannelloni+udp://HOST:PORT[?nodes=1-6], cannelloni+tcp://HOST:PORT[?listen][&nodes=…] or \
-     socketcan://IFACE[?nodes=…], ethercat://IF or franka://HOST[:PORT]";
+     cannelloni+udp://HOST:PORT[?nodes=1-6][&units=…], cannelloni+tcp://HOST:PORT[?listen][&nodes=…], \
+     socketcan://IFACE[?nodes=…], ethercat://IF[?units=…] or franka://HOST[:PORT]";
+
+/// The form of `units=` (and `--units`), for messages.
+pub const UNITS_FORM: &str = "cpr:N,gear:G[,feed:F][,torque:NM][,lead:M], each value one number \
+     for every axis or one per axis joined by `/` (e.g. gear:100/100/80/50/50/50)";
+
+/// Drive units the user gives (`?units=` or `--units`): they replace what the drives report in
+/// 0x608F (`cpr`), 0x6091 (`gear`), 0x6092 (`feed`) and 0x6076 (`torque`); `lead` is the travel
+/// of a linear axis per revolution. `cpr` and `gear` go together; without `feed` the position
+/// unit is the encoder count (`feed = cpr × gear`); without `torque` the rated torque is read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct UnitsSpec {
+    counts_per_rev: Vec<f64>,
+    gear: Vec<f64>,
+    feed: Vec<f64>,
+    torque: Vec<f64>,
+    lead: Vec<f64>,
+}
+
+impl UnitsSpec {
+    /// Parses [`UNITS_FORM`].
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad = |why: String| format!("units `{text}`: {why} (give {UNITS_FORM})");
+        let mut spec = Self::default();
+        for part in text.split(',') {
+            let (key, values) = part
+                .split_once(':')
+                .ok_or_else(|| bad(format!("`{part}` is not KEY:VALUE")))?;
+            let slot = match key.trim() {
+                "cpr" => &mut spec.counts_per_rev,
+                "gear" => &mut spec.gear,
+                "feed" => &mut spec.feed,
+                "torque" => &mut spec.torque,
+                "lead" => &mut spec.lead,
+                other => return Err(bad(format!("unknown key `{other}`"))),
+            };
+            if !slot.is_empty() {
+                return Err(bad(format!("`{key}` given twice")));
+            }
+            for v in values.split('/') {
+                let x: f64 = v
+                    .trim()
+                    .parse()
+                    .map_err(|_| bad(format!("`{v}` of `{key}` is not a number")))?;
+                if !(x.is_finite() && x > 0.0) {
+                    return Err(bad(format!("`{key}` must be positive, got {v}")));
+                }
+                slot.push(x);
+            }
+        }
+        if spec.counts_per_rev.is_empty() != spec.gear.is_empty() {
+            return Err(bad("`cpr` and `gear` go together".into()));
+        }
+        if !spec.feed.is_empty() && spec.gear.is_empty() {
+            return Err(bad("`feed` needs `cpr` and `gear`".into()));
+        }
+        Ok(spec)
+    }
+
+    /// The override of each of `axes` axes.
+    pub fn for_axes(&self, axes: usize) -> Result<Vec<UnitsOverride>, String> {
+        let pick = |values: &[f64], key: &str, k: usize| -> Result<Option<f64>, String> {
+            match values.len() {
+                0 => Ok(None),
+                1 => Ok(Some(values[0])),
+                n if n == axes => Ok(Some(values[k])),
+                n => Err(format!(
+                    "units: {n} values of `{key}` for {axes} axes (give one, or one per axis)"
+                )),
+            }
+        };
+        (0..axes)
+            .map(|k| {
+                let counts_per_rev = pick(&self.counts_per_rev, "cpr", k)?;
+                let gear_ratio = pick(&self.gear, "gear", k)?;
+                let feed = match (pick(&self.feed, "feed", k)?, counts_per_rev, gear_ratio) {
+                    (Some(f), _, _) => Some(f),
+                    // Position unit = encoder count.
+                    (None, Some(c), Some(g)) => Some(c * g),
+                    _ => None,
+                };
+                Ok(UnitsOverride {
+                    counts_per_rev,
+                    gear_ratio,
+                    feed,
+                    rated_torque_nm: pick(&self.torque, "torque", k)?,
+                    lead_m: pick(&self.lead, "lead", k)?,
+                })
+            })
+            .collect()
+    }
+}
+
+/// Splits `units=…` off a device address's query: the address without it, and its value.
+fn take_units(text: &str) -> (String, Option<&str>) {
+    let Some((base, query)) = text.split_once('?') else {
+        return (text.to_owned(), None);
+    };
+    let mut units = None;
+    let rest: Vec<&str> = query
+        .split('&')
+        .filter(|o| match o.strip_prefix("units=") {
+            Some(u) => {
+                units = Some(u);
+                false
+            }
+            None => true,
+        })
+        .collect();
+    let address = if rest.is_empty() {
+        base.to_owned()
+    } else {
+        format!("{base}?{}", rest.join("&"))
+    };
+    (address, units)
+}
 
 /// The robot `rl run` drives.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum DeviceSpec {
     /// A fake H7 controller in this process on loopback.
     FakeH7,
@@ -50,12 +167,15 @@ pub enum DeviceSpec {
     },
     /// Fake CiA 402 drives in this process, on cannelloni UDP over loopback.
     FakeCia402,
-    /// CiA 402 drives on a CAN bus (SocketCAN or cannelloni), nodes 1..=dof unless given.
-    Cia402(DeviceAddress),
+    /// CiA 402 drives on a CAN bus (SocketCAN or cannelloni), nodes 1..=dof unless given; the
+    /// units given (else read from the drives).
+    Cia402(DeviceAddress, Option<UnitsSpec>),
     /// CiA 402 drives on an EtherCAT segment on a network interface.
     Ethercat {
         /// The interface's name.
         interface: String,
+        /// The units given (else read from the drives).
+        units: Option<UnitsSpec>,
     },
     /// A Franka arm (FCI, libfranka's protocol), in joint position mode.
     Franka {
@@ -198,11 +318,25 @@ impl DeviceSpec {
         if text == "fake-cia402" {
             return Ok(Self::FakeCia402);
         }
+        let (text_without_units, units) = take_units(text);
+        let units = units.map(UnitsSpec::parse).transpose().map_err(bad)?;
+        if units.is_some()
+            && !text.starts_with("ethercat://")
+            && !text.starts_with("socketcan://")
+            && !text.starts_with("cannelloni+")
+        {
+            return Err(bad(
+                "units= applies to CiA 402 drives (CANopen, EtherCAT)".into()
+            ));
+        }
+        let text = text_without_units.as_str();
         if ["socketcan://", "cannelloni+udp://", "cannelloni+tcp://"]
             .iter()
             .any(|p| text.starts_with(p))
         {
-            return DeviceAddress::parse(text).map(Self::Cia402).map_err(bad);
+            return DeviceAddress::parse(text)
+                .map(|a| Self::Cia402(a, units))
+                .map_err(bad);
         }
         if let Some(rest) = text.strip_prefix("coach://") {
             let server = resolve(rest, rl_drivers::coach::DEFAULT_PORT).map_err(bad)?;
@@ -220,6 +354,7 @@ impl DeviceSpec {
             }
             return Ok(Self::Ethercat {
                 interface: interface.into(),
+                units,
             });
         }
         Err(bad("unknown device".into()))
@@ -230,14 +365,37 @@ impl DeviceSpec {
         matches!(self, Self::H7 { .. } | Self::FakeH7)
     }
 
-    /// Builds the device for `loaded`; `period` is the control period asked for, if any. An
-    /// in-process fake stands at `home` (the start of a planned motion), else at the model's
-    /// home position.
+    /// Gives the drives' units (`--units`); refused for a device that has none, or when the
+    /// address gives them too.
+    pub fn set_units(&mut self, spec: UnitsSpec) -> Result<(), CliError> {
+        match self {
+            Self::Cia402(_, units @ None)
+            | Self::Ethercat {
+                units: units @ None,
+                ..
+            } => {
+                *units = Some(spec);
+                Ok(())
+            }
+            Self::Cia402(..) | Self::Ethercat { .. } => Err(CliError::usage(
+                "--units and the device's units= give the units twice: give them once",
+            )),
+            _ => Err(CliError::usage(
+                "--units: only CiA 402 drives (CANopen, EtherCAT) have drive units; this device \
+                 reports joints",
+            )),
+        }
+    }
+
+    /// Builds the device for `loaded`; `period` is the control period asked for, if any;
+    /// `failure_limit` failed steps in a row fault the device. An in-process fake stands at
+    /// `home` (the start of a planned motion), else at the model's home position.
     pub fn build<const B: usize>(
         &self,
         loaded: &LoadedModel<B>,
         period: Option<Duration>,
         home: Option<&[f64]>,
+        failure_limit: u32,
     ) -> Result<Opened, CliError> {
         let model = &loaded.model;
         let home = home.map_or_else(|| loaded.home_or_neutral(), <[f64]>::to_vec);
@@ -246,9 +404,10 @@ impl DeviceSpec {
                 let config = fake_h7_config(loaded, &home)?;
                 let fake = spawn_fake("fake-h7-0", move || FakeH7::spawn(config))
                     .map_err(|e| CliError::failed(format!("cannot start the fake H7: {e}")))?;
-                let robot =
-                    MitsubishiH7::new(MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr()))
-                        .map_err(|e| CliError::failed(format!("H7 device: {e}")))?;
+                let mut config = MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr());
+                config.max_consecutive_failures = failure_limit;
+                let robot = MitsubishiH7::new(config)
+                    .map_err(|e| CliError::failed(format!("H7 device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!(
@@ -262,7 +421,9 @@ impl DeviceSpec {
             Self::H7 { server, r3 } => {
                 // The controller reports its axes (JPOSF) when the device opens; the run then
                 // refuses a model with another joint count.
-                let robot = MitsubishiH7::new(MitsubishiH7Config::at(*server, *r3))
+                let mut config = MitsubishiH7Config::at(*server, *r3);
+                config.max_consecutive_failures = failure_limit;
+                let robot = MitsubishiH7::new(config)
                     .map_err(|e| CliError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
@@ -271,8 +432,9 @@ impl DeviceSpec {
                 })
             }
             Self::FakeCia402 => {
-                let units = AxisUnits::GEARED_100;
-                let config = FakeCia402Config::for_model(model, &home, units)
+                // The fake drives' own units (a 100:1 gear carries the inverse-dynamics
+                // torques); the master reads them from the drives like any other.
+                let config = FakeCia402Config::for_model(model, &home, AxisUnits::GEARED_100)
                     .map_err(|e| CliError::usage(format!("fake CiA 402 drives: {e}")))?;
                 let loopback = CanAddress::parse("cannelloni+udp://127.0.0.1:0")
                     .map_err(|e| CliError::failed(e.to_string()))?;
@@ -288,7 +450,8 @@ impl DeviceSpec {
                     local: default_local(addr),
                 };
                 let nodes: Vec<u8> = (1..=model.dof() as u8).collect();
-                let robot = cia402(bus, &nodes, units, period)?;
+                let units = vec![UnitsOverride::NONE; nodes.len()];
+                let robot = cia402(bus, &nodes, &units, period, failure_limit)?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!(
@@ -298,7 +461,7 @@ impl DeviceSpec {
                     fake: Some(InProcessFake::Cia402(fake)),
                 })
             }
-            Self::Cia402(address) => {
+            Self::Cia402(address, units) => {
                 let nodes = address
                     .nodes
                     .clone()
@@ -311,14 +474,15 @@ impl DeviceSpec {
                         model.dof()
                     )));
                 }
-                let robot = cia402(address.bus.clone(), &nodes, AxisUnits::GEARED_100, period)?;
+                let units = given_units(units.as_ref(), nodes.len())?;
+                let robot = cia402(address.bus.clone(), &nodes, &units, period, failure_limit)?;
                 Ok(Opened {
                     robot: Box::new(robot),
                     name: format!("CiA 402 drives {nodes:?} on {}", address.bus),
                     fake: None,
                 })
             }
-            Self::Ethercat { interface } => {
+            Self::Ethercat { interface, units } => {
                 // Say what raw sockets need before anything else fails on it.
                 if let Err(e) = PacketLink::open(interface, ETHERTYPE) {
                     let fix = if packet::is_permission_error(&e) {
@@ -334,6 +498,9 @@ impl DeviceSpec {
                 if let Some(p) = period {
                     config.period = p;
                 }
+                // Drives are found by the scan: the model's joint count is what must match.
+                config.units = given_units(units.as_ref(), model.dof())?;
+                config.max_consecutive_failures = failure_limit;
                 let robot = EthercatDrives::new(config)
                     .map_err(|e| CliError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
@@ -356,6 +523,7 @@ impl DeviceSpec {
             Self::Coach { server } => {
                 let mut config = CoachConfig::new(model.dof());
                 config.server = *server;
+                config.max_consecutive_failures = failure_limit;
                 if let Some(p) = period {
                     config.update_period = p;
                 }
@@ -367,6 +535,81 @@ impl DeviceSpec {
                     fake: None,
                 })
             }
+        }
+    }
+}
+
+impl DeviceSpec {
+    /// What a user reads when the run could not start: the error, and for the errors a user
+    /// meets first — no CAN sockets, nothing listening at the address, nobody on the bus or
+    /// the segment — what they mean and what to do.
+    pub fn explain(&self, error: &RunError) -> String {
+        let text = error.to_string();
+        let RunError::Device {
+            stage: "open",
+            error,
+        } = error
+        else {
+            return text;
+        };
+        let refused = matches!(
+            error,
+            DeviceError::Io {
+                kind: std::io::ErrorKind::ConnectionRefused,
+                ..
+            }
+        );
+        let hint = match self {
+            Self::Cia402(address, _) => match (&address.bus, error) {
+                (
+                    CanAddress::SocketCan { .. },
+                    DeviceError::Io {
+                        kind: std::io::ErrorKind::Unsupported,
+                        ..
+                    }
+                    | DeviceError::Io {
+                        os_code: Some(EAFNOSUPPORT),
+                        ..
+                    },
+                ) => Some(NO_AF_CAN.to_owned()),
+                (
+                    CanAddress::SocketCan { interface },
+                    DeviceError::Io {
+                        kind: std::io::ErrorKind::NotFound,
+                        ..
+                    },
+                ) => Some(format!(
+                    "there is no network interface `{interface}` (see `ip link`)"
+                )),
+                (bus, e)
+                    if matches!(e, DeviceError::Timeout { .. })
+                        || text.contains("no SDO answer in time") =>
+                {
+                    Some(format!(
+                        "no drive answers on {bus}: is the bus powered and the gateway there? \
+                         For fake drives start `rl fake-robot canopen --bus {bus}`"
+                    ))
+                }
+                (bus, _) if refused => Some(format!(
+                    "nothing listens at {bus}; for fake drives start `rl fake-robot canopen \
+                     --bus {bus}`"
+                )),
+                _ => None,
+            },
+            Self::H7 { server, r3 } if refused => Some(format!(
+                "no H7 controller listens at {r3} (R3, TCP; real-time UDP {server}): check the \
+                 address and that the controller's R3 server is on, or start a fake with `rl \
+                 fake-robot h7 --bind {server} --r3-bind {r3}`"
+            )),
+            Self::Coach { server } if refused => Some(format!(
+                "no Coach server listens at {server}: start RL's rlCoachMdl with the model, or \
+                 `rl fake-robot coach --bind {server} --model FILE`"
+            )),
+            _ => None,
+        };
+        match hint {
+            Some(h) => format!("{text}: {h}"),
+            None => text,
         }
     }
 }
@@ -403,20 +646,31 @@ fn fake_h7_config<const B: usize>(
         .map_err(|e| CliError::usage(format!("--model: the fake H7 cannot simulate it: {e}")))
 }
 
-/// A CiA 402 device on `bus` for `nodes` with `units`, at `period` (2 ms by default); a cycle
-/// the bus cannot carry is refused with the arithmetic.
+/// The units given for `axes` axes (nothing given: every unit is read from the drives).
+fn given_units(spec: Option<&UnitsSpec>, axes: usize) -> Result<Vec<UnitsOverride>, CliError> {
+    match spec {
+        None => Ok(vec![UnitsOverride::NONE; axes]),
+        Some(s) => s.for_axes(axes).map_err(CliError::usage),
+    }
+}
+
+/// A CiA 402 device on `bus` for `nodes` with the units given per axis (the rest read from the
+/// drives), at `period` (2 ms by default); a cycle the bus cannot carry is refused with the
+/// arithmetic.
 fn cia402(
     bus: CanAddress,
     nodes: &[u8],
-    units: AxisUnits,
+    units: &[UnitsOverride],
     period: Option<Duration>,
+    failure_limit: u32,
 ) -> Result<Cia402, CliError> {
     let mut config = Cia402Config::new(bus, nodes);
     if let Some(p) = period {
         config = config.with_period(p);
     }
-    for a in &mut config.axes {
-        a.units = units;
+    config.max_consecutive_failures = failure_limit;
+    for (a, u) in config.axes.iter_mut().zip(units) {
+        a.units = *u;
     }
     let load = config.bus_load();
     if !load.fits(config.period) {
@@ -486,11 +740,11 @@ mod tests {
         );
         assert!(matches!(
             DeviceSpec::parse("cannelloni+udp://127.0.0.1:20000?nodes=1-6"),
-            Ok(DeviceSpec::Cia402(a)) if a.nodes == Some(vec![1, 2, 3, 4, 5, 6])
+            Ok(DeviceSpec::Cia402(a, None)) if a.nodes == Some(vec![1, 2, 3, 4, 5, 6])
         ));
         assert!(matches!(
             DeviceSpec::parse("socketcan://can0"),
-            Ok(DeviceSpec::Cia402(_))
+            Ok(DeviceSpec::Cia402(_, None))
         ));
         assert_eq!(
             DeviceSpec::parse("franka://127.0.0.2").ok(),
@@ -501,7 +755,8 @@ mod tests {
         assert_eq!(
             DeviceSpec::parse("ethercat://eth1").ok(),
             Some(DeviceSpec::Ethercat {
-                interface: "eth1".into()
+                interface: "eth1".into(),
+                units: None,
             })
         );
         for bad in [
@@ -516,9 +771,47 @@ mod tests {
             "tcp://1.2.3.4",
             "coach://",
             "franka://",
+            "franka://127.0.0.1?units=cpr:1,gear:1",
+            "cannelloni+udp://127.0.0.1:1?units=gear:100",
+            "cannelloni+udp://127.0.0.1:1?units=cpr:0,gear:100",
+            "cannelloni+udp://127.0.0.1:1?units=cpr:4096,gear:x",
+            "cannelloni+udp://127.0.0.1:1?units=cpr:4096,gear:1,speed:3",
+            "ethercat://eth0?units=feed:1000",
+            "h7://1.2.3.4?units=cpr:1,gear:1",
         ] {
             let e = DeviceSpec::parse(bad).expect_err(bad);
             assert_eq!(e.exit_code(), 2, "{bad}");
         }
+    }
+
+    #[test]
+    fn units_are_given_per_axis_or_for_all() {
+        let Ok(DeviceSpec::Cia402(a, Some(spec))) = DeviceSpec::parse(
+            "cannelloni+udp://127.0.0.1:20000?units=cpr:4096,gear:121/101/80,torque:0.5&nodes=1-3",
+        ) else {
+            panic!("parses");
+        };
+        assert_eq!(a.nodes, Some(vec![1, 2, 3]));
+        let u = spec.for_axes(3).expect("three axes");
+        assert_eq!(u[1].gear_ratio, Some(101.0));
+        assert_eq!(u[2].counts_per_rev, Some(4096.0));
+        // Without `feed:` the position unit is the encoder count.
+        assert_eq!(u[0].feed, Some(4096.0 * 121.0));
+        assert_eq!(u[0].rated_torque_nm, Some(0.5));
+        assert!(spec.for_axes(2).is_err(), "three gears for two axes");
+        // Only the rated torque given: the position scaling is read.
+        let t = UnitsSpec::parse("torque:2")
+            .expect("torque only")
+            .for_axes(6)
+            .expect("six");
+        assert_eq!(
+            (t[5].gear_ratio, t[5].feed, t[5].rated_torque_nm),
+            (None, None, Some(2.0))
+        );
+        let mut d = DeviceSpec::parse("ethercat://eth1").expect("ethercat");
+        d.set_units(UnitsSpec::parse("cpr:1,gear:1").expect("units"))
+            .expect("given once");
+        assert!(d.set_units(UnitsSpec::default()).is_err(), "given twice");
+        assert!(DeviceSpec::FakeH7.set_units(UnitsSpec::default()).is_err());
     }
 }

@@ -107,12 +107,7 @@ pub(crate) fn frames<'a, 'i>(
             if let Some((_, first)) = world {
                 return Err(err(
                     n,
-                    LoadErrorKind::NoSingleRoot {
-                        roots: std::vec![
-                            first.attribute("id").unwrap_or("").to_string(),
-                            id.to_string()
-                        ],
-                    },
+                    LoadErrorKind::roots([first.attribute("id").unwrap_or(""), id].into_iter()),
                 ));
             }
             world = Some((nodes.len(), n));

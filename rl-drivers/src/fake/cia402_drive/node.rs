@@ -712,6 +712,32 @@ impl Node {
         }
     }
 
+    /// Writes the drive's units into its factor group — 0x608F, 0x6091, 0x6092 as
+    /// `(numerator, denominator)` each — and 0x6076 (mN·m); `None` removes the three factor-group
+    /// objects, as on a drive without them (an SDO upload is then aborted with "object does not
+    /// exist").
+    pub fn set_units(&mut self, factors: Option<[(u32, u32); 3]>, rated_torque_mnm: u32) {
+        const GROUP: [u16; 3] = [0x608F, 0x6091, 0x6092];
+        match factors {
+            Some(f) => {
+                for (index, (n, d)) in GROUP.into_iter().zip(f) {
+                    self.put_default(index, 1, i64::from(n));
+                    self.put_default(index, 2, i64::from(d));
+                }
+            }
+            None => self.od.retain(|(index, _), _| !GROUP.contains(index)),
+        }
+        self.put_default(0x6076, 0, i64::from(rated_torque_mnm));
+    }
+
+    /// Sets an object's value and the value a reset restores.
+    fn put_default(&mut self, index: u16, sub: u8, value: i64) {
+        self.set(index, sub, value);
+        if let Some(v) = self.od.get_mut(&(index, sub)) {
+            v.default = v.bytes.clone();
+        }
+    }
+
     /// The object's value as an integer (for tests and status).
     pub fn value(&self, index: u16, sub: u8) -> i64 {
         self.get(index, sub)

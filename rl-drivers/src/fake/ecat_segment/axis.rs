@@ -9,35 +9,50 @@
 //! - CST (10): the torque is the target torque (0x6071) plus the offset (0x60B2), limited to
 //!   0x6072; the motor accelerates with `torque / inertia` against viscous friction.
 //!
-//! Positions are encoder counts, torques thousandths of the rated torque (0x6076 mN·m), as a
-//! real drive reports them. The firmware calls [`Axis::update`] once per SYNC0 pulse in DC mode
+//! Positions are in the drive's position units ([`MotorParams::units`]: the feed constant per
+//! joint revolution, encoder increments by default), torques thousandths of the motor's rated
+//! torque (0x6076 mN·m) ahead of its gear, as a real drive reports them. The firmware calls [`Axis::update`] once per SYNC0 pulse in DC mode
 //! (a drive in CSP waits for SYNC0) or once per new output buffer in free run.
 
 use super::dictionary::Dictionary;
 use crate::cia402::object as obj;
-use crate::cia402::{Mode, PowerState, Statusword};
+use crate::cia402::{AxisUnits, Mode, PowerState, Statusword};
 
 /// The motor's physical parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotorParams {
-    /// Encoder counts per motor revolution.
-    pub counts_per_rev: f64,
-    /// Rated torque in N·m.
-    pub rated_torque_nm: f64,
-    /// Rotor (and load) inertia in kg·m².
+    /// Encoder, gear, feed constant and rated torque: what the drive reports in 0x608F, 0x6091,
+    /// 0x6092 and 0x6076, and how its position units relate to the joint.
+    pub units: AxisUnits,
+    /// Whether the drive has the factor-group objects 0x608F, 0x6091, 0x6092 (`false`: an SDO
+    /// upload of them is aborted with "object does not exist").
+    pub unit_objects: bool,
+    /// Inertia at the joint in kg·m².
     pub inertia: f64,
-    /// Viscous friction in N·m·s/rad.
+    /// Viscous friction at the joint in N·m·s/rad.
     pub damping: f64,
 }
 
 impl Default for MotorParams {
     fn default() -> Self {
         Self {
-            counts_per_rev: f64::from(1u32 << 20),
-            rated_torque_nm: 1.0,
+            units: AxisUnits::default(),
+            unit_objects: true,
             inertia: 1e-3,
             damping: 1e-3,
         }
+    }
+}
+
+impl MotorParams {
+    /// Position units per joint radian.
+    pub fn per_rad(&self) -> f64 {
+        self.units.units_per_rev() / core::f64::consts::TAU
+    }
+
+    /// Joint torque per thousandth of the rated motor torque, N·m.
+    fn joint_torque_per_permille(&self) -> f64 {
+        self.units.rated_torque_nm * self.units.gear_ratio / 1000.0
     }
 }
 
@@ -109,7 +124,7 @@ impl Axis {
     pub fn update(&mut self, od: &mut Dictionary, dt: f64) {
         self.updates += 1;
         let mode = Mode::from_code(od.int(obj::MODES_OF_OPERATION.index, 0) as i8);
-        let per_rad = self.motor.counts_per_rev / core::f64::consts::TAU;
+        let per_rad = self.motor.per_rad();
         let mut limit = false;
         let mut following_error = false;
         let previous = self.position;
@@ -147,7 +162,7 @@ impl Axis {
                 self.velocity = v;
                 let offset = od.int(obj::TORQUE_OFFSET.index, 0) as f64;
                 let inertial =
-                    self.motor.inertia * acc / per_rad / self.motor.rated_torque_nm * 1000.0;
+                    self.motor.inertia * acc / per_rad / self.motor.joint_torque_per_permille();
                 self.torque_permille = offset + inertial;
             }
             (PowerState::OperationEnabled, Some(Mode::CyclicVelocity)) => {
@@ -165,7 +180,7 @@ impl Axis {
                     limit = true;
                 }
                 self.torque_permille = t;
-                let tau = t / 1000.0 * self.motor.rated_torque_nm;
+                let tau = t * self.motor.joint_torque_per_permille();
                 let w = self.velocity / per_rad;
                 let acc = (tau - self.motor.damping * w) / self.motor.inertia;
                 let w2 = w + acc * dt;
@@ -173,8 +188,8 @@ impl Axis {
                 self.velocity = w2 * per_rad;
             }
             (PowerState::QuickStopActive, _) => {
-                // Decelerate at 10 revolutions/s² to standstill.
-                let dec = 10.0 * self.motor.counts_per_rev * dt;
+                // Decelerate at 10 joint revolutions/s² to standstill.
+                let dec = 10.0 * self.motor.units.units_per_rev() * dt;
                 let v = self.velocity;
                 self.velocity = if v.abs() <= dec {
                     0.0

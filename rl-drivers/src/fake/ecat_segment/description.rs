@@ -567,7 +567,7 @@ impl DeviceDescription {
                 obj::MOTOR_RATED_TORQUE,
                 Ro,
                 false,
-                (motor.rated_torque_nm * 1000.0).round() as i64,
+                (motor.units.rated_torque_nm * 1000.0).round() as i64,
             );
             var(&mut d, obj::TORQUE_ACTUAL, Ro, true, 0);
             var(&mut d, obj::TARGET_POSITION, Rw, true, 0);
@@ -599,24 +599,27 @@ impl DeviceDescription {
                     (2, sub(Integer8, Rw, false, -3)),
                 ],
             );
-            d.compound(
-                0x608F,
-                "position encoder resolution",
-                Ro,
-                vec![
-                    (1, sub(Unsigned32, Ro, false, motor.counts_per_rev as i64)),
-                    (2, sub(Unsigned32, Ro, false, 1)),
-                ],
-            );
-            d.compound(
-                0x6091,
-                "gear ratio",
-                Ro,
-                vec![
-                    (1, sub(Unsigned32, Rw, false, 1)),
-                    (2, sub(Unsigned32, Rw, false, 1)),
-                ],
-            );
+            if motor.unit_objects {
+                // The factor group as the rationals the objects hold (values the fake cannot
+                // write exactly are refused by `FakeSegment::spawn`).
+                let u = &motor.units;
+                for (index, name, value) in [
+                    (0x608F, "position encoder resolution", u.counts_per_rev),
+                    (0x6091, "gear ratio", u.gear_ratio),
+                    (0x6092, "feed constant", u.units_per_rev()),
+                ] {
+                    let (n, den) = crate::cia402::units::ratio(value).unwrap_or((0, 1));
+                    d.compound(
+                        index,
+                        name,
+                        Ro,
+                        vec![
+                            (1, sub(Unsigned32, Ro, false, i64::from(n))),
+                            (2, sub(Unsigned32, Ro, false, i64::from(den))),
+                        ],
+                    );
+                }
+            }
         }
         let mut records: std::collections::BTreeMap<u16, Vec<(u8, super::dictionary::Sub)>> =
             Default::default();

@@ -356,11 +356,12 @@ fn parse_default(s: &str) -> Option<DefaultValue> {
 }
 
 impl Eds {
-    /// Reads an EDS file.
+    /// Reads an EDS file (at most 16 MiB, a regular file: rl-core's bounded reader; the EDS
+    /// of a large drive is under 1 MB).
     pub fn load(path: &Path) -> Result<Self, EdsError> {
-        let text = std::fs::read_to_string(path).map_err(|e| EdsError::Io {
+        let text = rl_core::loader::read_text(path, 16 << 20).map_err(|e| EdsError::Io {
             path: path.display().to_string(),
-            message: e.to_string(),
+            message: e.kind.to_string(),
         })?;
         Self::parse(&text)
     }

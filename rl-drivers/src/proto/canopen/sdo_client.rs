@@ -75,6 +75,33 @@ impl fmt::Display for SdoError {
     }
 }
 
+impl SdoError {
+    /// The reason without the object's address, for a message that names the object itself.
+    pub fn reason(&self) -> SdoReason {
+        SdoReason(*self)
+    }
+}
+
+/// [`SdoError::reason`]: the error without its object address.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SdoReason(SdoError);
+
+impl fmt::Display for SdoReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            SdoError::Aborted { code, .. } => write!(f, "aborted {code}"),
+            SdoError::Protocol { what, code, .. } => {
+                write!(f, "{what} (aborted {:#010x})", code.0)
+            }
+            SdoError::Timeout { .. } => f.write_str("no SDO answer in time"),
+            SdoError::TooLong { size, .. } => {
+                write!(f, "{size} bytes exceed the {MAX_TRANSFER}-byte buffer")
+            }
+            SdoError::Idle => f.write_str("SDO response without a transfer in progress"),
+        }
+    }
+}
+
 /// What the caller does next.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Next {

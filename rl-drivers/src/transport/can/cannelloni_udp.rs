@@ -6,8 +6,11 @@
 //! (`SO_TIMESTAMPNS`, [`timestamp`]), as on SocketCAN.
 //!
 //! A master [`connect`](CannelloniUdp::connect)s to a fixed peer: datagrams from any other
-//! address are rejected. A fake [`serve`](CannelloniUdp::serve)s on a bound address and
-//! answers the sender of the latest valid datagram.
+//! address are rejected. A fake [`serve`](CannelloniUdp::serve)s on a bound address and takes
+//! the first sender of a valid datagram as its peer, as a cannelloni gateway has one remote
+//! (the tool checks the peer's address unless told not to): datagrams from any other address
+//! are rejected and counted while the peer is active, and a new sender is taken only after
+//! the peer has been silent for [`PEER_HOLD`] (a master that was restarted on a new port).
 
 use std::io;
 use std::net::{SocketAddr, UdpSocket};
@@ -24,6 +27,11 @@ use crate::transport::{Readiness, timestamp, wait};
 /// Bytes of one datagram at most (an Ethernet MTU's UDP payload).
 pub const MAX_DATAGRAM: usize = 1472;
 
+/// How long a serving endpoint keeps its peer after the peer's last datagram: until then a
+/// datagram from another address is rejected. A running master sends every cycle (a few ms);
+/// a quarter of a second of silence means it has ended, and the next master is taken.
+pub const PEER_HOLD: Duration = Duration::from_millis(250);
+
 /// A cannelloni UDP endpoint.
 #[derive(Debug)]
 pub struct CannelloniUdp {
@@ -31,6 +39,8 @@ pub struct CannelloniUdp {
     timestamps: bool,
     peer: Option<SocketAddr>,
     follow_sender: bool,
+    /// When the peer's last valid datagram came (a serving endpoint).
+    peer_heard: Option<Instant>,
     tx: [u8; MAX_DATAGRAM],
     tx_len: usize,
     tx_count: u16,
@@ -57,7 +67,8 @@ impl CannelloniUdp {
         Ok(Self::with(bind(local)?, Some(peer), false))
     }
 
-    /// A fake's endpoint: bound to `local`, answering whoever sent the latest valid datagram.
+    /// A fake's endpoint: bound to `local`, taking the first sender of a valid datagram as its
+    /// peer and rejecting others while that peer is active (heard within [`PEER_HOLD`]).
     pub fn serve(local: SocketAddr) -> io::Result<Self> {
         Ok(Self::with(bind(local)?, None, true))
     }
@@ -72,6 +83,7 @@ impl CannelloniUdp {
             timestamps,
             peer,
             follow_sender,
+            peer_heard: None,
             tx: [0; MAX_DATAGRAM],
             tx_len: 0,
             tx_count: 0,
@@ -94,7 +106,7 @@ impl CannelloniUdp {
         self.timestamps
     }
 
-    /// The peer (for a serving endpoint: the latest sender, once one has sent).
+    /// The peer (for a serving endpoint: the sender it took, once one has sent).
     pub fn peer(&self) -> Option<SocketAddr> {
         self.peer
     }
@@ -127,8 +139,20 @@ impl CannelloniUdp {
     }
 
     fn take_datagram(&mut self, n: usize, from: SocketAddr, at: Option<Duration>) {
+        let now = Instant::now();
         match self.peer {
             Some(p) if p == from => {}
+            // A serving endpoint's peer is taken while it is active: a bus carries one master's
+            // frames, not every sender's.
+            Some(_)
+                if self.follow_sender
+                    && self
+                        .peer_heard
+                        .is_some_and(|t| now.duration_since(t) < PEER_HOLD) =>
+            {
+                self.counters.rejected += 1;
+                return;
+            }
             _ if self.follow_sender => {}
             _ => {
                 self.counters.rejected += 1;
@@ -150,6 +174,7 @@ impl CannelloniUdp {
                 self.last_seq_in = None;
             }
             self.peer = Some(from);
+            self.peer_heard = Some(now);
         }
         if let Some(last) = self.last_seq_in {
             let gap = header.seq.wrapping_sub(last.wrapping_add(1));
@@ -224,6 +249,31 @@ mod tests {
     use std::time::Duration;
 
     #[test]
+    fn a_serving_endpoint_keeps_its_peer_while_it_is_active() {
+        let any: SocketAddr = "127.0.0.1:0".parse().unwrap();
+        let mut fake = CannelloniUdp::serve(any).unwrap();
+        let to = fake.local_addr().unwrap();
+        let master = UdpSocket::bind(any).unwrap();
+        let stranger = UdpSocket::bind(any).unwrap();
+        // One SYNC frame in a version 2 DATA datagram.
+        let sync = [2, 0, 0, 0, 1, 0, 0, 0, 0x80, 0];
+        let soon = || Instant::now() + Duration::from_millis(200);
+        master.send_to(&sync, to).unwrap();
+        assert!(fake.recv(soon()).unwrap().is_some());
+        assert_eq!(fake.peer(), Some(master.local_addr().unwrap()));
+        // A stranger's frames are not delivered, and the answers still go to the master.
+        stranger.send_to(&sync, to).unwrap();
+        assert!(fake.recv(soon()).unwrap().is_none());
+        assert_eq!(fake.counters().rejected, 1);
+        assert_eq!(fake.peer(), Some(master.local_addr().unwrap()));
+        // Once the master has been silent for the hold time, a new one is taken (a restart).
+        std::thread::sleep(PEER_HOLD + Duration::from_millis(50));
+        stranger.send_to(&sync, to).unwrap();
+        assert!(fake.recv(soon()).unwrap().is_some());
+        assert_eq!(fake.peer(), Some(stranger.local_addr().unwrap()));
+    }
+
+    #[test]
     fn one_datagram_per_flush_and_only_the_peer_is_heard() {
         let any: SocketAddr = "127.0.0.1:0".parse().unwrap();
         let mut fake = CannelloniUdp::serve(any).unwrap();
@@ -278,7 +328,9 @@ mod tests {
             None
         );
         assert_eq!(master.counters().rejected, 1);
-        // A bad datagram is dropped whole and counted; a skipped sequence number is a gap.
+        // A bad datagram is dropped whole and counted; a skipped sequence number is a gap (from
+        // another sender, once the master has been silent for the hold time).
+        std::thread::sleep(PEER_HOLD);
         raw.send(&[3, 0, 0, 0, 0]).unwrap();
         raw.send(&[2, 0, 9, 0, 1, 0, 0, 1, 0x81, 9]).unwrap();
         assert_eq!(

@@ -32,6 +32,14 @@ pub struct CanFilter {
     pub mask: u32,
 }
 
+/// The OS error a kernel without CAN sockets gives (`EAFNOSUPPORT`).
+pub const EAFNOSUPPORT: i32 = libc::EAFNOSUPPORT;
+
+/// What a user does when the kernel has no CAN sockets (`EAFNOSUPPORT`, os error 97).
+pub const NO_AF_CAN: &str = "this kernel offers no CAN sockets (AF_CAN): load the modules \
+     (`modprobe can-raw`), run outside a container that hides them, or reach the bus through a \
+     CAN-to-Ethernet gateway (cannelloni+udp://HOST:PORT)";
+
 /// Whether this machine's kernel offers `AF_CAN` sockets (`false`: no module, a container).
 pub fn is_available() -> bool {
     sys::socket().is_ok()
@@ -49,8 +57,16 @@ pub struct SocketCan {
 impl SocketCan {
     /// Opens `interface` (`can0`), with `filters` (none: every frame) and CAN FD frames if
     /// `fd_frames`.
+    /// A kernel without CAN sockets is `Unsupported` ([`NO_AF_CAN`] says what to do), an
+    /// unknown interface `NotFound`.
     pub fn open(interface: &str, filters: &[CanFilter], fd_frames: bool) -> io::Result<Self> {
-        let fd = sys::socket()?;
+        let fd = sys::socket().map_err(|e| {
+            if e.raw_os_error() == Some(libc::EAFNOSUPPORT) {
+                io::Error::new(io::ErrorKind::Unsupported, format!("{NO_AF_CAN} ({e})"))
+            } else {
+                e
+            }
+        })?;
         let index = sys::interface_index(interface)?;
         sys::set_error_filter(&fd, crate::proto::can::frame::EFF_MASK)?;
         if !filters.is_empty() {

@@ -2,7 +2,7 @@
 //! nodes), `Inline`, `Shape` with `Box`, `Sphere`, `Cylinder`, `Cone` or `IndexedFaceSet` with
 //! its `Coordinate`, and `DEF`/`USE`. Other nodes (appearance, lights, viewpoints) are read and
 //! ignored; a `Shape` with any other geometry is an error that names it. No Rust VRML crate
-//! exists; the reader is [`parse`] (syntax) plus this module (meaning).
+//! exists; the reader is `parse` (syntax) plus this module (meaning).
 //!
 //! Meaning, as RL (through Coin3D) gives it:
 //! - `Transform` is `T · C · R · SR · S · −SR · −C` (VRML97 §6.52); scales are baked into
@@ -13,12 +13,18 @@
 //!   TRUE` explicitly — RL's FCL back end makes the same choice. `ccw FALSE` flips the faces.
 //! - `Inline` reads the first of its `url`s that exists, relative to the file; its content is
 //!   an unnamed group (so RL's empty body name selects an inlined file as a whole).
+//!
+//! Bounds ([`SceneLimits`]): each file is read once however often it is inlined, within the
+//! file, total-bytes, file-count and node limits; searching and expanding the graph counts node
+//! visits, shapes, vertices and triangles, so a `DEF`/`USE` or `Inline` "billion laughs" stops
+//! at a limit with an error naming the file and the chain of nodes that led there.
 
 mod lexer;
 mod parse;
 
 pub(crate) use parse::NodeIndex;
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -26,7 +32,8 @@ use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rl_core::spatial::PlueckerTransform;
 
 use self::parse::{Document, Node, Value};
-use super::{dir_of, read_text};
+use super::dir_of;
+use super::limits::{Budget, SceneLimits};
 use crate::error::{SgError, SgErrorKind};
 use crate::geometry::{Geometry, MeshStats, TriangleMesh};
 use crate::scene::{Model, Shape};
@@ -48,10 +55,18 @@ pub struct VrmlScene {
     /// What `(file, ROOT)` stands for: the unnamed group around a file's top-level nodes (as
     /// Coin reads a file, and as an `Inline` holds it).
     group: Node,
+    /// What the loading, the searches and the expansions have used of the limits.
+    budget: RefCell<Budget>,
 }
 
 /// The node index of a file's root group.
 const ROOT: NodeIndex = NodeIndex::MAX;
+
+/// What identifies a file for reading it once and for finding cycles: its canonical path
+/// (links resolved, `..` removed), or the path as given when it has none.
+fn file_key(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
 
 /// A shape found under a node: its geometry, its pose relative to the node, its name.
 #[derive(Clone, Debug)]
@@ -68,15 +83,32 @@ pub struct FoundShape {
 }
 
 impl VrmlScene {
-    /// Reads the file at `path` and the files it inlines.
+    /// Reads the file at `path` and the files it inlines, within [`SceneLimits::DEFAULT`].
     pub fn load(path: &Path) -> Result<Self, SgError> {
-        let text = read_text(path)?;
-        Self::from_str(&text, path)
+        Self::load_with(path, &SceneLimits::DEFAULT)
+    }
+
+    /// Reads the file at `path` and the files it inlines, within `limits` (which also bound the
+    /// searches and expansions of the scene).
+    pub fn load_with(path: &Path, limits: &SceneLimits) -> Result<Self, SgError> {
+        let mut budget = Budget::new(*limits);
+        let text = budget.read_text(path)?;
+        Self::from_text(&text, path, budget)
     }
 
     /// Reads `text` as if it were the file `path` (for its inlines and errors).
     pub fn from_str(text: &str, path: &Path) -> Result<Self, SgError> {
-        let doc = parse::parse(text).map_err(|e| e.in_file(path))?;
+        Self::from_str_with(text, path, &SceneLimits::DEFAULT)
+    }
+
+    /// [`VrmlScene::from_str`] within `limits`.
+    pub fn from_str_with(text: &str, path: &Path, limits: &SceneLimits) -> Result<Self, SgError> {
+        Self::from_text(text, path, Budget::new(*limits))
+    }
+
+    fn from_text(text: &str, path: &Path, mut budget: Budget) -> Result<Self, SgError> {
+        let doc = parse::parse(text, budget.nodes_left()).map_err(|e| e.in_file(path))?;
+        budget.add_nodes(doc.nodes.len());
         let mut s = Self {
             files: vec![(path.to_path_buf(), doc)],
             inlines: HashMap::new(),
@@ -87,8 +119,11 @@ impl VrmlScene {
                 line: 1,
                 column: 1,
             },
+            budget: RefCell::new(budget),
         };
-        s.load_inlines(0, &mut vec![path.to_path_buf()])?;
+        let key = file_key(path);
+        let mut known = HashMap::from([(key.clone(), 0)]);
+        s.load_inlines(0, &mut vec![key], &mut known)?;
         Ok(s)
     }
 
@@ -107,7 +142,36 @@ impl VrmlScene {
             .in_file(&self.files[r.0].0)
     }
 
-    fn load_inlines(&mut self, file: usize, stack: &mut Vec<PathBuf>) -> Result<(), SgError> {
+    /// `e` (a limit reached) at the last node of `chain`, naming every node of it from the
+    /// scene's root (and the files entered on the way).
+    fn chain_error(&self, chain: &[NodeRef], e: SgError) -> SgError {
+        let mut names = Vec::with_capacity(chain.len());
+        for &r in chain {
+            if r.1 == ROOT {
+                let file = self.files[r.0].0.file_name().unwrap_or_default();
+                names.push(format!("file \"{}\"", file.to_string_lossy()));
+            } else {
+                names.push(self.node(r).describe());
+            }
+        }
+        let e = e.at(names.join(" › "));
+        match chain.last() {
+            Some(&r) => {
+                let n = self.node(r);
+                e.at_position(n.line, n.column).in_file(&self.files[r.0].0)
+            }
+            None => e.in_file(&self.files[0].0),
+        }
+    }
+
+    /// Reads the files that the `Inline`s of file `file` name, each file once (`known`: the
+    /// files read, by [`file_key`]), refusing cycles (`stack`: the files being read).
+    fn load_inlines(
+        &mut self,
+        file: usize,
+        stack: &mut Vec<PathBuf>,
+        known: &mut HashMap<PathBuf, usize>,
+    ) -> Result<(), SgError> {
         let dir = dir_of(&self.files[file].0);
         let inline_nodes: Vec<NodeIndex> = (0..self.files[file].1.nodes.len())
             .filter(|&i| self.files[file].1.nodes[i].type_name == "Inline")
@@ -125,7 +189,8 @@ impl VrmlScene {
                     self.error_at(r, SgError::new(SgErrorKind::MissingFile { path: first }))
                 );
             };
-            if stack.len() >= MAX_INLINE_DEPTH || stack.contains(&path) {
+            let key = file_key(&path);
+            if stack.len() >= MAX_INLINE_DEPTH || stack.contains(&key) {
                 return Err(self.error_at(
                     r,
                     SgError::unsupported(format!(
@@ -134,14 +199,34 @@ impl VrmlScene {
                     )),
                 ));
             }
-            let doc = read_text(&path)
-                .and_then(|text| parse::parse(&text).map_err(|e| e.in_file(&path)))
+            if let Some(&idx) = known.get(&key) {
+                self.inlines.insert(r, idx);
+                continue;
+            }
+            let max_files = self.budget.get_mut().limits.max_files;
+            if self.files.len() >= max_files {
+                return Err(self.error_at(
+                    r,
+                    SgError::new(SgErrorKind::TooLarge {
+                        what: "number of files one VRML scene reads (itself and its inlines)",
+                        limit: max_files as u64,
+                    }),
+                ));
+            }
+            let budget = self.budget.get_mut();
+            let doc = budget
+                .read_text(&path)
+                .and_then(|text| {
+                    parse::parse(&text, budget.nodes_left()).map_err(|e| e.in_file(&path))
+                })
                 .map_err(|e| self.error_at(r, SgError::nested(e)))?;
-            self.files.push((path.clone(), doc));
+            self.budget.get_mut().add_nodes(doc.nodes.len());
+            self.files.push((path, doc));
             let idx = self.files.len() - 1;
             self.inlines.insert(r, idx);
-            stack.push(path);
-            self.load_inlines(idx, stack)?;
+            known.insert(key.clone(), idx);
+            stack.push(key);
+            self.load_inlines(idx, stack, known)?;
             stack.pop();
         }
         Ok(())
@@ -219,28 +304,42 @@ impl VrmlScene {
     /// Depth-first pre-order search for the first node `DEF`'d as `name` (the empty name
     /// matches the first node without one: a file's or an `Inline`'s root group, an unnamed
     /// `Transform`…), from `start` (itself included) or from the main file's root group.
-    /// Returns the path from `start` to the node.
-    pub fn find(&self, name: &str, start: Option<NodeRef>) -> Option<Vec<NodeRef>> {
+    /// Returns the path from `start` to the node. Every node visited counts against the scene's
+    /// [`SceneLimits::max_visits`]: a search that would pass it is an error.
+    pub fn find(
+        &self,
+        name: &str,
+        start: Option<NodeRef>,
+    ) -> Result<Option<Vec<NodeRef>>, SgError> {
         let mut path = Vec::new();
-        self.search(name, start.unwrap_or((0, ROOT)), &mut path, 0)
-            .then_some(path)
+        let found = self.search(name, start.unwrap_or((0, ROOT)), &mut path, 0)?;
+        Ok(found.then_some(path))
     }
 
-    fn search(&self, name: &str, r: NodeRef, path: &mut Vec<NodeRef>, depth: usize) -> bool {
+    fn search(
+        &self,
+        name: &str,
+        r: NodeRef,
+        path: &mut Vec<NodeRef>,
+        depth: usize,
+    ) -> Result<bool, SgError> {
         if depth > MAX_TREE_DEPTH {
-            return false;
+            return Ok(false);
         }
         path.push(r);
+        if let Err(e) = self.budget.borrow_mut().visit() {
+            return Err(self.chain_error(path, e));
+        }
         if self.node(r).def.as_deref().unwrap_or("") == name {
-            return true;
+            return Ok(true);
         }
         for c in self.children(r) {
-            if self.search(name, c, path, depth + 1) {
-                return true;
+            if self.search(name, c, path, depth + 1)? {
+                return Ok(true);
             }
         }
         path.pop();
-        false
+        Ok(false)
     }
 
     /// The product of the transforms along `path`, the last node's own included.
@@ -250,15 +349,18 @@ impl VrmlScene {
     }
 
     /// Every `Shape` below `r` (not `r`'s own transform: poses are in `r`'s frame after it),
-    /// in depth-first order.
+    /// in depth-first order. Nodes visited, shapes, vertices and triangles count against the
+    /// scene's [`SceneLimits`] (over every call on this scene): passing one is an error naming
+    /// the chain of nodes from `r`.
     pub fn shapes_under(&self, r: NodeRef) -> Result<Vec<FoundShape>, SgError> {
         let mut out = Vec::new();
+        let mut chain = vec![r];
         if self.node(r).type_name == "Shape" {
-            self.shape(r, DAffine3::IDENTITY, &mut out)?;
+            self.shape(r, DAffine3::IDENTITY, &mut out, &chain)?;
             return Ok(out);
         }
         for c in self.children(r) {
-            self.collect(c, DAffine3::IDENTITY, &mut out, 0)?;
+            self.collect(c, DAffine3::IDENTITY, &mut out, &mut chain)?;
         }
         Ok(out)
     }
@@ -268,30 +370,73 @@ impl VrmlScene {
         r: NodeRef,
         parent: DAffine3,
         out: &mut Vec<FoundShape>,
-        depth: usize,
+        chain: &mut Vec<NodeRef>,
     ) -> Result<(), SgError> {
-        if depth > MAX_TREE_DEPTH {
+        chain.push(r);
+        if let Err(e) = self.budget.borrow_mut().visit() {
+            return Err(self.chain_error(chain, e));
+        }
+        if chain.len() > MAX_TREE_DEPTH {
             return Err(self.error_at(r, SgError::unsupported("groups nested too deep")));
         }
         if self.node(r).type_name == "Shape" {
-            return self.shape(r, parent, out);
+            self.shape(r, parent, out, chain)?;
+            chain.pop();
+            return Ok(());
         }
         let x = parent * self.local(r)?;
         let inline = self.node(r).type_name == "Inline";
         for c in self.children(r) {
-            self.collect(c, x, out, depth + 1).map_err(|e| {
-                // Name the Inline in this file as well as the place in the inlined one.
-                if inline {
+            self.collect(c, x, out, chain).map_err(|e| {
+                // Name the Inline in this file as well as the place in the inlined one (a
+                // limit's error names the whole chain already).
+                if inline && !matches!(*e.kind, SgErrorKind::TooLarge { .. }) {
                     self.error_at(r, SgError::nested(e))
                 } else {
                     e
                 }
             })?;
         }
+        chain.pop();
         Ok(())
     }
 
-    fn shape(&self, r: NodeRef, x: DAffine3, out: &mut Vec<FoundShape>) -> Result<(), SgError> {
+    /// The vertices and triangles geometry node `g` will have (an upper bound for a convex
+    /// hull), from its fields, before anything is built.
+    fn cost(&self, g: NodeRef) -> (usize, usize) {
+        let n = self.node(g);
+        if n.type_name != "IndexedFaceSet" {
+            return (0, 0);
+        }
+        let points = match n.field("coord") {
+            Some(Value::Nodes(v)) if !v.is_empty() => match self.node((g.0, v[0])).field("point") {
+                Some(Value::Numbers(p)) => p.len() / 3,
+                _ => 0,
+            },
+            _ => 0,
+        };
+        let mut triangles = 0usize;
+        let mut run = 0usize;
+        if let Some(Value::Numbers(index)) = n.field("coordIndex") {
+            for &i in index.iter().chain(std::iter::once(&-1.0)) {
+                if i == -1.0 {
+                    triangles += run.saturating_sub(2);
+                    run = 0;
+                } else {
+                    run += 1;
+                }
+            }
+        }
+        (points, triangles)
+    }
+
+    fn shape(
+        &self,
+        r: NodeRef,
+        x: DAffine3,
+        out: &mut Vec<FoundShape>,
+        chain: &[NodeRef],
+    ) -> Result<(), SgError> {
         let n = self.node(r);
         let name = n.def.clone().unwrap_or_default();
         let g = match n.field("geometry") {
@@ -299,6 +444,10 @@ impl VrmlScene {
             // A Shape without geometry draws nothing and collides with nothing.
             _ => return Ok(()),
         };
+        let (vertices, triangles) = self.cost(g);
+        if let Err(e) = self.budget.borrow_mut().shape(vertices, triangles) {
+            return Err(self.chain_error(chain, e));
+        }
         let (geometry, pose, stats) = self.geometry(g, x).map_err(|e| self.error_at(g, e))?;
         let notes = stats.map_or_else(Vec::new, |s| {
             let n = self.node(g);

@@ -4,17 +4,22 @@
 //! (materials, viewpoints, lights) are read and skipped rather than refused; `PROTO`,
 //! `EXTERNPROTO` and `Script` (new node types and code) are refused with an error.
 //!
-//! Limits keep hostile input harmless: nesting depth 256, one million nodes per file.
+//! Limits keep hostile input harmless: nesting depth 64, and the nodes the caller allows
+//! (what is left of the scene's [`crate::load::SceneLimits::max_nodes`]).
 
 use std::collections::HashMap;
 
+use rl_core::loader::Clipped;
+
 use super::lexer::{Lexer, Spanned, Token};
-use crate::error::SgError;
+use crate::error::{SgError, SgErrorKind};
 
 /// How deep nodes may nest in one file: RL's files nest fewer than ten deep, CAD exports a few
 /// dozen; the bound keeps the recursive reader within a 2 MiB thread stack even in a debug build.
 const MAX_DEPTH: usize = 64;
-const MAX_NODES: usize = 1_000_000;
+/// Most fields of one node: VRML97's largest node has 14; every visit of a node looks its
+/// fields up, so a node with a million of them, used a million times, would cost 10¹².
+const MAX_FIELDS: usize = 128;
 
 /// A node's index in its file's arena.
 pub(crate) type NodeIndex = usize;
@@ -53,9 +58,10 @@ impl Node {
 
     /// `type "DEF name"` for messages, with the line.
     pub(crate) fn describe(&self) -> String {
+        let ty = Clipped(&self.type_name, Clipped::NAME);
         match &self.def {
-            Some(d) => format!("{} \"{d}\"", self.type_name),
-            None => self.type_name.clone(),
+            Some(d) => format!("{ty} \"{}\"", Clipped(d, Clipped::NAME)),
+            None => ty.to_string(),
         }
     }
 }
@@ -69,6 +75,7 @@ pub(crate) struct Document {
 
 struct Parser<'a> {
     lexer: Lexer<'a>,
+    max_nodes: usize,
     peeked: Option<Spanned<'a>>,
     doc: Document,
     defs: HashMap<String, NodeIndex>,
@@ -77,8 +84,8 @@ struct Parser<'a> {
 }
 
 /// Parses a VRML97 file: the `#VRML V2.0` header, then nodes (and `ROUTE` statements, which
-/// are skipped).
-pub(crate) fn parse(text: &str) -> Result<Document, SgError> {
+/// are skipped); at most `max_nodes` of them.
+pub(crate) fn parse(text: &str, max_nodes: usize) -> Result<Document, SgError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if !text.starts_with("#VRML V2.0") {
         let first: String = text.chars().take(20).collect();
@@ -89,6 +96,7 @@ pub(crate) fn parse(text: &str) -> Result<Document, SgError> {
     }
     let mut p = Parser {
         lexer: Lexer::new(text),
+        max_nodes,
         peeked: None,
         doc: Document::default(),
         defs: HashMap::new(),
@@ -226,8 +234,12 @@ impl<'a> Parser<'a> {
         if matches!(type_name, "Script" | "PROTO" | "EXTERNPROTO") {
             return Err(self.unsupported(&ty, &format!("{type_name} nodes")));
         }
-        if self.doc.nodes.len() >= MAX_NODES {
-            return Err(Self::error(&ty, format!("more than {MAX_NODES} nodes")));
+        if self.doc.nodes.len() >= self.max_nodes {
+            return Err(SgError::new(SgErrorKind::TooLarge {
+                what: "number of VRML nodes (in all files of the scene)",
+                limit: self.max_nodes as u64,
+            })
+            .at_position(ty.line, ty.column));
         }
         self.expect('{')?;
         let mut fields = Vec::new();
@@ -240,6 +252,13 @@ impl<'a> Parser<'a> {
                     self.route()?;
                 }
                 Token::Ident(name) => {
+                    if fields.len() >= MAX_FIELDS {
+                        return Err(SgError::new(SgErrorKind::TooLarge {
+                            what: "number of fields of one node",
+                            limit: MAX_FIELDS as u64,
+                        })
+                        .at_position(t.line, t.column));
+                    }
                     let v = self.value(name, depth + 1)?;
                     fields.push((name.to_string(), v));
                 }
@@ -390,6 +409,10 @@ fn show(t: &Token) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn parse(text: &str) -> Result<Document, SgError> {
+        super::parse(text, 1_000_000)
+    }
 
     #[test]
     fn nodes_fields_def_and_use() {
