@@ -11,12 +11,13 @@
 #![cfg(feature = "zenoh")]
 
 use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod cli;
 mod netns;
+#[path = "../rl-cell/tests/support/mod.rs"]
+mod support;
 use cli::exit_by;
 use netns::{ip, is_root};
 
@@ -80,21 +81,14 @@ impl Drop for Net {
 #[test]
 fn cutting_the_link_mid_run_leaves_the_run_alone_and_every_loss_counted() {
     let root = is_root();
-    let python = std::env::var_os("RL_CELL_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/cell-venv/bin/python")
-        });
-    let has_python = Command::new(&python)
-        .args(["-c", "import zenoh, rosbags"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !root || !has_python {
+    let found = support::python();
+    let has_python = found.is_some();
+    let (true, Some(python)) = (root, found) else {
         println!(
             "SKIPPED: needs root (network namespaces) and the venv with eclipse-zenoh (root {root}, venv {has_python})"
         );
         return;
-    }
+    };
     let Some(_net) = Net::up() else {
         println!(
             "SKIPPED: cannot create network namespaces and a veth pair (ip netns/link failed)"
@@ -107,7 +101,7 @@ fn cutting_the_link_mid_run_leaves_the_run_alone_and_every_loss_counted() {
     let mut sub = Command::new("ip")
         .args(["netns", "exec", "zen-trk"])
         .arg(&python)
-        .arg(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("rl-cell/tests/peers/peer.py"))
+        .arg(support::peer_script("peer.py"))
         .args(["subscribe", "--listen", "tcp/10.201.0.2:7447"])
         .args([
             "--key",

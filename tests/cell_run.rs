@@ -12,34 +12,13 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod cli;
+#[path = "../rl-cell/tests/support/mod.rs"]
+mod support;
 use cli::exit_by;
+use support::{free_port, python};
 
 use rl_cell::ros2::msg::{JOINT_TRAJECTORY, STRING};
 use rl_cell::ros2::names::topic_key;
-
-fn python() -> Option<PathBuf> {
-    let p = std::env::var_os("RL_CELL_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/cell-venv/bin/python")
-        });
-    Command::new(&p)
-        .args(["-c", "import zenoh, rosbags"])
-        .output()
-        .is_ok_and(|o| o.status.success())
-        .then_some(p)
-}
-
-fn peer() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("rl-cell/tests/peers/peer.py")
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .expect("a free port")
-}
 
 fn temp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rl-cell-run-{}-{name}", std::process::id()));
@@ -56,7 +35,7 @@ fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 /// Starts `peer.py subscribe` listening on `port` for `key`, and waits for it to be ready.
 fn subscriber(python: &Path, port: u16, key: &str, out: &Path) -> Child {
     let mut child = Command::new(python)
-        .arg(peer())
+        .arg(support::peer_script("peer.py"))
         .args([
             "subscribe",
             "--listen",
@@ -243,17 +222,7 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
     let plan_path = dir.join("plan.json");
     std::fs::write(&plan_path, plan.to_string()).expect("plan");
     let started = Instant::now();
-    let published = Command::new(&python)
-        .arg(peer())
-        .args([
-            "publish",
-            "--connect",
-            &format!("tcp/127.0.0.1:{port}"),
-            "--plan",
-        ])
-        .arg(&plan_path)
-        .output()
-        .expect("python runs");
+    let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
     assert!(published.status.success());
     let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
     let out = run.wait_with_output().expect("output");

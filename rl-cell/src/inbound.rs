@@ -449,11 +449,10 @@ pub fn target_from<const J: usize>(
         None
     } else {
         let v = reorder(&point.velocities, "velocities")?;
-        for m in 0..dof {
-            if v[m].abs() > joints.speed[m] {
+        for ((v, speed), name) in v.iter().zip(&joints.speed).zip(&joints.names).take(dof) {
+            if v.abs() > *speed {
                 return Err(Refusal::OutOfLimits(format!(
-                    "joint {} at {} is beyond its speed limit {}",
-                    joints.names[m], v[m], joints.speed[m]
+                    "joint {name} at {v} is beyond its speed limit {speed}"
                 )));
             }
         }
@@ -468,11 +467,11 @@ pub fn target_from<const J: usize>(
         };
     }
     let position = reorder(&point.positions, "positions")?;
-    for m in 0..dof {
-        if position[m] < joints.lower[m] || position[m] > joints.upper[m] {
+    let bounds = joints.lower.iter().zip(&joints.upper).zip(&joints.names);
+    for (q, ((lower, upper), name)) in position.iter().zip(bounds).take(dof) {
+        if q < lower || q > upper {
             return Err(Refusal::OutOfLimits(format!(
-                "joint {} at {} is outside its limits [{}, {}]",
-                joints.names[m], position[m], joints.lower[m], joints.upper[m]
+                "joint {name} at {q} is outside its limits [{lower}, {upper}]"
             )));
         }
     }

@@ -2,7 +2,7 @@
 //! decoded by the type named in its key, and the rmw_zenoh liveliness tokens coming and going
 //! (nodes, publishers, subscriptions). `rl cell watch` prints these.
 
-use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::sync::mpsc::{Receiver, channel};
 use std::time::Duration;
 
 use zenoh::Wait;
@@ -178,10 +178,8 @@ impl Watch {
 
     /// The next event, waiting up to `timeout`.
     pub fn next(&self, timeout: Duration) -> Option<Event> {
-        match self.rx.recv_timeout(timeout) {
-            Ok(e) => Some(e),
-            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
-        }
+        // Timed out, or the session's callbacks are gone.
+        self.rx.recv_timeout(timeout).ok()
     }
 
     /// The Zenoh session id.

@@ -103,18 +103,7 @@ fn a_python_publisher_streams_targets_obstacles_and_a_stop() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let plan_path = dir.join("plan.json");
     std::fs::write(&plan_path, plan.to_string()).expect("plan written");
-    let out = Command::new(&python)
-        .arg(support::peer_script("peer.py"))
-        .args([
-            "publish",
-            "--connect",
-            &format!("tcp/127.0.0.1:{port}"),
-            "--plan",
-        ])
-        .arg(&plan_path)
-        .stderr(Stdio::inherit())
-        .output()
-        .expect("python runs");
+    let out = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
     assert!(out.status.success(), "the publisher failed");
     std::thread::sleep(Duration::from_millis(300));
 
