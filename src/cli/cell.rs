@@ -2,8 +2,11 @@
 //! rl-cell's bridge) and `rl cell watch` (what a cell publishes). Built with the `zenoh`
 //! feature; without it the flags are refused with the way to get them.
 
+#[cfg(feature = "zenoh")]
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+#[cfg(feature = "zenoh")]
+use std::time::Instant;
 
 use clap::{Args, Subcommand};
 
@@ -107,6 +110,7 @@ pub struct WatchArgs {
 }
 
 /// The ROS domain from `--…-domain` or `$ROS_DOMAIN_ID` (0 if neither).
+#[cfg(feature = "zenoh")]
 fn domain(flag: Option<u32>) -> Result<u32, CliError> {
     match flag {
         Some(d) => Ok(d),
