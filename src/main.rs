@@ -38,9 +38,12 @@ enum Command {
     /// runs a MotionBenchMaker set.
     Plan(Box<cli::plan::PlanArgs>),
     /// Run a complete controller against a robot (the default: a fake robot on loopback).
-    Run(cli::run::RunArgs),
+    Run(Box<cli::run::RunArgs>),
     /// Show robots in a web browser, live over RL's Coach protocol (rlCoachMdl).
     View(cli::view::ViewArgs),
+    /// A cell of machines over Zenoh (ROS 2's rmw_zenoh): `cell watch` prints what runs publish.
+    #[command(subcommand)]
+    Cell(cli::cell::CellCommand),
 }
 
 /// `command` and all its subcommands, recursively, with negative numbers accepted as values
@@ -72,8 +75,9 @@ fn main() -> ExitCode {
         Some(Command::Preflight(args)) => cli::jitter::run_preflight(args),
         Some(Command::FakeRobot(cmd)) => cli::fake_robot::run(cmd),
         Some(Command::Plan(args)) => cli::plan::run(*args),
-        Some(Command::Run(args)) => cli::run::run(args),
+        Some(Command::Run(args)) => cli::run::run(*args),
         Some(Command::View(args)) => cli::view::run(args),
+        Some(Command::Cell(cmd)) => cli::cell::run(cmd),
         None => cli::run::run(cli::run::RunArgs::default()),
     };
     match result {

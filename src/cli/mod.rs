@@ -1,6 +1,7 @@
 //! One module per `rl` subcommand. Each exposes its clap arguments and a `run` function.
 
 pub mod capacity;
+pub mod cell;
 pub mod fake_robot;
 pub mod jitter;
 pub mod model;

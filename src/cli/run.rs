@@ -179,6 +179,9 @@ pub struct RunArgs {
     /// With --view: keep serving the page after the report, until Ctrl-C.
     #[arg(long, requires = "view")]
     pub view_hold: bool,
+    /// Join a cell over Zenoh (src/cli/cell.rs).
+    #[command(flatten)]
+    pub zenoh: super::cell::ZenohArgs,
 }
 
 /// The planning problem of `--plan`, checked before anything starts.
@@ -318,6 +321,7 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
     if let Some(path) = &args.plot {
         check_writable(path).map_err(|e| CliError::usage(format!("--plot: {e}")))?;
     }
+    args.zenoh.check()?;
     Ok(Setup {
         device,
         period,
@@ -620,6 +624,8 @@ fn drive<const B: usize, const J: usize>(
     let fake = opened.fake;
     let cycle = opened.robot.update_period();
     supervision.allow_device_lag(opened.lag, setup.period.map_or(cycle, |p| p.max(cycle)));
+    let period = setup.period.unwrap_or_else(|| opened.robot.update_period());
+    let mut cell = super::cell::RunCell::<J>::open(&args.zenoh, model, period, &stop)?;
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {
             [one] => vec![*one; joints.len()],
@@ -640,7 +646,7 @@ fn drive<const B: usize, const J: usize>(
         cpus: args.cpu.into_iter().collect(),
         lock_memory: !args.no_mlock,
         supervision,
-        telemetry: setup.telemetry.is_some() || args.plot.is_some(),
+        telemetry: setup.telemetry.is_some() || args.plot.is_some() || cell.is_some(),
         stop: stop.clone(),
         model_name,
         device_name: opened.name,
@@ -685,6 +691,9 @@ fn drive<const B: usize, const J: usize>(
         if let Some(file) = &mut setup.telemetry {
             file.write(r);
         }
+        if let Some(c) = &cell {
+            c.forward(r);
+        }
         if want_plot && r.cycle % stride == 0 {
             if plot_rows.len() >= PLOT_ROWS {
                 stride *= 2;
@@ -697,8 +706,13 @@ fn drive<const B: usize, const J: usize>(
     };
     let started = Instant::now();
     let mut told = StopLevel::None;
-    while let Some(p) = run.poll(Duration::from_millis(50)) {
+    // A cell gets the records within a few milliseconds.
+    let poll = Duration::from_millis(if args.zenoh.wanted() { 2 } else { 50 });
+    while let Some(p) = run.poll(poll) {
         run.drain_telemetry(&mut sink);
+        if let Some(c) = &cell {
+            c.progress(&p);
+        }
         display.update(&p, started.elapsed());
         let level = stop.level();
         if level > told {
@@ -715,6 +729,7 @@ fn drive<const B: usize, const J: usize>(
     }
     let mut report = run.join_with(&mut sink);
     display.finish();
+    let cell_json = cell.take().map(|c| c.finish(&mut report));
     if let Some(file) = setup.telemetry.take() {
         match file.finish() {
             Ok(rows) => report.telemetry_rows = Some(rows),
@@ -748,6 +763,9 @@ fn drive<const B: usize, const J: usize>(
         }
         if let (Some(obj), Some(plan)) = (json.as_object_mut(), plan_json) {
             obj.insert("plan".into(), plan);
+        }
+        if let (Some(obj), Some(cell)) = (json.as_object_mut(), cell_json) {
+            obj.insert("zenoh".into(), cell);
         }
         outln!("{json}")
     } else {

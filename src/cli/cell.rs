@@ -1,0 +1,439 @@
+//! `rl run --zenoh ENDPOINT` / `--zenoh-listen ENDPOINT` (a run joined to a cell over Zenoh,
+//! rl-cell's bridge) and `rl cell watch` (what a cell publishes). Built with the `zenoh`
+//! feature; without it the flags are refused with the way to get them.
+
+#[cfg(feature = "zenoh")]
+use std::process::ExitCode;
+use std::time::Duration;
+#[cfg(feature = "zenoh")]
+use std::time::Instant;
+
+use clap::{Args, Subcommand};
+
+use super::{CliError, CliResult};
+
+/// Zenoh flags of `rl run`.
+#[derive(Args, Debug, Default, Clone)]
+#[command(next_help_heading = "Cell (Zenoh, ROS 2 over rmw_zenoh)")]
+pub struct ZenohArgs {
+    /// Join a cell: connect to this Zenoh endpoint (tcp/HOST:PORT; HOST:PORT means TCP),
+    /// retried until it answers; repeatable. The run publishes its joint states (ROS 2
+    /// sensor_msgs/JointState), run state, faults and report, and takes stop requests.
+    #[arg(long = "zenoh", value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// Join a cell by listening on this endpoint (a bare PORT listens on 127.0.0.1);
+    /// repeatable.
+    #[arg(long = "zenoh-listen", value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// ROS namespace of the run's topics [default: /].
+    #[arg(long = "zenoh-namespace", value_name = "NS")]
+    pub namespace: Option<String>,
+    /// ROS domain (the first part of every key) [default: $ROS_DOMAIN_ID or 0].
+    #[arg(long = "zenoh-domain", value_name = "ID")]
+    pub domain: Option<u32>,
+    /// Publish the joint states of every N-th cycle [default: 1, every cycle].
+    #[arg(long = "zenoh-decimate", value_name = "N")]
+    pub decimate: Option<u32>,
+    /// Before moving, wait up to this long (e.g. 5s) for a subscriber of the joint states, so
+    /// a recorder on another machine sees the whole run [default: do not wait].
+    #[arg(long = "zenoh-wait", value_name = "DURATION", value_parser = super::parse_duration)]
+    pub wait: Option<Duration>,
+}
+
+impl ZenohArgs {
+    /// Whether a cell was asked for.
+    pub fn wanted(&self) -> bool {
+        !self.connect.is_empty() || !self.listen.is_empty()
+    }
+
+    /// The flags that need a cell, given without `--zenoh` or `--zenoh-listen`.
+    fn stray(&self) -> Option<&'static str> {
+        [
+            ("--zenoh-namespace", self.namespace.is_some()),
+            ("--zenoh-domain", self.domain.is_some()),
+            ("--zenoh-decimate", self.decimate.is_some()),
+            ("--zenoh-wait", self.wait.is_some()),
+        ]
+        .into_iter()
+        .find(|(_, on)| *on)
+        .map(|(flag, _)| flag)
+    }
+
+    /// Checks the flags before anything starts.
+    pub fn check(&self) -> Result<(), CliError> {
+        if let Some(flag) = self.stray().filter(|_| !self.wanted()) {
+            return Err(CliError::usage(format!(
+                "{flag} configures a cell: add --zenoh ENDPOINT or --zenoh-listen ENDPOINT"
+            )));
+        }
+        if self.wanted() && !cfg!(feature = "zenoh") {
+            return Err(CliError::usage(
+                "--zenoh/--zenoh-listen: this rl was built without Zenoh (build with \
+                 `--features zenoh`)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `rl cell` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum CellCommand {
+    /// Print what a cell publishes: controllers and ROS nodes coming and going (liveliness),
+    /// run states, faults and reports as they come, and joint states once a second per topic
+    /// (rate, sequence gaps, latest positions).
+    Watch(WatchArgs),
+}
+
+/// `rl cell watch`.
+#[derive(Args, Debug)]
+pub struct WatchArgs {
+    /// Connect to this Zenoh endpoint (repeatable) [default: tcp/127.0.0.1:7447 when
+    /// --listen is not given].
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// Listen on this endpoint instead (repeatable; a bare PORT is 127.0.0.1).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// ROS domain [default: $ROS_DOMAIN_ID or 0].
+    #[arg(long)]
+    pub domain: Option<u32>,
+    /// Watch only this namespace [default: / (all)].
+    #[arg(long, default_value = "/")]
+    pub namespace: String,
+    /// Stop after this long (e.g. 10s) [default: until Ctrl-C].
+    #[arg(long, value_parser = super::parse_duration)]
+    pub duration: Option<Duration>,
+    /// One JSON object per line instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The ROS domain from `--…-domain` or `$ROS_DOMAIN_ID` (0 if neither).
+#[cfg(feature = "zenoh")]
+fn domain(flag: Option<u32>) -> Result<u32, CliError> {
+    match flag {
+        Some(d) => Ok(d),
+        None => match std::env::var("ROS_DOMAIN_ID") {
+            Ok(v) if !v.trim().is_empty() => v.trim().parse().map_err(|_| {
+                CliError::usage(format!("ROS_DOMAIN_ID=`{v}` is not a domain number"))
+            }),
+            _ => Ok(0),
+        },
+    }
+}
+
+/// Runs `rl cell …`.
+pub fn run(cmd: CellCommand) -> CliResult {
+    match cmd {
+        CellCommand::Watch(args) => watch(args),
+    }
+}
+
+#[cfg(not(feature = "zenoh"))]
+fn watch(_: WatchArgs) -> CliResult {
+    Err(CliError::usage(
+        "rl cell watch: this rl was built without Zenoh (build with `--features zenoh`)",
+    ))
+}
+
+#[cfg(feature = "zenoh")]
+fn watch(args: WatchArgs) -> CliResult {
+    use std::collections::BTreeMap;
+
+    use rl_cell::watch::{Body, Event, Watch};
+    use rl_rt::StopFlag;
+
+    use super::output::outln;
+
+    let domain = domain(args.domain)?;
+    let mut connect = args.connect.clone();
+    if connect.is_empty() && args.listen.is_empty() {
+        connect.push("tcp/127.0.0.1:7447".into());
+    }
+    let stop = StopFlag::new();
+    stop.raise_on_termination_signals()
+        .map_err(|e| CliError::failed(format!("cannot watch SIGINT/SIGTERM: {e}")))?;
+    let w = Watch::open(&connect, &args.listen, domain, &args.namespace)
+        .map_err(|e| CliError::usage(e.to_string()))?;
+    eprintln!(
+        "rl cell watch: zenoh session {} on {}, domain {domain}, namespace {}",
+        w.zid(),
+        if args.listen.is_empty() {
+            format!("connect {}", connect.join(", "))
+        } else {
+            format!("listen {}", args.listen.join(", "))
+        },
+        args.namespace
+    );
+    /// A joint-state topic's last second.
+    #[derive(Default)]
+    struct Rate {
+        count: u64,
+        total: u64,
+        gaps: u64,
+        last_seq: Option<i64>,
+        last: Option<rl_cell::ros2::msg::JointState>,
+    }
+    let mut rates: BTreeMap<String, Rate> = BTreeMap::new();
+    let started = Instant::now();
+    let mut summary_due = Instant::now() + Duration::from_secs(1);
+    let json_token = |t: &rl_cell::ros2::names::Token| {
+        serde_json::json!({"kind": t.kind, "namespace": t.namespace, "node": t.node,
+            "topic": t.topic, "type": t.type_name, "zid": t.zid})
+    };
+    loop {
+        if stop.is_stop_requested() || args.duration.is_some_and(|d| started.elapsed() >= d) {
+            break;
+        }
+        let wait = summary_due
+            .saturating_duration_since(Instant::now())
+            .min(Duration::from_millis(100));
+        if let Some(event) = w.next(wait) {
+            let line = match event {
+                Event::Joined(t) | Event::Left(t) if t.kind != "NN" && !args.json => {
+                    // Publishers and subscriptions: one line each, the node's line says who.
+                    let _ = t;
+                    None
+                }
+                Event::Joined(t) => Some(if args.json {
+                    serde_json::json!({"event": "joined", "entity": json_token(&t)}).to_string()
+                } else {
+                    format!(
+                        "joined: node {} in {} (zenoh {})",
+                        t.node, t.namespace, t.zid
+                    )
+                }),
+                Event::Left(t) => Some(if args.json {
+                    serde_json::json!({"event": "left", "entity": json_token(&t)}).to_string()
+                } else {
+                    format!("left: node {} in {} (zenoh {})", t.node, t.namespace, t.zid)
+                }),
+                Event::Message {
+                    topic,
+                    type_name,
+                    attachment,
+                    received_unix_ns,
+                    body,
+                } => match body {
+                    Body::JointState(js) => {
+                        let r = rates.entry(topic).or_default();
+                        r.count += 1;
+                        r.total += 1;
+                        if let (Some(a), Some(last)) = (attachment, r.last_seq) {
+                            if a.sequence_number > last + 1 {
+                                r.gaps += (a.sequence_number - last - 1) as u64;
+                            }
+                        }
+                        r.last_seq = attachment.map(|a| a.sequence_number);
+                        r.last = Some(js);
+                        None
+                    }
+                    Body::Text(text) => Some(if args.json {
+                        serde_json::json!({"event": "message", "topic": topic, "type": type_name,
+                            "sequence": attachment.map(|a| a.sequence_number),
+                            "age_s": attachment.map(|a| (received_unix_ns - a.source_timestamp) as f64 * 1e-9),
+                            "text": text})
+                        .to_string()
+                    } else {
+                        format!("{topic}: {text}")
+                    }),
+                    other => Some(if args.json {
+                        serde_json::json!({"event": "message", "topic": topic, "type": type_name,
+                            "sequence": attachment.map(|a| a.sequence_number),
+                            "body": format!("{other:?}")})
+                        .to_string()
+                    } else {
+                        format!("{topic} ({type_name}): {other:?}")
+                    }),
+                },
+            };
+            if let Some(line) = line {
+                outln!("{line}")?;
+            }
+        }
+        if Instant::now() >= summary_due {
+            summary_due += Duration::from_secs(1);
+            for (topic, r) in rates.iter_mut().filter(|(_, r)| r.count > 0) {
+                let positions = r
+                    .last
+                    .as_ref()
+                    .map(|j| j.position.clone())
+                    .unwrap_or_default();
+                let line = if args.json {
+                    serde_json::json!({"event": "joint_states", "topic": topic, "per_s": r.count,
+                        "total": r.total, "lost": r.gaps, "sequence": r.last_seq,
+                        "names": r.last.as_ref().map(|j| j.name.clone()), "position": positions})
+                    .to_string()
+                } else {
+                    let shown: Vec<String> = positions.iter().map(|v| format!("{v:.4}")).collect();
+                    format!(
+                        "{topic}: {}/s, {} in all, {} lost, position [{}]",
+                        r.count,
+                        r.total,
+                        r.gaps,
+                        shown.join(", ")
+                    )
+                };
+                outln!("{line}")?;
+                r.count = 0;
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A run joined to a cell (feature `zenoh`), or nothing.
+#[cfg(feature = "zenoh")]
+pub struct RunCell<const J: usize> {
+    // The drain sink and the progress loop both hold it; only `forward` needs it mutably.
+    cell: std::cell::RefCell<rl_cell::Cell<J>>,
+}
+
+#[cfg(not(feature = "zenoh"))]
+pub struct RunCell<const J: usize>;
+
+#[cfg(feature = "zenoh")]
+impl<const J: usize> RunCell<J> {
+    /// Joins the cell the flags name, for `model`'s joints at `period`; stop requests raise
+    /// `stop`. `None` without `--zenoh`/`--zenoh-listen`.
+    pub fn open<const B: usize>(
+        args: &ZenohArgs,
+        model: &rl_core::Model<B>,
+        period: Duration,
+        stop: &rl_rt::StopFlag,
+    ) -> Result<Option<Self>, CliError> {
+        use rl::controller::plan::joint_name;
+        if !args.wanted() {
+            return Ok(None);
+        }
+        let dof = model.dof();
+        let mut joints =
+            rl_cell::JointLimits::unlimited((0..dof).map(|k| joint_name(model, k)).collect());
+        for k in 0..dof {
+            let l = model.limits(k);
+            if !l.wraparound {
+                joints.lower[k] = l.lower;
+                joints.upper[k] = l.upper;
+            }
+            if l.velocity.is_finite() && l.velocity > 0.0 {
+                joints.speed[k] = l.velocity;
+            }
+        }
+        let config = rl_cell::CellConfig {
+            connect: args.connect.clone(),
+            listen: args.listen.clone(),
+            domain: domain(args.domain)?,
+            namespace: args.namespace.clone().unwrap_or_else(|| "/".into()),
+            decimation: args.decimate.unwrap_or(1),
+            period,
+            wait_for_subscriber: args.wait,
+            ..rl_cell::CellConfig::default()
+        };
+        // Streamed targets and obstacles wait for the controller's input channel (issue 26):
+        // until then this run refuses them, counted, with the reason.
+        let inbound = Box::new(rl_cell::Refuse(
+            "this run takes no streamed targets or obstacles: it follows its planned motion",
+        ));
+        let cell = rl_cell::Cell::open(config, joints, inbound, stop.clone())
+            .map_err(|e| CliError::usage(format!("--zenoh: {e}")))?;
+        if let Some(wait) = args.wait {
+            match cell.subscriber_after_s() {
+                Some(s) => eprintln!("rl run: the joint states have a subscriber (after {s:.2} s)"),
+                None => eprintln!(
+                    "rl run: warning: no subscriber of the joint states within {wait:?}; moving anyway"
+                ),
+            }
+        }
+        eprintln!(
+            "rl run: joined the cell as zenoh {}; publishing {}",
+            cell.zid(),
+            cell.topics()
+                .iter()
+                .take(2)
+                .map(|(t, _)| t.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        Ok(Some(Self {
+            cell: std::cell::RefCell::new(cell),
+        }))
+    }
+
+    /// Passes one cycle's record on (wait-free).
+    pub fn forward(&self, r: &rl::controller::CycleRecord<J>) {
+        self.cell.borrow_mut().forward(&rl_cell::Sample {
+            cycle: r.cycle,
+            commanded: r.commanded,
+            measured: r.measured,
+            effort: r.feed_forward,
+        });
+    }
+
+    /// The run state from the loop's progress.
+    pub fn progress(&self, p: &rl::controller::Progress) {
+        self.cell
+            .borrow()
+            .set_state(state_json(p, None).to_string());
+    }
+
+    /// Publishes the end (state, fault, report), leaves the cell and adds what it did to the
+    /// report (notes, and `zenoh` in the JSON).
+    pub fn finish(self, report: &mut rl::controller::RunReport) -> serde_json::Value {
+        let end = serde_json::json!({
+            "state": "ended",
+            "exit_code": report.exit_code(),
+            "failure": report.failure,
+        });
+        let done = self.cell.into_inner().finish(
+            end.to_string(),
+            report.to_json().to_string(),
+            report.failure.clone(),
+        );
+        report.notes.extend(done.lines());
+        done.to_json()
+    }
+}
+
+#[cfg(not(feature = "zenoh"))]
+impl<const J: usize> RunCell<J> {
+    /// Without Zenoh: never a cell (the flags were refused by [`ZenohArgs::check`]).
+    pub fn open<const B: usize>(
+        _: &ZenohArgs,
+        _: &rl_core::Model<B>,
+        _: Duration,
+        _: &rl_rt::StopFlag,
+    ) -> Result<Option<Self>, CliError> {
+        Ok(None)
+    }
+    /// Nothing.
+    pub fn forward(&self, _: &rl::controller::CycleRecord<J>) {}
+    /// Nothing.
+    pub fn progress(&self, _: &rl::controller::Progress) {}
+    /// Nothing.
+    pub fn finish(self, _: &mut rl::controller::RunReport) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+}
+
+/// The run state published on `run_state`.
+#[cfg_attr(not(feature = "zenoh"), allow(dead_code))]
+fn state_json(p: &rl::controller::Progress, ended: Option<&str>) -> serde_json::Value {
+    use rl_rt::StopLevel;
+    let state = match (ended, p.faulted, p.stop, p.halting) {
+        (Some(e), ..) => e,
+        (None, true, ..) => "fault",
+        (None, false, StopLevel::Now, _) => "stopping",
+        (None, false, _, true) => "coming to rest",
+        _ => "running",
+    };
+    serde_json::json!({
+        "state": state,
+        "cycle": p.cycle,
+        "time_s": p.time_s,
+        "tracking_error_max": p.error_max_rad,
+        "worst_latency_us": p.worst_latency_ns as f64 / 1e3,
+        "lost": p.lost,
+        "stop": p.stop.to_string(),
+    })
+}
