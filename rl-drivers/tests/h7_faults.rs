@@ -3,6 +3,8 @@
 //! checked (counter, source, content), `stop` brings the arm to a safe state from a fault, and
 //! the link counts are exact and survive `close`. Driven by the fake H7's fault injection.
 
+mod support;
+
 use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant};
 
@@ -20,7 +22,11 @@ const DOF: usize = 6;
 /// Where the fake's arm stands at power-up (rad): away from zero, as in the issue.
 const HOME: [f64; 8] = [0.3, -1.2, 2.3, 0.05, -0.7, 1.1, 0.0, 0.0];
 
+/// A fake controller whose threads run at SCHED_FIFO where the process may (they inherit the
+/// test thread's policy), as a real controller has its own CPU: R3 replies split into paced
+/// segments must not be stretched past the client's quiet gap by a loaded machine.
 fn fake_with(f: impl FnOnce(&mut FakeH7Config)) -> FakeH7 {
+    support::realtime_fake();
     let mut config = FakeH7Config::loopback(DOF);
     config.initial_rad = HOME;
     f(&mut config);
