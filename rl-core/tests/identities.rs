@@ -275,6 +275,9 @@ fn rl_example_models() {
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "xml"))
+        // RL's XSLT-parameterised form (planar2.param.xml) is refused by the loader (see
+        // loader_rlmdl.rs); its applied result is planar2.xml.
+        .filter(|p| !p.to_string_lossy().ends_with(".param.xml"))
         .collect();
     files.sort();
     assert!(files.len() >= 12, "{files:?}");

@@ -1140,6 +1140,8 @@ fn rl_example_models_reach_random_poses() {
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "xml"))
+        // RL's XSLT-parameterised form is refused by the loader (see loader_rlmdl.rs).
+        .filter(|p| !p.to_string_lossy().ends_with(".param.xml"))
         .collect();
     files.sort();
     assert!(files.len() >= 12, "corpus not found in {}", dir.display());
