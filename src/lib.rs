@@ -4,7 +4,10 @@
 //! - [`core`] (`rl-core`): spatial algebra, models, kinematics, dynamics, trajectories;
 //! - [`rt`] (`rl-rt`): Linux real-time threads and absolute-deadline loops;
 //! - [`drivers`] (`rl-drivers`): cyclic devices, protocol codecs and fake robots;
-//! - [`sg`] (`rl-sg`): the scene graph — geometry, collision, distance, raycasts.
+//! - [`sg`] (`rl-sg`): the scene graph — geometry, collision, distance, raycasts;
+//! - `plan` (`rl-plan`, feature `plan`): motion planning — planners, collision checkers,
+//!   path simplification and certification;
+//! - `view` (`rl-view`, feature `view`): the browser viewer.
 
 #![recursion_limit = "256"]
 
@@ -19,6 +22,10 @@ pub use rl_drivers as drivers;
 #[doc(inline)]
 pub use rl_rt as rt;
 pub use rl_sg as sg;
+#[cfg(feature = "plan")]
+pub use rl_plan as plan;
+#[cfg(feature = "view")]
+pub use rl_view as view;
 
 /// The README's examples, compiled and run as doc tests so they cannot rot.
 #[cfg(doctest)]
