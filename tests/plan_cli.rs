@@ -492,3 +492,56 @@ fn bad_arguments_name_the_problem() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown planner \"astar\""));
 }
+
+/// What the JSON says in numbers, stderr says in one line for a reader who looks only at the
+/// exit status: no path (exit 1) or a path the meshes did not certify (exit 0, a warning; the
+/// cage's seed 1 is such a path, see the README's "not built": the swept margin).
+#[test]
+fn no_path_and_uncertified_paths_are_said_on_stderr() {
+    let problem = data("mbm/panda/problems/cage_panda");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "plan".to_string(),
+            data("mbm/panda/panda.urdf").to_string_lossy().into_owned(),
+            "--scene".into(),
+            problem
+                .join("scene0001.yaml")
+                .to_string_lossy()
+                .into_owned(),
+            "--request".into(),
+            problem
+                .join("request0001.yaml")
+                .to_string_lossy()
+                .into_owned(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let run = |extra: &[&str]| {
+        let a = args(extra);
+        rl(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    // No time to plan: no path.
+    let o = run(&["--time", "1us"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["solved"], false);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("no path found"), "{err}");
+    // A path: the warning if and only if the JSON says it is not certified.
+    for seed in ["1", "2"] {
+        let o = run(&["--seed", seed, "--time", "30s"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        let uncertified = v["certified"]["certified"] == false;
+        assert_eq!(
+            err.contains("warning: the path is not certified on the exact geometry"),
+            uncertified,
+            "seed {seed}: {err}\n{}",
+            v["certified"]
+        );
+        println!("seed {seed}: certified {}", !uncertified);
+    }
+}

@@ -1,8 +1,6 @@
 //! `rl jitter` (a cyclictest-equivalent measurement with rl-rt's own loop and an empty step)
 //! and `rl preflight` (what stands between this machine and hard real time).
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -15,7 +13,7 @@ use rl_rt::{
     StopFlag,
 };
 
-use super::output::{errln, out, outln};
+use super::output::{Replacement, errln, out, outln};
 use super::{CliError, CliResult, parse_duration};
 
 /// Largest `--histogram-range-us`: one second in 1 µs bins (8 MB of counters).
@@ -142,13 +140,15 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         .validate()
         .map_err(|e| CliError::usage(e.to_string()))?;
     // So is a histogram file that cannot be created: found before the measurement, not after.
-    let mut histogram = match &args.histogram {
-        Some(path) => Some(BufWriter::new(File::create(path).map_err(|e| {
+    // Written beside its destination and moved over it once complete (a failed measurement
+    // leaves an existing file as it was).
+    let histogram = match &args.histogram {
+        Some(path) => Some(Replacement::create(path).map_err(|e| {
             CliError::usage(format!(
                 "--histogram: cannot create {}: {e}",
                 path.display()
             ))
-        })?)),
+        })?),
         None => None,
     };
 
@@ -203,15 +203,14 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
     };
     drop(latency_hint);
 
-    if let (Some(path), Some(w)) = (&args.histogram, &mut histogram) {
+    if let (Some(path), Some(mut w)) = (&args.histogram, histogram) {
         report
             .stats
             .wakeup
-            .write_cyclictest(&mut *w)
-            .and_then(|()| w.flush())
+            .write_cyclictest(&mut w)
+            .and_then(|()| w.commit())
             .map_err(|e| CliError::failed(format!("cannot write {}: {e}", path.display())))?;
     }
-    drop(histogram);
 
     let stats = &report.stats;
     let interrupted = report.end == LoopEnd::StopRequested;

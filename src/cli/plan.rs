@@ -9,8 +9,7 @@
 //!
 //! All the logic lives in rl-plan; this file parses arguments and prints.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -31,6 +30,7 @@ use rl_plan::verifier::Verifier;
 use rl_plan::{JointSpace, Path as PlanPath, PlanError, PlanOptions, PlanResult, Validity, plan};
 use serde_json::json;
 
+use super::output::Replacement;
 use super::{CliError, CliResult, parse_duration};
 
 /// Arguments of `rl plan`.
@@ -256,7 +256,7 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
 pub(crate) fn load_robot(urdf: &Path, c: &CommonArgs) -> Result<Robot, CliError> {
     let cover = (!c.raw_spheres).then_some(COVER_SPACING);
     let mut robot = Robot::load_urdf_with(urdf, c.srdf.as_deref(), c.spheres.as_deref(), cover)
-        .map_err(failed)?;
+        .map_err(usage)?;
     override_limits(&mut robot.space, c)?;
     Ok(robot)
 }
@@ -288,9 +288,20 @@ pub fn run(args: PlanArgs) -> CliResult {
     let is_scenario = rl_core::loader::read_text(model, max)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
         .map_err(|e| usage(e.to_string()))?;
+    if is_scenario && args.trajectory.is_some() {
+        return Err(usage(
+            "--trajectory is written for URDF robots only (a scenario's path: --out)",
+        ));
+    }
+    // Output files before any work: one that cannot be created fails first, and each is moved
+    // over an existing file only once written.
+    let out_file = args.out.as_deref().map(create).transpose()?;
+    let trajectory_file = args.trajectory.as_deref().map(create).transpose()?;
     let (space, result, checker_name, certified) = if is_scenario {
-        let sc = Scenario::load(model).map_err(failed)?;
-        let (mut space, mut checker) = sc.build().map_err(failed)?;
+        // A file that cannot be read or understood is a bad argument (exit 2), as in every
+        // subcommand; a problem that cannot be solved is a failure (exit 1).
+        let sc = Scenario::load(model).map_err(usage)?;
+        let (mut space, mut checker) = sc.build().map_err(usage)?;
         override_limits(&mut space, &args.common)?;
         let mut opts = sc.options(args.common.seed);
         if args.common.time != Duration::from_secs(1) {
@@ -310,9 +321,9 @@ pub fn run(args: PlanArgs) -> CliResult {
             }
         };
         let robot = load_robot(model, &args.common)?;
-        let env = rl_sg::load::moveit::load_environment(scene).map_err(failed)?;
-        let req = MotionRequest::load(request).map_err(failed)?;
-        let (start, goal) = req.configurations(&robot.space).map_err(failed)?;
+        let env = rl_sg::load::moveit::load_environment(scene).map_err(usage)?;
+        let req = MotionRequest::load(request).map_err(usage)?;
+        let (start, goal) = req.configurations(&robot.space).map_err(usage)?;
         let opts = options(&args.common)?;
         // The path is certified on the exact geometry of the planner's checker (the sphere
         // checker has none: the exact checker of the same scene then).
@@ -343,17 +354,38 @@ pub fn run(args: PlanArgs) -> CliResult {
             Checker::Spheres => "spheres",
             Checker::Exact => "exact",
         };
-        if let (Some(t), Some(path)) = (&args.trajectory, &r.optimized) {
+        if let (Some(t), Some(file), Some(path)) = (&args.trajectory, trajectory_file, &r.optimized)
+        {
             let names = robot.space.number_names();
-            write_trajectory(t, &robot, path, args.speed, args.dt, &names)?;
+            write_trajectory(t, file, &robot, path, args.speed, args.dt, &names)?;
         }
         (robot.space, r, name, cert)
     };
-    if let (Some(out), Some(path)) = (&args.out, &result.optimized) {
-        write_path(out, &space, path)?;
+    if let (Some(out), Some(file), Some(path)) = (&args.out, out_file, &result.optimized) {
+        write_path_to(out, file, &space, path)?;
     }
-    if args.trajectory.is_some() && is_scenario {
-        eprintln!("rl plan: --trajectory is written for URDF robots only");
+    // What stdout's JSON says in numbers, one line on stderr for a reader who only looks at
+    // the exit status: no path (exit 1), or a path the exact geometry did not certify (exit 0,
+    // with a warning).
+    if !result.solved {
+        eprintln!(
+            "rl plan: no path found by {} within {:?} ({} iterations)",
+            result.planner, args.common.time, result.iterations
+        );
+    } else if certified["certified"] == json!(false) {
+        let why = match (&certified["failure"], &certified["unsupported"]) {
+            (serde_json::Value::Object(f), _) => format!(
+                "edge {}: {}",
+                f.get("edge").unwrap_or(&json!(null)),
+                f.get("reason").and_then(|r| r.as_str()).unwrap_or("")
+            ),
+            (_, serde_json::Value::String(u)) => u.clone(),
+            _ => "see \"certified\" in the output".to_string(),
+        };
+        eprintln!(
+            "rl plan: warning: the path is not certified on the exact geometry ({why}); \
+             plan again with another --seed, or rl run --plan, which does"
+        );
     }
     let mut json = result_json(&space, &result, checker_name, args.common.seed);
     json["certified"] = certified;
@@ -439,19 +471,31 @@ fn result_json(space: &JointSpace, r: &PlanResult, checker: &str, seed: u64) -> 
     })
 }
 
-fn create(path: &Path) -> Result<BufWriter<File>, CliError> {
-    File::create(path)
-        .map(BufWriter::new)
-        .map_err(|e| failed(format!("{}: {e}", path.display())))
+/// An output file written beside `path` and moved over it by [`Replacement::commit`]; one that
+/// cannot be created is a bad argument.
+fn create(path: &Path) -> Result<Replacement, CliError> {
+    Replacement::create(path).map_err(|e| usage(format!("cannot create {}: {e}", path.display())))
 }
 
 fn write_path(out: &Path, space: &JointSpace, path: &PlanPath) -> Result<(), CliError> {
-    path.write_csv(space, create(out)?)
+    write_path_to(out, create(out)?, space, path)
+}
+
+fn write_path_to(
+    out: &Path,
+    mut f: Replacement,
+    space: &JointSpace,
+    path: &PlanPath,
+) -> Result<(), CliError> {
+    path.write_csv(space, &mut f)
+        .map_err(|e| e.to_string())
+        .and_then(|()| f.commit().map_err(|e| e.to_string()))
         .map_err(|e| failed(format!("{}: {e}", out.display())))
 }
 
 fn write_trajectory(
     out: &Path,
+    mut f: Replacement,
     robot: &Robot,
     path: &PlanPath,
     speed: f64,
@@ -462,7 +506,6 @@ fn write_trajectory(
     let ex = Execution::new(&robot.space, path, limits).map_err(failed)?;
     let tr = ex.trajectory::<16, 256>().map_err(failed)?;
     let io = |e: std::io::Error| failed(format!("{}: {e}", out.display()));
-    let mut f = create(out)?;
     let n = names.len();
     let mut header = vec!["t".to_string()];
     for suffix in ["", "/v", "/a"] {
@@ -480,7 +523,7 @@ fn write_trajectory(
         }
         writeln!(f, "{}", row.join(",")).map_err(io)?;
     }
-    f.flush().map_err(io)
+    f.commit().map_err(io)
 }
 
 /// The URDF for a problem directory: given, or the only plain `.urdf` in DIR or an ancestor.
@@ -613,7 +656,7 @@ fn run_bench(b: BenchArgs) -> CliResult {
             ));
             let mut f = create(&file)?;
             bench::write_ompl_log(&mut f, &p.name, planner, &setup, &mine)
-                .and_then(|_| f.flush())
+                .and_then(|_| f.commit())
                 .map_err(|e| failed(format!("{}: {e}", file.display())))?;
         }
         let csv = out.join("benchmark.csv");
@@ -624,7 +667,7 @@ fn run_bench(b: BenchArgs) -> CliResult {
             Checker::Exact => "PARRY",
         };
         bench::write_rl_csv(&mut f, &runs, engine)
-            .and_then(|_| f.flush())
+            .and_then(|_| f.commit())
             .map_err(|e| failed(format!("{}: {e}", csv.display())))?;
         eprintln!(
             "rl plan bench: wrote {} OMPL logs and {}",

@@ -45,7 +45,7 @@ use rl_rt::{StopFlag, StopLevel};
 
 use self::progress::ProgressDisplay;
 use super::capacity::{self, WithModel};
-use super::output::{out, outln};
+use super::output::{Replacement, out, outln};
 use super::plan::{CommonArgs, load_robot, options as plan_options};
 use super::{CliError, CliResult};
 use rl::devices::{self as device, DeviceSpec};
@@ -483,15 +483,11 @@ fn plan_for_run<const B: usize, const J: usize>(
     }
 }
 
-/// Checks that `path` can be written without touching it: its directory exists and accepts a
-/// new file.
+/// Checks that `path` can be written without touching it: its directory takes a new file.
 fn check_writable(path: &Path) -> Result<(), String> {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    let probe = path.with_file_name(name);
-    std::fs::File::create(&probe).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
-    let _ = std::fs::remove_file(&probe);
-    Ok(())
+    Replacement::create(path)
+        .map(drop)
+        .map_err(|e| format!("cannot create {}: {e}", path.display()))
 }
 
 /// Builds the device, runs the controller through the library's [`ControlRun`], writes
@@ -786,17 +782,9 @@ fn draw_plot<const J: usize>(
     if rows.is_empty() {
         return Err("no cycles to draw".into());
     }
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    let partial = path.with_file_name(name);
-    let drawn = plot::draw(&partial, report, rows);
-    match drawn {
-        Ok(()) => std::fs::rename(&partial, path).map_err(|e| e.to_string()),
-        Err(e) => {
-            let _ = std::fs::remove_file(&partial);
-            Err(e)
-        }
-    }
+    let file = Replacement::create(path).map_err(|e| e.to_string())?;
+    plot::draw(file.partial(), report, rows)?;
+    file.commit().map_err(|e| e.to_string())
 }
 
 /// Reads waypoints: a header row, then one row per waypoint, one column per joint (rad or m);

@@ -15,8 +15,7 @@
 //! reached). `--jmax` with parabolic-blend is refused (its acceleration jumps: the jerk is
 //! unbounded), and a `t` column with jerk-limited is refused (it plans its own timing).
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -27,7 +26,7 @@ use rl_core::traj::{
     spline,
 };
 
-use super::output::{errln, write_error};
+use super::output::{Replacement, errln, write_error};
 use super::{CliError, CliResult};
 
 /// Most axes a waypoint file may have.
@@ -160,9 +159,11 @@ fn run_on_big_stack(args: TrajArgs) -> CliResult {
         )));
     }
     let waypoints = read_waypoints(&args.file)?;
-    // Output files first: a path that cannot be written fails before any work.
+    // Output files first: a path that cannot be written fails before any work. Each is
+    // written beside its destination and moved over it only once complete, so a failed run
+    // leaves an existing file as it was.
     let create = |flag: &str, path: &Path| {
-        File::create(path).map_err(|e| {
+        Replacement::create(path).map_err(|e| {
             CliError::usage(format!("--{flag}: cannot create {}: {e}", path.display()))
         })
     };
@@ -172,13 +173,11 @@ fn run_on_big_stack(args: TrajArgs) -> CliResult {
         .as_deref()
         .map(|p| create("plot", p))
         .transpose()?;
-    drop(plot_file); // plotters writes it at the end
     let sampled = match out_file {
-        Some(file) => {
+        Some(mut file) => {
             let path = args.out.as_deref().unwrap_or(Path::new(""));
-            let mut w = BufWriter::new(file);
-            let sampled = dispatch(&args, &waypoints, &mut w).map_err(|e| in_file(e, path))?;
-            w.flush()
+            let sampled = dispatch(&args, &waypoints, &mut file).map_err(|e| in_file(e, path))?;
+            file.commit()
                 .map_err(|e| CliError::failed(format!("writing {}: {e}", path.display())))?;
             sampled
         }
@@ -192,17 +191,20 @@ fn run_on_big_stack(args: TrajArgs) -> CliResult {
     for note in &sampled.notes {
         errln!("rl traj: {note}");
     }
-    if let Some(path) = &args.plot {
+    if let (Some(path), Some(file)) = (&args.plot, plot_file) {
         let limits = PlotLimits::parse(&args, sampled.axes)?;
-        plot(path, &sampled, &waypoints, &limits, &args.unit)
+        plot(file.partial(), &sampled, &waypoints, &limits, &args.unit)
+            .map_err(|e| e.to_string())
+            .and_then(|()| file.commit().map_err(|e| e.to_string()))
             .map_err(|e| CliError::failed(format!("drawing {}: {e}", path.display())))?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
-/// A write error while sampling into `--out` names the file.
+/// A failure while sampling into the file at `path`: a write error names the file; bad
+/// waypoints or limits stay bad arguments (exit 2) with their own message.
 fn in_file(e: CliError, path: &Path) -> CliError {
-    if e.is_closed_output() {
+    if e.is_closed_output() || e.exit_code() == 2 {
         e
     } else {
         CliError::failed(format!("writing {}: {e}", path.display()))
