@@ -2,6 +2,8 @@
 //! loopback: open, start, CSP motion, stop; every injected fault becomes a counted, typed
 //! error, and a fault reset recovers.
 
+mod support;
+
 use std::time::{Duration, Instant};
 
 use rl_drivers::canopen::{Cia402, Cia402Config};
@@ -18,8 +20,14 @@ use rl_drivers::{
 /// One fake bus at a time: these tests share two cores with everything else.
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// Takes the bus, and puts the test's thread — and so the fake drives' threads it spawns,
+/// which inherit its policy — at SCHED_FIFO where allowed: real drives have CPUs of their own,
+/// and a loaded CI machine delayed a normal-priority fake's answer past the master's 16 ms
+/// budget (a drive-fault test failed on its first step in a clean-clone run).
 fn serial() -> std::sync::MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(|p| p.into_inner())
+    let guard = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    support::realtime_fake();
+    guard
 }
 
 /// Fake drives and a master on one in-process bus, 20 ms cycle, 200 ms SDO answers. The
