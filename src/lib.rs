@@ -19,11 +19,11 @@ pub mod devices;
 pub use rl_core as core;
 #[doc(inline)]
 pub use rl_drivers as drivers;
+#[cfg(feature = "plan")]
+pub use rl_plan as plan;
 #[doc(inline)]
 pub use rl_rt as rt;
 pub use rl_sg as sg;
-#[cfg(feature = "plan")]
-pub use rl_plan as plan;
 #[cfg(feature = "view")]
 pub use rl_view as view;
 
