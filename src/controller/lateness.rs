@@ -65,6 +65,8 @@ pub enum Culprit {
     Loop,
     /// The device's side (an in-process fake) ran late against its own cycle.
     Peer,
+    /// Both the loop and the device's side ran late (other real-time work held both up).
+    LoopAndPeer,
     /// Replies reached this machine late while neither side measured itself late.
     Delivery,
     /// Nobody measured was late.
@@ -107,17 +109,18 @@ impl Lateness {
             .map_or(0.0, |p| Self::share(p.max, p.cycle.unwrap_or(self.period)))
     }
 
-    /// Who was late the most, as a share of their cycles; [`Culprit::Nobody`] when no one
-    /// passed [`LATE_FRACTION`] and no reply reached the kernel after its deadline.
+    /// Who was late: the loop, the device's side or both, where their worst lateness passed
+    /// [`LATE_FRACTION`] of their cycles; else the delivery where a reply reached the kernel
+    /// after its deadline; else [`Culprit::Nobody`].
     pub fn culprit(&self) -> Culprit {
         let looped = Self::share(self.loop_max(), self.period);
         let peer = self.peer_share();
-        if looped.max(peer) >= LATE_FRACTION {
-            if peer >= looped {
-                Culprit::Peer
-            } else {
-                Culprit::Loop
-            }
+        if looped >= LATE_FRACTION && peer >= LATE_FRACTION {
+            Culprit::LoopAndPeer
+        } else if peer >= LATE_FRACTION {
+            Culprit::Peer
+        } else if looped >= LATE_FRACTION {
+            Culprit::Loop
         } else if self.delivery.after_deadline > 0 {
             Culprit::Delivery
         } else {
@@ -203,6 +206,19 @@ impl Lateness {
                 );
                 s
             }
+            Culprit::LoopAndPeer => {
+                let p = self.peer.as_ref();
+                format!(
+                    "both the loop (woke up to {:.2} ms late against its {:.2} ms period) and {} \
+                     (up to {:.2} ms late against its {:.2} ms cycle) were held up: other \
+                     real-time work on this machine starved them — see `rl preflight`",
+                    ms(self.loop_max()),
+                    ms(self.period),
+                    p.map_or("the device", |p| p.who.as_str()),
+                    ms(p.map_or(Duration::ZERO, |p| p.max)),
+                    ms(p.and_then(|p| p.cycle).unwrap_or(self.period))
+                )
+            }
             Culprit::Delivery => format!(
                 "replies arrived late at the kernel (up to {:.2} ms after their step's deadline) \
                  while the loop was at most {:.2} ms late{}: the device or the network was slow",
@@ -253,6 +269,7 @@ impl Lateness {
             "culprit": match self.culprit() {
                 Culprit::Loop => "loop",
                 Culprit::Peer => "peer",
+                Culprit::LoopAndPeer => "loop_and_peer",
                 Culprit::Delivery => "delivery",
                 Culprit::Nobody => "nobody",
             },
@@ -334,6 +351,20 @@ mod tests {
         assert!(
             l.likely_cause()
                 .contains("read replies up to 5.00 ms after they had arrived"),
+            "{}",
+            l.likely_cause()
+        );
+    }
+
+    #[test]
+    fn a_loop_and_a_fake_both_starved_are_both_named() {
+        let l = lateness(29.9, Some(30.2), Delivery::default());
+        assert_eq!(l.culprit(), Culprit::LoopAndPeer);
+        assert!(
+            l.likely_cause().starts_with(
+                "both the loop (woke up to 29.90 ms late against its 7.11 ms period) and the \
+                 fake H7 (up to 30.20 ms late against its 7.11 ms cycle) were held up"
+            ),
             "{}",
             l.likely_cause()
         );
