@@ -653,7 +653,6 @@ impl MitsubishiH7 {
         Ok(())
     }
 
-    /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
     /// Notes how long the datagram just read waited in the socket after the kernel received it.
     fn note_wait(&mut self) {
         if let Some(at) = self.udp.as_ref().and_then(UdpLink::received_at) {
@@ -677,6 +676,7 @@ impl MitsubishiH7 {
         }
     }
 
+    /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
     fn verdict(&mut self, n: usize, sent: u32) -> Verdict {
         const OP: Operation = Operation::Step;
         let reply = match Packet::decode(&self.rx[..n]) {
