@@ -928,7 +928,7 @@ impl Driver for MitsubishiH7 {
                 b.min(self.config.reply_timeout)
             });
         let deadline = begin + timeout;
-        let deadline_epoch = timestamp::since_epoch() + timeout;
+        let deadline_epoch = timestamp::since_epoch().saturating_add(timeout);
         // A controller a cycle behind (two requests reached it within one of its cycles, and it
         // answers one per cycle: the last step saw the reply to the packet before its own)
         // stays behind while we send one packet a cycle. This step then sends nothing and
