@@ -292,8 +292,8 @@ pub struct FakeSeen {
     pub safe: Result<(), String>,
     /// The same as JSON keys for the report (`fake_end_packets`, `fake_servo_on`, …).
     pub json: serde_json::Value,
-    /// How late the fake's own thread ran (for [`RunReport::peer_lateness`](
-    /// crate::controller::RunReport::peer_lateness)).
+    /// How late the fake's own thread ran (for the report's
+    /// [`peer_lateness`](crate::controller::RunReport::peer_lateness)).
     pub lateness: PeerLateness,
 }
 

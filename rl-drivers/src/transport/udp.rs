@@ -1,7 +1,7 @@
 //! A UDP link to one peer: a non-blocking, unconnected socket that accepts datagrams only from
 //! the configured peer. Anything else is dropped and counted (the kernel's own filter of a
 //! connected socket would hide it). Where the kernel gives them (`SO_TIMESTAMPNS`, see
-//! [`timestamp`](super::timestamp)), each received datagram's kernel receive time is kept
+//! [`timestamp`]), each received datagram's kernel receive time is kept
 //! ([`UdpLink::received_at`]): the caller can tell how long a reply waited in the socket.
 
 use std::io;
