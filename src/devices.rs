@@ -29,7 +29,7 @@
 use std::net::{SocketAddr, ToSocketAddrs};
 use std::time::Duration;
 
-use crate::controller::{JointRobot, RunError};
+use crate::controller::{JointRobot, PeerLateness, RunError};
 use rl_core::loader::LoadedModel;
 use rl_drivers::Error as DeviceError;
 use rl_drivers::EthercatDrives;
@@ -38,7 +38,7 @@ use rl_drivers::cia402::{AxisUnits, PowerState, UnitsOverride};
 use rl_drivers::coach::{Coach, CoachConfig};
 use rl_drivers::ethercat::EthercatConfig;
 use rl_drivers::fake::cia402_drive::{FakeCia402, FakeCia402Config};
-use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
+use rl_drivers::fake::h7_controller::{self, FakeH7, FakeH7Config};
 use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl_drivers::proto::ecat::frame::ETHERTYPE;
 use rl_drivers::transport::can::socketcan::{EAFNOSUPPORT, NO_AF_CAN};
@@ -292,6 +292,9 @@ pub struct FakeSeen {
     pub safe: Result<(), String>,
     /// The same as JSON keys for the report (`fake_end_packets`, `fake_servo_on`, …).
     pub json: serde_json::Value,
+    /// How late the fake's own thread ran (for the report's
+    /// [`peer_lateness`](crate::controller::RunReport::peer_lateness)).
+    pub lateness: PeerLateness,
 }
 
 impl InProcessFake {
@@ -329,7 +332,16 @@ impl InProcessFake {
                         "fake_cycles": s.cycles,
                         "fake_packets_outside_program": s.packets_outside_program,
                         "fake_overflowed": s.overflowed,
+                        "fake_late_ticks": s.late_ticks,
+                        "fake_max_tick_lateness_ms": s.max_tick_lateness.as_secs_f64() * 1e3,
                     }),
+                    lateness: PeerLateness {
+                        who: "the fake H7".to_owned(),
+                        cycle: Some(h7_controller::CYCLE),
+                        max: s.max_tick_lateness,
+                        late: Some(s.late_ticks),
+                        cycles: Some(s.cycles),
+                    },
                 }
             }
             InProcessFake::Cia402(fake) => {
@@ -363,8 +375,21 @@ impl InProcessFake {
                     "fake_syncs": s.nodes.first().map_or(0, |n| n.counters.syncs),
                     "fake_tpdos": s.nodes.first().map_or(0, |n| n.counters.tpdos),
                     "fake_faults": s.nodes.iter().map(|n| n.counters.faults).sum::<u64>(),
+                    "fake_max_lateness_ms": s.max_lateness.as_secs_f64() * 1e3,
                 });
-                FakeSeen { note, safe, json }
+                let lateness = PeerLateness {
+                    who: "the fake CiA 402 drives".to_owned(),
+                    cycle: None,
+                    max: s.max_lateness,
+                    late: None,
+                    cycles: None,
+                };
+                FakeSeen {
+                    note,
+                    safe,
+                    json,
+                    lateness,
+                }
             }
         }
     }

@@ -201,6 +201,67 @@ fn a_frozen_controller_ends_the_run_and_is_still_switched_off() {
     assert_switched_off(&fake, &report, false);
 }
 
+/// A fake H7 held up for seven of its cycles (as other real-time work on the machine would
+/// starve it) loses the loop's replies; the report says the fake was late, not the link: the
+/// likely cause names it, from its own lateness against its cycle.
+#[test]
+fn a_starved_fake_is_named_as_the_likely_cause_of_lost_replies() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    const HELD: Duration = Duration::from_millis(50);
+    let model = rv6sl().expect("model");
+    let (body, placement) = (model.model.body_count() - 1, Default::default());
+    let fk = rl::drivers::fake::h7_controller::ForwardKinematics::from_model(
+        model.model.clone(),
+        body,
+        placement,
+    );
+    let starve = Arc::new(AtomicBool::new(false));
+    let held = starve.clone();
+    let fake = fake(&model, |c| {
+        // The pose feedback the driver asks for goes through here, in the fake's cycle.
+        c.kinematics = Some(rl::drivers::fake::h7_controller::ForwardKinematics::new(
+            move |q| {
+                if held.swap(false, Ordering::Relaxed) {
+                    std::thread::sleep(HELD);
+                }
+                fk.pose(q)
+            },
+        ));
+    });
+    let mut report = run_with(model, &fake, options(), Duration::from_millis(300), |_| {
+        starve.store(true, Ordering::Relaxed)
+    });
+    // Replies lost in a row: a short loss, a dead link, or the device's own bound on failed
+    // steps (a timeout), whichever a loaded machine reaches first.
+    assert!(
+        matches!(
+            fault(&report),
+            Fault::LinkInterrupted { .. } | Fault::ConsecutiveLost { .. } | Fault::LinkLost { .. }
+        ),
+        "{report}"
+    );
+    // What `rl run` does with its in-process fake after the run.
+    let fake = rl::devices::InProcessFake::H7(fake);
+    let seen = fake.after_run(report.shutdown.stopped);
+    report.peer_lateness = Some(seen.lateness);
+    let peer = report.peer_lateness.as_ref().expect("set above");
+    assert!(peer.max >= HELD, "{peer:?}");
+    assert!(peer.late.is_some_and(|n| n >= 1), "{peer:?}");
+    let cause = report
+        .likely_cause()
+        .expect("a timing failure has a likely cause");
+    assert!(
+        cause.starts_with("the fake H7 ran up to"),
+        "{cause}\n{report}"
+    );
+    let text = report.to_string();
+    assert!(text.contains(&format!("likely cause: {cause}")), "{text}");
+    assert!(text.contains("lateness: loop woke up to"), "{text}");
+    assert_eq!(report.to_json()["lateness"]["culprit"], "peer", "{text}");
+    println!("{text}");
+}
+
 #[test]
 fn half_the_replies_lost_ends_the_run_early() {
     let model = rv6sl().expect("model");

@@ -19,7 +19,7 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Instant;
 
 use crate::capability::{
-    JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
+    Delivery, JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
     JointTorqueFeedForward, JointVelocityActuator, LinkStatistics, LinkStatisticsSensor, Pose,
 };
 use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
@@ -484,6 +484,7 @@ impl LinkStatisticsSensor for Coach {
             rejected: c.other_lines,
             corrupt: c.bad_lines,
             consecutive_failures: self.lifecycle.consecutive_failures(),
+            delivery: Delivery::default(),
         }
     }
 }

@@ -40,8 +40,9 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Instant;
 
 use crate::capability::{
-    CartesianPositionActuator, CartesianPositionSensor, Gripper, JointDevice, JointLimitSensor,
-    JointPositionActuator, JointPositionSensor, LinkStatistics, LinkStatisticsSensor, Pose,
+    CartesianPositionActuator, CartesianPositionSensor, Delivery, Gripper, JointDevice,
+    JointLimitSensor, JointPositionActuator, JointPositionSensor, LinkStatistics,
+    LinkStatisticsSensor, Pose,
 };
 use crate::device::{
     DeviceError, Driver, Error, FirstError, Lifecycle, Operation, State, impl_cyclic_device,
@@ -51,7 +52,7 @@ use crate::proto::h7::{
     PACKET_LEN, Packet, PoseData,
 };
 use crate::proto::r3::{self, DState, EmdatChunks, JointReport, R3Error, Reply, Request};
-use crate::transport::{TcpLink, UdpLink};
+use crate::transport::{TcpLink, UdpLink, timestamp};
 use glam::DVec3;
 use rl_core::rotation::euler;
 
@@ -242,6 +243,10 @@ pub struct H7Counters {
     /// Steps that sent nothing because the previous request was still unanswered: the
     /// controller was a cycle behind, and waiting for that reply lets it catch up.
     pub held: u64,
+    /// When replies reached this machine's kernel, against when the steps read them and
+    /// against their steps' deadlines (kernel receive timestamps; empty where the kernel gives
+    /// none).
+    pub delivery: Delivery,
 }
 
 /// Where the last joint positions came from.
@@ -275,6 +280,10 @@ pub struct MitsubishiH7 {
     commanded: Option<[f32; MAX_AXES]>,
     limit: [bool; MAX_AXES],
     last_latency: Option<Duration>,
+    /// The requests whose steps gave up waiting lately (by counter modulo [`GIVEN_UP`]), each
+    /// with its step's deadline on the kernel timestamps' clock: a reply to one found later
+    /// tells how late it reached the kernel.
+    given_up: [Option<(u32, Duration)>; GIVEN_UP],
     counters: H7Counters,
     /// Foreign datagrams counted by sockets closed since (the counts survive `close`).
     foreign_before: u64,
@@ -283,6 +292,9 @@ pub struct MitsubishiH7 {
     r3_tx: [u8; 512],
     r3_rx: [u8; r3::MAX_REPLY_LEN],
 }
+
+/// Requests given up whose deadlines are kept, to time their late replies.
+const GIVEN_UP: usize = 16;
 
 /// How a received datagram relates to the packet just sent.
 enum Verdict {
@@ -323,6 +335,7 @@ impl MitsubishiH7 {
             commanded: None,
             limit: [false; MAX_AXES],
             last_latency: None,
+            given_up: [None; GIVEN_UP],
             counters: H7Counters::default(),
             foreign_before: 0,
             tx: [0; PACKET_LEN],
@@ -640,6 +653,29 @@ impl MitsubishiH7 {
         Ok(())
     }
 
+    /// Notes how long the datagram just read waited in the socket after the kernel received it.
+    fn note_wait(&mut self) {
+        if let Some(at) = self.udp.as_ref().and_then(UdpLink::received_at) {
+            let waited = timestamp::since_epoch().saturating_sub(at);
+            self.counters.delivery.note_wait(waited);
+        }
+    }
+
+    /// Notes how long after its step's deadline the late reply to request `c`, just read,
+    /// reached the kernel.
+    fn note_late_arrival(&mut self, c: u32) {
+        let at = self.udp.as_ref().and_then(UdpLink::received_at);
+        let slot = &mut self.given_up[c as usize % GIVEN_UP];
+        if let (Some(at), Some((given_up, deadline))) = (at, *slot)
+            && given_up == c
+        {
+            *slot = None;
+            self.counters
+                .delivery
+                .note_after_deadline(at.saturating_sub(deadline));
+        }
+    }
+
     /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
     fn verdict(&mut self, n: usize, sent: u32) -> Verdict {
         const OP: Operation = Operation::Step;
@@ -892,6 +928,7 @@ impl Driver for MitsubishiH7 {
                 b.min(self.config.reply_timeout)
             });
         let deadline = begin + timeout;
+        let deadline_epoch = timestamp::since_epoch().saturating_add(timeout);
         // A controller a cycle behind (two requests reached it within one of its cycles, and it
         // answers one per cycle: the last step saw the reply to the packet before its own)
         // stays behind while we send one packet a cycle. This step then sends nothing and
@@ -941,8 +978,10 @@ impl Driver for MitsubishiH7 {
                             self.counters.late += 1;
                         }
                     }
-                    // Late or corrupt: counted, never used.
-                    Verdict::Late(_) | Verdict::Bad(_) => {}
+                    // Late or corrupt: counted, never used. A late reply's kernel timestamp
+                    // tells how late it reached this machine.
+                    Verdict::Late(c) => self.note_late_arrival(c),
+                    Verdict::Bad(_) => {}
                 },
                 None => break,
             }
@@ -976,11 +1015,15 @@ impl Driver for MitsubishiH7 {
                 .map_err(|e| Error::io(OP, &e))?
             else {
                 self.counters.timeouts += 1;
+                self.given_up[sent as usize % GIVEN_UP] = Some((sent, deadline_epoch));
                 return Err(Error::Timeout {
                     operation: OP,
                     waited: timeout,
                 });
             };
+            // The step was waiting for this reply: the time it spent in the socket is how late
+            // this thread woke up to read it.
+            self.note_wait();
             match self.verdict(n, sent) {
                 Verdict::Current(reply) if held.is_some() => {
                     self.accept_held(reply);
@@ -995,9 +1038,10 @@ impl Driver for MitsubishiH7 {
                 // The controller answered our previous packet only now, at this cycle's tick:
                 // it is a cycle behind, and would stay so while we send one packet a cycle.
                 Verdict::Late(c) if c == sent.wrapping_sub(1) && held.is_none() => {
+                    self.note_late_arrival(c);
                     self.behind = true;
                 }
-                Verdict::Late(_) => {}
+                Verdict::Late(c) => self.note_late_arrival(c),
                 Verdict::Bad(e) => return Err(e),
             }
         }
@@ -1017,6 +1061,7 @@ impl LinkStatisticsSensor for MitsubishiH7 {
             rejected: c.foreign,
             corrupt: c.wrong_length + c.corrupt + c.replayed,
             consecutive_failures: c.consecutive_failures,
+            delivery: c.delivery,
         }
     }
 }

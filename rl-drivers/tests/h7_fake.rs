@@ -310,3 +310,40 @@ fn the_r3_responder_survives_signals_instead_of_dropping_the_connection() {
     robot.stop().unwrap();
     robot.close().unwrap();
 }
+
+/// The fake measures its own lateness against its cycle: a tick held up (here by forward
+/// kinematics that take three cycles, as a thread starved by other real-time work would be)
+/// is counted late, by at least the time it was held; a run's report names it from this.
+#[test]
+fn the_fake_counts_the_ticks_it_ran_late() {
+    const HELD: Duration = Duration::from_millis(3 * 7110 / 1000);
+    let mut config = FakeH7Config::loopback(2);
+    // Without R3 it answers real-time packets from anyone.
+    config.r3_bind = None;
+    config.kinematics = Some(ForwardKinematics::new(|_| {
+        std::thread::sleep(HELD);
+        None
+    }));
+    let fake = FakeH7::spawn(config).unwrap();
+    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket.connect(fake.udp_addr()).unwrap();
+    let before = fake.status();
+    assert_eq!(
+        (before.late_ticks, before.max_tick_lateness),
+        (0, Duration::ZERO)
+    );
+    for c in 0..3 {
+        let pose = Packet {
+            recv_type: MxtType::Pose,
+            c_count: c,
+            ..Packet::default()
+        };
+        socket.send(&pose.to_bytes()).unwrap();
+    }
+    let got = replies(&socket, Instant::now() + Duration::from_secs(2));
+    assert_eq!(got.len(), 3, "every packet answered");
+    let s = fake.status();
+    assert_eq!(s.cycles, 3);
+    assert_eq!(s.late_ticks, 3, "each tick was held {HELD:?}: {s:?}");
+    assert!(s.max_tick_lateness >= HELD, "{:?}", s.max_tick_lateness);
+}

@@ -241,6 +241,48 @@ fn a_late_reply_is_counted_once_and_never_used() {
     );
 }
 
+/// The kernel's receive timestamps tell when the replies reached this machine: the replies a
+/// step waited for are timed from the kernel to the read (how late the step's thread woke to
+/// read them), and a late reply by how long after its step's deadline it came.
+#[test]
+fn the_delivery_says_when_replies_reached_the_kernel() {
+    let fake = fake_with(|c| c.pacing = Pacing::Immediate);
+    let c = config(&fake);
+    let timeout = c.reply_timeout;
+    let mut robot = started(c);
+    let start = robot.link_statistics().delivery;
+    robot.step().unwrap();
+    let delay = Duration::from_millis(60);
+    fake.set_fault(Some(FaultPlan {
+        every: 1,
+        fault: Fault::Delay(delay),
+    }));
+    assert_eq!(robot.step().unwrap_err().kind(), ErrorKind::Timeout);
+    fake.set_fault(None);
+    std::thread::sleep(Duration::from_millis(100));
+    robot.step().unwrap();
+    let d = robot.link_statistics().delivery;
+    if d.timestamped == start.timestamped {
+        println!("SKIPPED the delivery check: this kernel or emulator refuses SO_TIMESTAMPNS");
+        return;
+    }
+    assert_eq!(
+        d.timestamped - start.timestamped,
+        2,
+        "the two replies a step waited for"
+    );
+    assert!(d.max_wait >= d.mean_wait());
+    assert_eq!(d.after_deadline, 1, "the delayed reply: {d:?}");
+    // It was sent `delay` after the request, whose step gave up `timeout` after it sent it.
+    // (The timestamps' clock is CLOCK_REALTIME; a millisecond allows for its slewing.)
+    assert!(
+        d.max_after_deadline + Duration::from_millis(1) >= delay - timeout,
+        "{:?} after the deadline, expected at least {:?}",
+        d.max_after_deadline,
+        delay - timeout
+    );
+}
+
 #[test]
 fn a_flood_of_foreign_datagrams_is_counted_and_does_not_hold_the_step() {
     let fake = fake_with(|c| c.pacing = Pacing::Immediate);

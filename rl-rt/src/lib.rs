@@ -15,7 +15,8 @@
 //! - [`exchange`]: wait-free SPSC [`queue`](exchange::queue) and latest-value
 //!   [`mailbox`](exchange::mailbox), drops counted.
 //! - [`cpu_latency`]: hold `/dev/cpu_dma_latency` (no deep C-states) while measuring.
-//! - [`preflight`]: what stands between this machine and hard real time, with fixes.
+//! - [`preflight`]: what stands between this machine and hard real time, with fixes, and the
+//!   other programs' threads at real-time priority that can starve a loop.
 //!
 //! Linux only (std). All `unsafe` lives in one private module (`sys`), each block with its
 //! safety argument. Nothing called per cycle allocates (proved by `tests/no_alloc.rs`).

@@ -1,12 +1,15 @@
 //! What stands between this machine and hard real time, each finding with its fix.
 //!
 //! Reads the kernel's preemption model, RT throttling, CPU frequency governor, isolated CPUs,
-//! clock source, memlock and rtprio limits, and tries SCHED_FIFO on a probe thread. Nothing is
-//! changed; the report says what to change.
+//! clock source, memlock and rtprio limits, tries SCHED_FIFO on a probe thread, and lists the
+//! other programs' threads at real-time priority ([`rt_threads`]: the work that can starve a
+//! loop on a shared machine). Nothing is changed; the report says what to change.
 
 use core::fmt;
 use std::fs;
 use std::path::Path;
+
+pub mod rt_threads;
 
 use crate::memory::{self, Capability};
 use crate::thread::{Policy, RtThreadBuilder, ThreadError};
@@ -136,9 +139,12 @@ fn ok_or_warn(name: &'static str, ok: bool, found: String, fix: &str) -> Item {
     }
 }
 
+/// Other programs' real-time threads listed one by one, at most; the rest are counted.
+pub const MAX_RT_THREADS_LISTED: usize = 8;
+
 /// Runs every check. Spawns one short-lived probe thread to try SCHED_FIFO.
 pub fn check() -> Report {
-    Report {
+    let mut report = Report {
         items: vec![
             kernel_preemption(),
             rt_throttling(),
@@ -151,7 +157,80 @@ pub fn check() -> Report {
             rtprio(),
             fifo_permitted(),
         ],
+    };
+    report
+        .items
+        .extend(rt_thread_items(&rt_threads::other_rt_threads()));
+    report
+}
+
+/// The findings on other real-time threads: a summary (`other real-time threads`), then a
+/// warning for each other program's thread (`real-time thread`, at most
+/// [`MAX_RT_THREADS_LISTED`], the rest counted in the summary). Kernel threads (interrupt
+/// threads, `migration/N`, …) are the kernel's own work: counted, not warned about.
+pub fn rt_thread_items(threads: &[rt_threads::RtThread]) -> Vec<Item> {
+    let name = "other real-time threads";
+    let (kernel, user): (Vec<_>, Vec<_>) = threads.iter().partition(|t| t.kernel);
+    let kernel_note = if kernel.is_empty() {
+        String::new()
+    } else {
+        let top = kernel[0];
+        format!(
+            "; {} kernel thread{} (the kernel's own, highest {} {} {})",
+            kernel.len(),
+            if kernel.len() == 1 { "" } else { "s" },
+            top.comm,
+            top.policy.name(),
+            top.priority
+        )
+    };
+    let mut items = Vec::with_capacity(user.len().min(MAX_RT_THREADS_LISTED) + 1);
+    if user.is_empty() {
+        items.push(item(
+            name,
+            Status::Ok,
+            format!("none in other programs{kernel_note}"),
+            None,
+        ));
+        return items;
     }
+    let more = user.len().saturating_sub(MAX_RT_THREADS_LISTED);
+    items.push(item(
+        name,
+        Status::Warn,
+        format!(
+            "{} thread{} of other programs at real-time priority{}{kernel_note}",
+            user.len(),
+            if user.len() == 1 { "" } else { "s" },
+            if more > 0 {
+                format!(" ({MAX_RT_THREADS_LISTED} listed below, {more} more not)")
+            } else {
+                String::new()
+            }
+        ),
+        Some(
+            "a real-time thread at or above a loop's priority (rl run: 80, its in-process fake \
+             device 79) takes their CPU whenever it runs, and the run loses replies or misses \
+             deadlines: give it other CPUs (taskset, isolcpus), lower its priority (chrt), or \
+             stop it while the loop runs",
+        ),
+    ));
+    for t in user.iter().take(MAX_RT_THREADS_LISTED) {
+        items.push(item(
+            "real-time thread",
+            Status::Warn,
+            format!(
+                "pid {} tid {} `{}` {} priority {}",
+                t.pid,
+                t.tid,
+                t.comm,
+                t.policy.name(),
+                t.priority
+            ),
+            Some("see `other real-time threads`"),
+        ));
+    }
+    items
 }
 
 fn kernel_preemption() -> Item {
@@ -457,8 +536,15 @@ mod tests {
     fn every_check_reports_something() {
         let report = check();
         let names: Vec<&str> = report.items.iter().map(|i| i.name).collect();
+        // Then one line for each other program's real-time thread, at most the bound.
+        let (fixed, listed) = names.split_at(names.len().min(11));
+        assert!(
+            listed.len() <= MAX_RT_THREADS_LISTED
+                && listed.iter().all(|n| *n == "real-time thread"),
+            "{listed:?}"
+        );
         assert_eq!(
-            names,
+            fixed,
             [
                 "kernel preemption",
                 "RT throttling",
@@ -469,7 +555,8 @@ mod tests {
                 "virtualisation",
                 "memlock limit",
                 "rtprio limit",
-                "SCHED_FIFO permitted"
+                "SCHED_FIFO permitted",
+                "other real-time threads"
             ]
         );
         for i in &report.items {
@@ -478,6 +565,54 @@ mod tests {
                 assert!(i.fix.is_some(), "{} is {} without a fix", i.name, i.status);
             }
         }
+    }
+
+    #[test]
+    fn other_real_time_threads_are_warned_about_one_by_one_up_to_the_bound() {
+        use rt_threads::{RtPolicy, RtThread};
+        let thread = |tid: u32, priority: u32, kernel: bool| RtThread {
+            pid: 100,
+            tid,
+            comm: if kernel { "irq/9-acpi" } else { "spinner" }.into(),
+            policy: RtPolicy::Fifo,
+            priority,
+            kernel,
+        };
+        let none = rt_thread_items(&[thread(1, 50, true)]);
+        assert_eq!(none.len(), 1);
+        assert_eq!(none[0].status, Status::Ok);
+        assert_eq!(
+            none[0].found,
+            "none in other programs; 1 kernel thread (the kernel's own, highest irq/9-acpi \
+             SCHED_FIFO 50)"
+        );
+        let mut many: Vec<RtThread> = (0..10).map(|k| thread(200 + k, 90, false)).collect();
+        many.push(thread(2, 50, true));
+        let items = rt_thread_items(&many);
+        assert_eq!(items.len(), 1 + MAX_RT_THREADS_LISTED);
+        assert_eq!(items[0].status, Status::Warn);
+        assert!(
+            items[0]
+                .found
+                .starts_with("10 threads of other programs at real-time priority (8 listed below, 2 more not); 1 kernel thread"),
+            "{}",
+            items[0].found
+        );
+        assert!(
+            items[0]
+                .fix
+                .as_deref()
+                .is_some_and(|f| f.contains("taskset"))
+        );
+        assert_eq!(
+            items[1].found,
+            "pid 100 tid 200 `spinner` SCHED_FIFO priority 90"
+        );
+        assert!(
+            items[1..]
+                .iter()
+                .all(|i| i.status == Status::Warn && i.fix.is_some())
+        );
     }
 
     #[test]

@@ -211,3 +211,67 @@ fn best_effort_runs_at_sched_other_and_reports_what_was_refused() {
     assert!(refusal.contains("SCHED_DEADLINE"), "{refusal}");
     assert_eq!(t.join().expect("no panic"), Some(Policy::Other));
 }
+
+/// `rl preflight` lists another program's thread at real-time priority, with its pid, name,
+/// policy and priority (here `sleep` started by `chrt -f 7`).
+#[test]
+fn preflight_lists_another_programs_real_time_thread() {
+    use rl_rt::preflight::{self, rt_threads};
+    if !privileged("preflight_lists_another_programs_real_time_thread") {
+        return;
+    }
+    let child = std::process::Command::new("chrt")
+        .args(["-f", "7", "sleep", "30"])
+        .spawn();
+    let mut child = match child {
+        Ok(c) => c,
+        Err(e) => {
+            println!("SKIPPED preflight_lists_another_programs_real_time_thread: no chrt ({e})");
+            return;
+        }
+    };
+    let pid = child.id();
+    // `chrt` sets the policy and then executes `sleep` in the same process.
+    let deadline = std::time::Instant::now() + Duration::from_secs(5);
+    let found = loop {
+        let found = rt_threads::other_rt_threads()
+            .into_iter()
+            .find(|t| t.pid == pid && t.comm == "sleep");
+        if found.is_some() || std::time::Instant::now() > deadline {
+            break found;
+        }
+        if let Ok(Some(status)) = child.try_wait() {
+            println!(
+                "SKIPPED preflight_lists_another_programs_real_time_thread: chrt ended ({status})"
+            );
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let report = preflight::check();
+    let _ = child.kill();
+    let _ = child.wait();
+    let t = found.expect("the chrt'd sleep is listed");
+    assert_eq!(
+        (t.tid, t.policy, t.priority, t.kernel),
+        (pid, rt_threads::RtPolicy::Fifo, 7, false)
+    );
+    let summary = report
+        .items
+        .iter()
+        .find(|i| i.name == "other real-time threads")
+        .expect("summary item");
+    assert_eq!(summary.status, preflight::Status::Warn, "{report}");
+    // Listed if it is among the highest ones shown (other programs' threads may be above it).
+    let line = format!("pid {pid} tid {pid} `sleep` SCHED_FIFO priority 7");
+    let listed = report.items.iter().any(|i| i.found == line);
+    let shown = report
+        .items
+        .iter()
+        .filter(|i| i.name == "real-time thread")
+        .count();
+    assert!(
+        listed || shown == preflight::MAX_RT_THREADS_LISTED,
+        "{line} not in\n{report}"
+    );
+}

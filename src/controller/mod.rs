@@ -26,7 +26,10 @@
 //! - [`tracking`]: tracking error, feed-forward peaks and limit checks of the measured motion;
 //! - [`telemetry`]: one `Copy` record per cycle for a lock-free queue, and its CSV form (with
 //!   the run's state each cycle);
-//! - [`report`]: the end-of-run report as text and JSON (when a fault happened, too).
+//! - [`report`]: the end-of-run report as text and JSON (when a fault happened, too);
+//! - [`lateness`]: who was late — the loop, the device's side (an in-process fake measures its
+//!   own cycle), the delivery of the replies — and a run's likely cause when it failed on
+//!   timing.
 //! - `view` (feature `view`): the run's motion and tracking error, live in rl-view's page.
 //!
 //! A caller who wants its own loop steps a [`Controller`] itself:
@@ -60,6 +63,7 @@ pub mod clock;
 mod control;
 mod follower;
 pub mod input;
+pub mod lateness;
 pub mod law;
 pub mod plan;
 #[cfg(feature = "plan")]
@@ -77,6 +81,7 @@ pub use clock::TrajectoryClock;
 pub use control::{Controller, CycleResult, CycleTiming, DEFAULT_MAX_BRAKING, FaultAt, RunEnd};
 pub use follower::TrajectoryFollower;
 pub use input::{InputError, InputSender, Target};
+pub use lateness::{Lateness, PeerLateness};
 pub use law::{
     BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, Measured, Start,
 };

@@ -11,6 +11,7 @@ use serde_json::json;
 
 use super::control::{FaultAt, RunEnd};
 use super::input::InputReport;
+use super::lateness::{self, Lateness, PeerLateness};
 use super::tracking::Violation;
 
 /// How the device was brought to a safe state after the loop.
@@ -105,6 +106,9 @@ pub struct RunReport {
     pub telemetry_dropped: Option<u64>,
     /// Lines the caller adds (e.g. what a fake device saw).
     pub notes: Vec<String>,
+    /// How late the device's side ran, as it measured itself (the caller adds it for an
+    /// in-process fake; see [`RunReport::lateness`]).
+    pub peer_lateness: Option<PeerLateness>,
     /// Why the run failed, if it did (fault, loop error, stop failed).
     pub failure: Option<String>,
 }
@@ -153,6 +157,7 @@ impl RunReport {
             telemetry_rows: None,
             telemetry_dropped: None,
             notes: Vec::new(),
+            peer_lateness: None,
             failure: Some(why.to_owned()),
         }
     }
@@ -162,6 +167,18 @@ impl RunReport {
         if self.failure.is_none() {
             self.failure = Some(why.into());
         }
+    }
+
+    /// Who was late in this run: the loop, the device's side, the delivery of the replies.
+    pub fn lateness(&self) -> Lateness {
+        Lateness::new(&self.stats, self.link.delivery, self.peer_lateness.clone())
+    }
+
+    /// For a run that failed on timing (replies lost, deadlines missed, overruns), the likely
+    /// cause in one sentence: who was late.
+    pub fn likely_cause(&self) -> Option<String> {
+        (self.failure.is_some() && lateness::is_timing_failure(self.end))
+            .then(|| self.lateness().likely_cause())
     }
 
     /// The process exit code: 1 failed, 130 interrupted by a stop request, 0 done.
@@ -203,6 +220,8 @@ impl RunReport {
                 "corrupt": self.link.corrupt, "loss_rate": self.link.loss_rate(),
             },
             "loop": loop_stats,
+            "lateness": self.lateness().to_json(),
+            "likely_cause": self.likely_cause(),
             "latency_us": {
                 "min": us(w.min_ns), "mean": us(w.mean_ns), "p50": us(w.p50_ns),
                 "p99": us(w.p99_ns), "p999": us(w.p999_ns), "max": us(w.max_ns),
@@ -376,6 +395,7 @@ impl fmt::Display for RunReport {
             us(s.p999_ns),
             us(s.max_ns)
         );
+        let _ = writeln!(out, "{}", self.lateness().summary());
         let _ = write!(out, "  {:<24}", "joint");
         for j in &self.joints {
             let _ = write!(out, " {:>9}", truncate(j, 9));
@@ -503,6 +523,9 @@ impl fmt::Display for RunReport {
         }
         match &self.failure {
             Some(why) => {
+                if let Some(cause) = self.likely_cause() {
+                    let _ = writeln!(out, "likely cause: {cause}");
+                }
                 let _ = writeln!(out, "result: FAILED: {why}");
             }
             None => {

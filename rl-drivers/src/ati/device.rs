@@ -22,7 +22,7 @@ use core::time::Duration;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Instant;
 
-use crate::capability::{LinkStatistics, LinkStatisticsSensor, SixAxisForceTorqueSensor};
+use crate::capability::{Delivery, LinkStatistics, LinkStatisticsSensor, SixAxisForceTorqueSensor};
 use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::netft::{
     CALINFO_RESPONSE_LEN, Calibration, RDT_PORT, RECORD_LEN, RdtCommand, RdtRecord, RdtRequest,
@@ -498,6 +498,7 @@ impl LinkStatisticsSensor for AtiNetFt {
             rejected: c.foreign,
             corrupt: c.malformed,
             consecutive_failures: self.lifecycle.consecutive_failures(),
+            delivery: Delivery::default(),
         }
     }
 }

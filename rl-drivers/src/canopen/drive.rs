@@ -35,9 +35,9 @@ use std::time::{Duration, Instant};
 use super::config::{Cia402Config, MAX_AXES};
 use super::error::CanopenError;
 use crate::capability::{
-    JointDevice, JointLimitSensor, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
-    JointTorqueFeedForward, JointTorqueSensor, JointVelocityActuator, JointVelocitySensor,
-    LinkStatistics, LinkStatisticsSensor,
+    Delivery, JointDevice, JointLimitSensor, JointPositionActuator, JointPositionSensor,
+    JointTorqueActuator, JointTorqueFeedForward, JointTorqueSensor, JointVelocityActuator,
+    JointVelocitySensor, LinkStatistics, LinkStatisticsSensor,
 };
 use crate::cia402::state::Goal;
 use crate::cia402::{
@@ -1323,6 +1323,7 @@ impl LinkStatisticsSensor for Cia402 {
             rejected: c.rejected + t.rejected,
             corrupt: c.corrupt + t.corrupt,
             consecutive_failures: self.lifecycle.consecutive_failures(),
+            delivery: Delivery::default(),
         }
     }
 }

@@ -32,5 +32,5 @@ pub use joint_position::{JointPositionActuator, JointPositionSensor};
 pub use joint_torque::{JointTorqueActuator, JointTorqueSensor};
 pub use joint_torque_feed_forward::JointTorqueFeedForward;
 pub use joint_velocity::{JointVelocityActuator, JointVelocitySensor};
-pub use link_statistics::{LinkStatistics, LinkStatisticsSensor};
+pub use link_statistics::{Delivery, LinkStatistics, LinkStatisticsSensor};
 pub use range_sensor::RangeSensor;

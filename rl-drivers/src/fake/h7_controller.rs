@@ -11,6 +11,9 @@
 //!   [`Pacing::ControllerCycle`]`::offset` after the first packet of a session and again after
 //!   the client has been silent for a cycle (a real controller's cycle runs on regardless, at
 //!   a phase of its own; set the offset near the period to put a client on the cycle's edge).
+//!   The fake measures how late each tick's reply went out against the tick's scheduled time
+//!   ([`FakeH7Status::max_tick_lateness`], [`FakeH7Status::late_ticks`]): sharing the CPUs
+//!   with other real-time work can hold it up, which a real controller never is.
 //! - **Only while the program runs.** Real-time packets are answered only while the uploaded
 //!   MXT program runs (`RUN`), only from the address of its `OPEN "ENET:…"` line, and commands
 //!   of another kind than its `MXT` mode are ignored; its filter time constant (ms) sets the
@@ -66,6 +69,9 @@ const POLL: Duration = Duration::from_millis(20);
 pub const CYCLE: Duration = Duration::from_micros(CYCLE_US);
 /// Packets the fake queues between ticks before it drops them (a socket buffer).
 pub const QUEUE_CAPACITY: usize = 64;
+/// A tick whose reply went out later than this after its scheduled time is counted as late
+/// ([`FakeH7Status::late_ticks`]): a tenth of the cycle.
+pub const LATE_TICK: Duration = Duration::from_micros(CYCLE_US / 10);
 
 /// The fake's own R3 error numbers (answered as `QeR<n>`; `ERRORMES<n>` explains them).
 pub mod r3_errors {
@@ -382,6 +388,14 @@ pub struct FakeH7Status {
     pub r3_not_implemented: u64,
     /// The last address real-time packets came from.
     pub client: Option<SocketAddr>,
+    /// Cycle ticks ([`Pacing::ControllerCycle`]) that handled a packet and sent its reply more
+    /// than [`LATE_TICK`] after their scheduled time: the fake's thread woke late or was held
+    /// up. A real controller has its own CPU; a fake that shares one with other (real-time)
+    /// work may be held up, and the report of a run can tell that apart from a fault of the
+    /// link or of the client.
+    pub late_ticks: u64,
+    /// The longest a tick's work (the reply sent) ended after the tick's scheduled time.
+    pub max_tick_lateness: Duration,
 }
 
 #[derive(Debug)]
@@ -743,9 +757,20 @@ impl Cycle {
         match self.queue.pop_front() {
             Some((packet, from)) => {
                 self.handle(packet, from, tick);
+                // How late this tick's work ended against its scheduled time: the thread woke
+                // late, or was held up while it handled the packet. A fake that shares its CPUs
+                // with other (real-time) work may be; a real controller is not.
+                let now = Instant::now();
+                let lateness = now.saturating_duration_since(tick);
+                {
+                    let mut s = lock(&self.shared);
+                    if lateness > LATE_TICK {
+                        s.status.late_ticks += 1;
+                    }
+                    s.status.max_tick_lateness = s.status.max_tick_lateness.max(lateness);
+                }
                 let mut next = tick + CYCLE;
                 // A tick that came late does not make the next ones come in a burst.
-                let now = Instant::now();
                 while next <= now {
                     next += CYCLE;
                 }

@@ -42,7 +42,7 @@ use super::message::{
 use super::state::{ControllerMode, MotionGeneratorMode, RobotMode, RobotState, STATE_LEN};
 use super::{COMMAND_PORT, CYCLE, DOF, MAX_LOST_IN_A_ROW};
 use crate::capability::{
-    CartesianPositionSensor, JointDevice, JointPositionActuator, JointPositionSensor,
+    CartesianPositionSensor, Delivery, JointDevice, JointPositionActuator, JointPositionSensor,
     JointTorqueActuator, JointTorqueSensor, JointVelocityActuator, JointVelocitySensor,
     LinkStatistics, LinkStatisticsSensor, Pose,
 };
@@ -1085,6 +1085,7 @@ impl LinkStatisticsSensor for FrankaArm {
                 .lifecycle
                 .consecutive_failures()
                 .max(c.unanswered_in_a_row),
+            delivery: Delivery::default(),
         }
     }
 }

@@ -22,7 +22,7 @@ use core::time::Duration;
 use std::time::Instant;
 
 use super::master::{MasterError, ModbusMaster, check_answer};
-use crate::capability::{Gripper, LinkStatistics, LinkStatisticsSensor};
+use crate::capability::{Delivery, Gripper, LinkStatistics, LinkStatisticsSensor};
 use crate::device::{
     DeviceError, Driver, Error, ErrorKind, Lifecycle, Operation, State, impl_cyclic_device,
 };
@@ -663,6 +663,7 @@ impl LinkStatisticsSensor for RobotiqGripper {
             rejected: m.exceptions,
             corrupt: m.crc_errors + m.garbage,
             consecutive_failures: self.lifecycle.consecutive_failures(),
+            delivery: Delivery::default(),
         }
     }
 }

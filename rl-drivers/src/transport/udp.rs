@@ -1,15 +1,17 @@
 //! A UDP link to one peer: a non-blocking, unconnected socket that accepts datagrams only from
 //! the configured peer. Anything else is dropped and counted (the kernel's own filter of a
-//! connected socket would hide it).
+//! connected socket would hide it). Where the kernel gives them (`SO_TIMESTAMPNS`, see
+//! [`timestamp`]), each received datagram's kernel receive time is kept
+//! ([`UdpLink::received_at`]): the caller can tell how long a reply waited in the socket.
 
 use std::io;
 use std::net::{SocketAddr, UdpSocket};
 use std::os::fd::AsFd;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use socket2::{Domain, Protocol, Socket, Type};
 
-use super::{Readiness, wait};
+use super::{Readiness, timestamp, wait};
 
 /// Datagram counts of a [`UdpLink`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -28,6 +30,8 @@ pub struct UdpLink {
     socket: UdpSocket,
     peer: SocketAddr,
     counters: UdpCounters,
+    /// The kernel's receive time of the datagram last returned, where it gives one.
+    received_at: Option<Duration>,
 }
 
 impl UdpLink {
@@ -36,10 +40,14 @@ impl UdpLink {
         let socket = Socket::new(Domain::for_address(local), Type::DGRAM, Some(Protocol::UDP))?;
         socket.set_nonblocking(true)?;
         socket.bind(&local.into())?;
+        // Best effort: an emulator such as qemu-user may refuse the option; the datagrams then
+        // carry no receive time.
+        let _ = timestamp::enable(socket.as_fd());
         Ok(Self {
             socket: socket.into(),
             peer,
             counters: UdpCounters::default(),
+            received_at: None,
         })
     }
 
@@ -56,6 +64,13 @@ impl UdpLink {
     /// Counts so far.
     pub fn counters(&self) -> UdpCounters {
         self.counters
+    }
+
+    /// The kernel's receive time (`CLOCK_REALTIME`, compare with
+    /// [`timestamp::since_epoch`]) of the datagram the last successful receive returned;
+    /// `None` where the kernel gives no timestamps.
+    pub fn received_at(&self) -> Option<Duration> {
+        self.received_at
     }
 
     /// Sends one datagram to the peer without blocking.
@@ -77,9 +92,10 @@ impl UdpLink {
     /// length (datagrams longer than `buf` are cut).
     pub fn try_recv(&mut self, buf: &mut [u8], deadline: Instant) -> io::Result<Option<usize>> {
         loop {
-            match self.socket.recv_from(buf) {
-                Ok((n, from)) if from == self.peer => {
+            match timestamp::recv(self.socket.as_fd(), buf) {
+                Ok((n, Some(from), at)) if from == self.peer => {
                     self.counters.received += 1;
+                    self.received_at = at;
                     return Ok(Some(n));
                 }
                 Ok(_) => {
@@ -128,6 +144,19 @@ mod tests {
         assert_eq!(link.recv_until(&mut buf, deadline).unwrap(), Some(4));
         assert_eq!(&buf[..4], b"real");
         assert_eq!(link.counters().foreign, 1);
+        // The datagram carries the kernel's receive time: before now, and recent.
+        match link.received_at() {
+            Some(at) => {
+                let now = timestamp::since_epoch();
+                assert!(
+                    at <= now && now - at < Duration::from_secs(2),
+                    "{at:?} vs {now:?}"
+                );
+            }
+            None => println!(
+                "SKIPPED the timestamp check: this kernel or emulator refuses SO_TIMESTAMPNS"
+            ),
+        }
         let start = Instant::now();
         let short = start + Duration::from_millis(20);
         assert_eq!(link.recv_until(&mut buf, short).unwrap(), None);

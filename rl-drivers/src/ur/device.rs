@@ -35,7 +35,7 @@ use super::dashboard::{self, Dashboard};
 use super::link::{LinkError, Package, RtdeLink};
 use super::program::FollowerProgram;
 use crate::capability::{
-    CartesianPositionSensor, DigitalInputReader, DigitalOutputWriter, JointDevice,
+    CartesianPositionSensor, Delivery, DigitalInputReader, DigitalOutputWriter, JointDevice,
     JointPositionActuator, JointPositionSensor, JointVelocitySensor, LinkStatistics,
     LinkStatisticsSensor, Pose,
 };
@@ -982,6 +982,7 @@ impl LinkStatisticsSensor for UniversalRobot {
             rejected: 0,
             corrupt: c.corrupt,
             consecutive_failures: self.lifecycle.consecutive_failures(),
+            delivery: Delivery::default(),
         }
     }
 }

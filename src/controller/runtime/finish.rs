@@ -96,6 +96,7 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         telemetry_rows: None,
         telemetry_dropped: dropped,
         notes: Vec::new(),
+        peer_lateness: None,
         failure,
     }
 }
