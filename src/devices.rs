@@ -292,9 +292,10 @@ pub struct FakeSeen {
     pub safe: Result<(), String>,
     /// The same as JSON keys for the report (`fake_end_packets`, `fake_servo_on`, …).
     pub json: serde_json::Value,
-    /// How late the fake's own thread ran (for the report's
-    /// [`peer_lateness`](crate::controller::RunReport::peer_lateness)).
-    pub lateness: PeerLateness,
+    /// How late the fake's own thread ran against its cycle (for the report's
+    /// [`peer_lateness`](crate::controller::RunReport::peer_lateness)); `None` where the fake
+    /// has no measure that tells a starved thread from a healthy one.
+    pub lateness: Option<PeerLateness>,
 }
 
 impl InProcessFake {
@@ -335,13 +336,13 @@ impl InProcessFake {
                         "fake_late_ticks": s.late_ticks,
                         "fake_max_tick_lateness_ms": s.max_tick_lateness.as_secs_f64() * 1e3,
                     }),
-                    lateness: PeerLateness {
+                    lateness: Some(PeerLateness {
                         who: "the fake H7".to_owned(),
                         cycle: Some(h7_controller::CYCLE),
                         max: s.max_tick_lateness,
                         late: Some(s.late_ticks),
                         cycles: Some(s.cycles),
-                    },
+                    }),
                 }
             }
             InProcessFake::Cia402(fake) => {
@@ -377,13 +378,12 @@ impl InProcessFake {
                     "fake_faults": s.nodes.iter().map(|n| n.counters.faults).sum::<u64>(),
                     "fake_max_lateness_ms": s.max_lateness.as_secs_f64() * 1e3,
                 });
-                let lateness = PeerLateness {
-                    who: "the fake CiA 402 drives".to_owned(),
-                    cycle: None,
-                    max: s.max_lateness,
-                    late: None,
-                    cycles: None,
-                };
+                // The drives' `max_lateness` mixes a frame's wait in the socket with the
+                // thread's poll timeouts and reads about 1 ms in a healthy 2 ms run: set against
+                // the cycle it would blame the drives for every timing failure. It stays in the
+                // JSON (`fake_max_lateness_ms`); the likely cause rests on the loop and the
+                // delivery until the drives measure their own SYNC-to-answer lateness.
+                let lateness = None;
                 FakeSeen {
                     note,
                     safe,

@@ -244,7 +244,7 @@ fn a_starved_fake_is_named_as_the_likely_cause_of_lost_replies() {
     // What `rl run` does with its in-process fake after the run.
     let fake = rl::devices::InProcessFake::H7(fake);
     let seen = fake.after_run(report.shutdown.stopped);
-    report.peer_lateness = Some(seen.lateness);
+    report.peer_lateness = seen.lateness;
     let peer = report.peer_lateness.as_ref().expect("set above");
     assert!(peer.max >= HELD, "{peer:?}");
     assert!(peer.late.is_some_and(|n| n >= 1), "{peer:?}");

@@ -428,7 +428,7 @@ impl ControlRun {
             let seen = fake.as_ref().map(|f| f.after_run(report.shutdown.stopped));
             let json = seen.map(|s| {
                 report.notes.push(s.note);
-                report.peer_lateness = Some(s.lateness);
+                report.peer_lateness = s.lateness;
                 if let Err(why) = s.safe {
                     report.fail(why);
                 }

@@ -738,7 +738,7 @@ fn drive<const B: usize, const J: usize>(
     let fake_json = fake.as_ref().map(|fake| {
         let seen = fake.after_run(report.shutdown.stopped);
         report.notes.push(seen.note);
-        report.peer_lateness = Some(seen.lateness);
+        report.peer_lateness = seen.lateness;
         if let Err(why) = seen.safe {
             report.fail(why);
         }
