@@ -50,6 +50,30 @@ fn untouched(path: &Path, content: &str) {
     );
 }
 
+/// `rl traj WP --profile quintic --out OUT --plot SVG`.
+fn traj(wp: &Path, out: &Path, svg: &Path) -> std::process::Output {
+    let path = |p: &Path| p.to_string_lossy().into_owned();
+    rl(&[
+        "traj",
+        &path(wp),
+        "--profile",
+        "quintic",
+        "--out",
+        &path(out),
+        "--plot",
+        &path(svg),
+    ])
+}
+
+/// Refused with exit code 2 and `needle` in the message; `out` and `svg` as they were.
+fn refused_and_untouched(o: &std::process::Output, needle: &str, out: &Path, svg: &Path) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(needle) && !err.contains("writing"), "{err}");
+    untouched(out, "t,a\n0,1\n");
+    untouched(svg, "<svg/>");
+}
+
 #[test]
 fn a_failed_traj_leaves_existing_outputs_as_they_were() {
     let d = dir("traj");
@@ -70,59 +94,19 @@ fn a_failed_traj_leaves_existing_outputs_as_they_were() {
     let svg = d.join("plot.svg");
     std::fs::write(&out, "t,a\n0,1\n").unwrap();
     std::fs::write(&svg, "<svg/>").unwrap();
-    let o = rl(&[
-        "traj",
-        wp.to_str().unwrap(),
-        "--profile",
-        "quintic",
-        "--out",
-        out.to_str().unwrap(),
-        "--plot",
-        svg.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("13 axes"), "{err}");
-    untouched(&out, "t,a\n0,1\n");
-    untouched(&svg, "<svg/>");
+    refused_and_untouched(&traj(&wp, &out, &svg), "13 axes", &out, &svg);
 
     // Waypoints without times for a profile that needs them: refused while sampling into the
     // output, with the sampler's own message, not as a write error.
     std::fs::write(&wp, "a,b\n0,0\n1,-1\n").unwrap();
-    let o = rl(&[
-        "traj",
-        wp.to_str().unwrap(),
-        "--profile",
-        "quintic",
-        "--out",
-        out.to_str().unwrap(),
-        "--plot",
-        svg.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("needs times") && !err.contains("writing"),
-        "{err}"
-    );
-    untouched(&out, "t,a\n0,1\n");
-    untouched(&svg, "<svg/>");
+    refused_and_untouched(&traj(&wp, &out, &svg), "needs times", &out, &svg);
 
     // The same command with good waypoints replaces both, through a symbolic link too (the
     // link stays a link to the new content).
     std::fs::write(&wp, "t,a,b\n0,0,0\n1,1,-1\n").unwrap();
     let link = d.join("link.csv");
     std::os::unix::fs::symlink(&out, &link).unwrap();
-    let o = rl(&[
-        "traj",
-        wp.to_str().unwrap(),
-        "--profile",
-        "quintic",
-        "--out",
-        link.to_str().unwrap(),
-        "--plot",
-        svg.to_str().unwrap(),
-    ]);
+    let o = traj(&wp, &link, &svg);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
         std::fs::symlink_metadata(&link)
