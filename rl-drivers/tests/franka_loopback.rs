@@ -17,6 +17,16 @@ use rl_drivers::{
 
 const LOCALHOST: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
 
+/// One fake robot at a time: each ticks at 1 kHz at SCHED_FIFO 85 and some tests run a 1 kHz
+/// client at SCHED_FIFO 80; run side by side on two CPUs they took each other's cycles (a
+/// velocity motion's client skipped states and the fake saw an acceleration discontinuity in a
+/// clean-clone CI run).
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 /// Waits (at most a second) until the fake's status, published after each of its ticks,
 /// shows `condition`.
 fn eventually(condition: impl Fn() -> bool) {
@@ -69,6 +79,7 @@ fn arm(fake: &FakeFranka, mode: ControlMode) -> FrankaArm {
 
 #[test]
 fn open_reads_the_version_the_first_state_and_the_urdf() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointPosition);
     robot.open().unwrap();
@@ -87,6 +98,7 @@ fn open_reads_the_version_the_first_state_and_the_urdf() {
 
 #[test]
 fn another_version_is_refused_and_the_message_names_both() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig {
         version: 9,
         ..FakeFrankaConfig::loopback()
@@ -111,6 +123,7 @@ fn excursion(k: usize) -> f64 {
 
 #[test]
 fn a_joint_position_motion_runs_without_reflex_and_finishes() {
+    let _one = one_at_a_time();
     real_time(80);
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointPosition);
@@ -168,6 +181,7 @@ fn a_joint_position_motion_runs_without_reflex_and_finishes() {
 
 #[test]
 fn a_jump_is_a_velocity_discontinuity_and_recovery_clears_it() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointPosition);
     robot.open().unwrap();
@@ -216,6 +230,7 @@ fn a_jump_is_a_velocity_discontinuity_and_recovery_clears_it() {
 
 #[test]
 fn lost_states_are_counted_and_twenty_in_a_row_stop_the_motion() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointPosition);
     robot.open().unwrap();
@@ -275,6 +290,7 @@ fn lost_states_are_counted_and_twenty_in_a_row_stop_the_motion() {
 
 #[test]
 fn torques_move_the_simulated_arm_and_zero_torque_holds_it_against_gravity() {
+    let _one = one_at_a_time();
     real_time(80);
     let fake = fake(FakeFrankaConfig::loopback().with_urdf(fr3_shaped_urdf()));
     let mut robot = arm(&fake, ControlMode::JointTorque);
@@ -321,6 +337,7 @@ fn torques_move_the_simulated_arm_and_zero_torque_holds_it_against_gravity() {
 
 #[test]
 fn a_torque_step_is_a_torque_discontinuity() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig::loopback().with_urdf(fr3_shaped_urdf()));
     let mut robot = arm(&fake, ControlMode::JointTorque);
     robot.open().unwrap();
@@ -340,6 +357,7 @@ fn a_torque_step_is_a_torque_discontinuity() {
 
 #[test]
 fn settings_are_refused_while_moving_and_when_out_of_range() {
+    let _one = one_at_a_time();
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointPosition);
     robot.open().unwrap();
@@ -372,6 +390,7 @@ fn settings_are_refused_while_moving_and_when_out_of_range() {
 
 #[test]
 fn a_joint_velocity_motion_moves_the_joint_by_the_integral() {
+    let _one = one_at_a_time();
     real_time(80);
     let fake = fake(FakeFrankaConfig::loopback());
     let mut robot = arm(&fake, ControlMode::JointVelocity);
