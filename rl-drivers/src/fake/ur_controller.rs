@@ -9,7 +9,7 @@
 //!   on every port, runs the program's share of the cycle, moves the arm, and sends each
 //!   started RTDE client its output package when the client's frequency falls due (up to
 //!   500 Hz: every cycle). A tick that wakes more than a cycle late does not catch up: its
-//!   clock slips (counted), and `timestamp` goes on in steps of 2 ms.
+//!   clock slips (counted, with the time it cost), and `timestamp` goes on in steps of 2 ms.
 //! - **RTDE as the guide has it.** Protocol versions 1 and 2; the controller's version; output
 //!   recipes of any known variables at 1 to 500 Hz (`NOT_FOUND` refuses the recipe), input
 //!   recipes of writable variables (`IN_USE` when another client's recipe writes one),
@@ -154,6 +154,9 @@ pub struct FakeUrStatus {
     pub slips: u64,
     /// The latest a tick woke after its deadline, µs.
     pub max_lateness_us: u64,
+    /// The time the slips cost the fake's clock, µs: `timestamp` runs this much behind the
+    /// wall clock (the sum of the slipped ticks' lateness).
+    pub slipped_us: u64,
     /// RTDE connections accepted.
     pub rtde_clients: u64,
     /// RTDE packages received.
@@ -490,6 +493,10 @@ impl Controller {
             if late > CYCLE {
                 next = woke + CYCLE;
                 self.status.slips += 1;
+                self.status.slipped_us = self
+                    .status
+                    .slipped_us
+                    .saturating_add(u64::try_from(late.as_micros()).unwrap_or(u64::MAX));
             }
             self.take_control(shared);
             self.cycle(woke);
