@@ -162,6 +162,62 @@ fn sigint_mid_run_stops_the_device_and_prints_the_report() {
     assert!(stdout.contains("result: ok"), "{stdout}");
 }
 
+/// The whole process held up from outside for 150 ms mid-run (SIGSTOP, then SIGCONT), as a
+/// hypervisor that takes the machine's CPUs holds every thread at once: the loop and the
+/// in-process fake both come back late, the run fails on its missed deadlines or lost replies,
+/// and the likely cause says the wake-ups themselves came late — the loop's thread never
+/// waited on a run queue for that long — rather than blaming the link or other programs.
+#[test]
+fn a_stall_from_outside_is_named_as_the_hosts() {
+    let _run = one_run_at_a_time();
+    let mut child: Child = rl()
+        .args(["run", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn rl");
+    let (rx, stderr) = watch_stderr(&mut child, "cycle");
+    rx.recv_timeout(Duration::from_secs(30))
+        .expect("progress line within 30 s");
+    std::thread::sleep(Duration::from_millis(500));
+    let pid = Pid::from_raw(child.id() as i32);
+    kill(pid, Signal::SIGSTOP).expect("SIGSTOP");
+    std::thread::sleep(Duration::from_millis(150));
+    kill(pid, Signal::SIGCONT).expect("SIGCONT");
+    let status = exit_by(&mut child, Instant::now() + Duration::from_secs(30))
+        .expect("rl did not end within 30 s");
+    let mut stdout = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut stdout)
+        .expect("read stdout");
+    let context = format!(
+        "stdout:\n{stdout}\nstderr:\n{}",
+        stderr.join().unwrap_or_default()
+    );
+    assert_eq!(status.code(), Some(1), "{context}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("JSON report");
+    let l = &v["lateness"];
+    let woke = l["loop_wakeup_max_ms"]
+        .as_f64()
+        .expect("loop_wakeup_max_ms");
+    let waited = l["loop_run_delay_ms"].as_f64().expect("loop_run_delay_ms");
+    assert!(woke >= 100.0, "the loop woke {woke} ms late\n{context}");
+    assert!(waited < woke, "{context}");
+    assert!(
+        matches!(l["culprit"].as_str(), Some("loop" | "loop_and_peer")),
+        "{context}"
+    );
+    let cause = v["likely_cause"].as_str().expect("a likely cause");
+    assert!(
+        cause.contains("so its wake-up itself came late: the host held the CPU"),
+        "{context}"
+    );
+    assert!(!cause.contains("link"), "{context}");
+}
+
 /// `--telemetry`: a CSV with the documented columns and one row per cycle, in order; and
 /// `--plot` draws every joint (measured, commanded, error) and the latency histogram.
 #[test]

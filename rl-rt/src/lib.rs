@@ -15,6 +15,8 @@
 //! - [`exchange`]: wait-free SPSC [`queue`](exchange::queue) and latest-value
 //!   [`mailbox`](exchange::mailbox), drops counted.
 //! - [`cpu_latency`]: hold `/dev/cpu_dma_latency` (no deep C-states) while measuring.
+//! - [`host_time`]: where a late thread's time went — its own wait for a CPU ([`ThreadWait`],
+//!   schedstat) or the host's steal and interrupts ([`HostTimes`]).
 //! - [`preflight`]: what stands between this machine and hard real time, with fixes, and the
 //!   other programs' threads at real-time priority that can starve a loop.
 //!
@@ -48,6 +50,7 @@ pub mod clock;
 pub mod cpu_latency;
 pub mod cyclic;
 pub mod exchange;
+pub mod host_time;
 pub mod memory;
 pub mod phase;
 pub mod preflight;
@@ -59,6 +62,7 @@ pub mod thread;
 
 pub use clock::MonoTime;
 pub use cyclic::{Cycle, CyclicLoop, LoopEnd, LoopError, LoopReport, OverrunPolicy};
+pub use host_time::{HostTimes, ThreadWait};
 pub use phase::PhaseShift;
 pub use stats::{Histogram, LoopStats, Overrun, Summary};
 pub use stop::{StopFlag, StopLevel};

@@ -11,14 +11,23 @@
 //! - **the delivery**: replies that reached this machine's kernel only after their step's
 //!   deadline (found later, with their kernel timestamps).
 //!
-//! A party counts as late when its worst lateness passed [`LATE_FRACTION`] of its cycle. All
-//! of this is read after the run; nothing here runs in the loop.
+//! A party counts as late when its worst lateness passed [`LATE_FRACTION`] of its cycle.
+//!
+//! Where the time of a late party went ([`HostActivity`]): the loop's thread measures how long
+//! it waited on its CPU's run queue during the run (schedstat). A wake-up later than that wait
+//! was not held up by another thread — the timer's interrupt came late: the host (a
+//! hypervisor's steal, the kernel with interrupts off) held the CPU. A wait as long as the
+//! lateness was another thread's doing: the other programs' real-time threads are listed. The
+//! host's steal and interrupt times over the run back the sentence up.
+//!
+//! All of this is read after the run; nothing here runs in the loop.
 
 use std::fmt::Write as _;
 use std::time::Duration;
 
 use rl_drivers::{Delivery, DeviceError, ErrorKind};
-use rl_rt::LoopStats;
+use rl_rt::preflight::rt_threads::RtThread;
+use rl_rt::{HostTimes, LoopStats};
 use serde_json::json;
 
 use super::control::RunEnd;
@@ -43,6 +52,109 @@ pub struct PeerLateness {
     pub cycles: Option<u64>,
 }
 
+/// Where the run's time went besides its own work: what the loop's thread waited for its CPU,
+/// what the host took, and the other programs at real-time priority.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HostActivity {
+    /// How long the loop's thread waited on its run queue, in all, during the loop (`None`:
+    /// the kernel has no schedstat).
+    pub loop_run_delay: Option<Duration>,
+    /// Steal and interrupt time the host took over the run, summed over the CPUs (`None`:
+    /// no `/proc/stat`).
+    pub host: Option<HostTimes>,
+    /// Other programs' threads at real-time priority during the run (kernel threads left out).
+    pub other_rt: Vec<OtherRtThread>,
+}
+
+/// Another program's thread at real-time priority.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OtherRtThread {
+    /// Its process id.
+    pub pid: u32,
+    /// Its name.
+    pub name: String,
+    /// Its policy and priority, as `chrt` says it (e.g. `SCHED_FIFO 80`).
+    pub scheduling: String,
+}
+
+impl HostActivity {
+    /// The other programs' (not the kernel's) threads in `threads`, once per thread.
+    pub fn other_programs(threads: &[RtThread]) -> Vec<OtherRtThread> {
+        let mut out: Vec<OtherRtThread> = Vec::new();
+        let mut seen = std::collections::BTreeSet::new();
+        for t in threads.iter().filter(|t| !t.kernel) {
+            if seen.insert(t.tid) {
+                out.push(OtherRtThread {
+                    pid: t.pid,
+                    name: t.comm.clone(),
+                    scheduling: format!("{} {}", t.policy.name(), t.priority),
+                });
+            }
+        }
+        out
+    }
+
+    /// A few of the other real-time threads, for a sentence: `name (pid, SCHED_FIFO 80), …`.
+    fn list(&self) -> String {
+        const SHOWN: usize = 4;
+        let mut s = self
+            .other_rt
+            .iter()
+            .take(SHOWN)
+            .map(|t| format!("{} (pid {}, {})", t.name, t.pid, t.scheduling))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if self.other_rt.len() > SHOWN {
+            let _ = write!(s, " and {} more", self.other_rt.len() - SHOWN);
+        }
+        s
+    }
+
+    /// The host's steal and interrupt time, for a sentence.
+    fn host_times(&self) -> String {
+        match &self.host {
+            Some(h) => format!(
+                "the host took {:.0} ms of steal, {:.0} ms of interrupts during the run",
+                ms(h.steal),
+                ms(h.irq + h.softirq)
+            ),
+            None => "no host times".to_owned(),
+        }
+    }
+
+    /// Why a thread that woke up to `late` behind its deadline was late: it waited for its CPU
+    /// (another thread's doing), or its wake-up itself came late (the host's).
+    fn why_late(&self, late: Duration) -> String {
+        let others = if self.other_rt.is_empty() {
+            "no other program runs at real-time priority".to_owned()
+        } else {
+            format!(
+                "other programs' real-time threads: {} — see `rl preflight`",
+                self.list()
+            )
+        };
+        match self.loop_run_delay {
+            Some(waited) if waited < late => format!(
+                "the loop's thread waited only {:.2} ms in all for its CPU, so its wake-up itself \
+                 came late: the host held the CPU (a hypervisor running other work, or the \
+                 kernel with interrupts off; {}); {others}",
+                ms(waited),
+                self.host_times()
+            ),
+            Some(waited) => format!(
+                "the loop's thread waited {:.2} ms in all for its CPU, enough to explain it: \
+                 other work at its priority or above took it ({others})",
+                ms(waited)
+            ),
+            None if self.other_rt.is_empty() => format!(
+                "{others}: the host or the kernel held the CPUs up ({})",
+                self.host_times()
+            ),
+            None => format!("other real-time work took the CPUs ({others})"),
+        }
+    }
+}
+
 /// Who was late in a run: what the loop, the device's side and the delivery measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lateness {
@@ -56,6 +168,8 @@ pub struct Lateness {
     pub delivery: Delivery,
     /// The device's side, where it measures itself.
     pub peer: Option<PeerLateness>,
+    /// Where the time went besides the run's own work.
+    pub host: HostActivity,
 }
 
 /// The party a likely cause names.
@@ -79,13 +193,19 @@ fn ms(d: Duration) -> f64 {
 
 impl Lateness {
     /// What a run's loop statistics, link and device's side measured.
-    pub fn new(stats: &LoopStats, delivery: Delivery, peer: Option<PeerLateness>) -> Self {
+    pub fn new(
+        stats: &LoopStats,
+        delivery: Delivery,
+        peer: Option<PeerLateness>,
+        host: HostActivity,
+    ) -> Self {
         Self {
             period: Duration::from_nanos(stats.period_ns),
             loop_wakeup_max: Duration::from_nanos(stats.wakeup.summary().max_ns),
             missed_deadlines: stats.missed_deadlines,
             delivery,
             peer,
+            host,
         }
     }
 
@@ -135,6 +255,13 @@ impl Lateness {
             ms(self.loop_wakeup_max),
             ms(self.period)
         );
+        if let Some(waited) = self.host.loop_run_delay {
+            let _ = write!(
+                out,
+                " (its thread waited {:.2} ms in all for its CPU)",
+                ms(waited)
+            );
+        }
         if self.delivery.timestamped > 0 {
             let _ = write!(
                 out,
@@ -176,10 +303,22 @@ impl Lateness {
                 let p = self.peer.as_ref();
                 let who = p.map_or("the device", |p| p.who.as_str());
                 let cycle = p.and_then(|p| p.cycle).unwrap_or(self.period);
+                let why = if self.host.other_rt.is_empty() {
+                    format!(
+                        "no other program runs at real-time priority, so the host, the kernel or \
+                         — where it could not run at real-time priority — ordinary load held its \
+                         thread up ({})",
+                        self.host.host_times()
+                    )
+                } else {
+                    format!(
+                        "other real-time work on this machine starved it: {} — see `rl preflight`",
+                        self.host.list()
+                    )
+                };
                 format!(
-                    "{who} ran up to {:.2} ms late against its {:.2} ms cycle: other real-time \
-                     work on this machine starved it (the loop was at most {:.2} ms late) — see \
-                     `rl preflight`",
+                    "{who} ran up to {:.2} ms late against its {:.2} ms cycle (the loop was at most \
+                     {:.2} ms late): {why}",
                     ms(p.map_or(Duration::ZERO, |p| p.max)),
                     ms(cycle),
                     ms(self.loop_max())
@@ -201,22 +340,20 @@ impl Lateness {
                 if let Some(p) = &self.peer {
                     let _ = write!(s, " ({} was at most {:.2} ms late)", p.who, ms(p.max));
                 }
-                s.push_str(
-                    ": other work at its priority or above took its CPU — see `rl preflight`",
-                );
+                let _ = write!(s, ": {}", self.host.why_late(self.loop_max()));
                 s
             }
             Culprit::LoopAndPeer => {
                 let p = self.peer.as_ref();
                 format!(
                     "both the loop (woke up to {:.2} ms late against its {:.2} ms period) and {} \
-                     (up to {:.2} ms late against its {:.2} ms cycle) were held up: other \
-                     real-time work on this machine starved them — see `rl preflight`",
+                     (up to {:.2} ms late against its {:.2} ms cycle) were held up: {}",
                     ms(self.loop_max()),
                     ms(self.period),
                     p.map_or("the device", |p| p.who.as_str()),
                     ms(p.map_or(Duration::ZERO, |p| p.max)),
-                    ms(p.and_then(|p| p.cycle).unwrap_or(self.period))
+                    ms(p.and_then(|p| p.cycle).unwrap_or(self.period)),
+                    self.host.why_late(self.loop_max())
                 )
             }
             Culprit::Delivery => format!(
@@ -266,6 +403,14 @@ impl Lateness {
                 "late_cycles": p.late,
                 "cycles": p.cycles,
             })),
+            "loop_run_delay_ms": self.host.loop_run_delay.map(ms),
+            "host_steal_ms": self.host.host.map(|h| ms(h.steal)),
+            "host_interrupts_ms": self.host.host.map(|h| ms(h.irq + h.softirq)),
+            "other_rt_threads": self.host.other_rt.iter().map(|t| json!({
+                "pid": t.pid,
+                "name": t.name,
+                "scheduling": t.scheduling,
+            })).collect::<Vec<_>>(),
             "culprit": match self.culprit() {
                 Culprit::Loop => "loop",
                 Culprit::Peer => "peer",
@@ -315,7 +460,16 @@ mod tests {
                 late: Some(12),
                 cycles: Some(900),
             }),
+            host: HostActivity::default(),
         }
+    }
+
+    fn other_rt() -> Vec<OtherRtThread> {
+        vec![OtherRtThread {
+            pid: 4242,
+            name: "cyclictest".into(),
+            scheduling: "SCHED_FIFO 95".into(),
+        }]
     }
 
     #[test]
@@ -327,11 +481,94 @@ mod tests {
             why.starts_with("the fake H7 ran up to 14.00 ms late against its 7.11 ms cycle"),
             "{why}"
         );
-        assert!(why.contains("rl preflight"), "{why}");
+        // Nobody else at real-time priority: not "other real-time work".
+        assert!(
+            why.contains("no other program runs at real-time priority"),
+            "{why}"
+        );
+        assert!(!why.contains("starved"), "{why}");
         assert!(
             l.summary().contains("(12 of 900 cycles late)"),
             "{}",
             l.summary()
+        );
+        // Another program's real-time thread is named, with `rl preflight`.
+        let mut l = l;
+        l.host.other_rt = other_rt();
+        let why = l.likely_cause();
+        assert!(
+            why.contains(
+                "other real-time work on this machine starved it: cyclictest (pid 4242, \
+                 SCHED_FIFO 95) — see `rl preflight`"
+            ),
+            "{why}"
+        );
+    }
+
+    #[test]
+    fn a_late_wake_up_without_a_wait_for_the_cpu_is_the_hosts() {
+        // The loop woke 3.2 ms and the fake 3.6 ms late; the loop's thread waited 0.05 ms in
+        // all on its run queue: nothing ran in its place, the wake-up came late.
+        let mut l = lateness(3.2, Some(3.6), Delivery::default());
+        l.host.loop_run_delay = Some(Duration::from_micros(50));
+        l.host.host = Some(HostTimes {
+            steal: Duration::from_millis(20),
+            irq: Duration::ZERO,
+            softirq: Duration::from_millis(10),
+        });
+        let why = l.likely_cause();
+        assert!(
+            why.contains(
+                "the loop's thread waited only 0.05 ms in all for its CPU, so its wake-up itself \
+                 came late: the host held the CPU"
+            ),
+            "{why}"
+        );
+        assert!(
+            why.contains("the host took 20 ms of steal, 10 ms of interrupts"),
+            "{why}"
+        );
+        assert!(
+            why.ends_with("no other program runs at real-time priority"),
+            "{why}"
+        );
+        // A wait as long as the lateness: another thread ran in its place.
+        l.host.loop_run_delay = Some(Duration::from_millis(5));
+        l.host.other_rt = other_rt();
+        let why = l.likely_cause();
+        assert!(
+            why.contains(
+                "the loop's thread waited 5.00 ms in all for its CPU, enough to explain it: other \
+                 work at its priority or above took it (other programs' real-time threads: cyclictest (pid 4242, \
+                 SCHED_FIFO 95)"
+            ),
+            "{why}"
+        );
+        let json = l.to_json();
+        assert_eq!(json["loop_run_delay_ms"], 5.0);
+        assert_eq!(json["host_steal_ms"], 20.0);
+        assert_eq!(json["other_rt_threads"][0]["name"], "cyclictest");
+    }
+
+    #[test]
+    fn other_programs_leave_out_kernel_threads_and_repeats() {
+        use rl_rt::preflight::rt_threads::RtPolicy;
+        let t = |tid, kernel| RtThread {
+            pid: 7,
+            tid,
+            comm: format!("t{tid}"),
+            policy: RtPolicy::Fifo,
+            priority: 50,
+            kernel,
+        };
+        let found = HostActivity::other_programs(&[t(1, false), t(2, true), t(1, false)]);
+        assert_eq!(
+            found,
+            vec![OtherRtThread {
+                pid: 7,
+                name: "t1".into(),
+                scheduling: "SCHED_FIFO 50".into()
+            }]
         );
     }
 

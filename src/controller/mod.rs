@@ -81,7 +81,7 @@ pub use clock::TrajectoryClock;
 pub use control::{Controller, CycleResult, CycleTiming, DEFAULT_MAX_BRAKING, FaultAt, RunEnd};
 pub use follower::TrajectoryFollower;
 pub use input::{InputError, InputSender, Target};
-pub use lateness::{Lateness, PeerLateness};
+pub use lateness::{HostActivity, Lateness, OtherRtThread, PeerLateness};
 pub use law::{
     BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, Measured, Start,
 };

@@ -11,7 +11,7 @@ use serde_json::json;
 
 use super::control::{FaultAt, RunEnd};
 use super::input::InputReport;
-use super::lateness::{self, Lateness, PeerLateness};
+use super::lateness::{self, HostActivity, Lateness, PeerLateness};
 use super::tracking::Violation;
 
 /// How the device was brought to a safe state after the loop.
@@ -109,6 +109,9 @@ pub struct RunReport {
     /// How late the device's side ran, as it measured itself (the caller adds it for an
     /// in-process fake; see [`RunReport::lateness`]).
     pub peer_lateness: Option<PeerLateness>,
+    /// Where the run's time went besides its own work: the loop's wait for its CPU, the host's
+    /// steal and interrupts, other programs at real-time priority.
+    pub host: HostActivity,
     /// Why the run failed, if it did (fault, loop error, stop failed).
     pub failure: Option<String>,
 }
@@ -158,6 +161,7 @@ impl RunReport {
             telemetry_dropped: None,
             notes: Vec::new(),
             peer_lateness: None,
+            host: HostActivity::default(),
             failure: Some(why.to_owned()),
         }
     }
@@ -171,7 +175,12 @@ impl RunReport {
 
     /// Who was late in this run: the loop, the device's side, the delivery of the replies.
     pub fn lateness(&self) -> Lateness {
-        Lateness::new(&self.stats, self.link.delivery, self.peer_lateness.clone())
+        Lateness::new(
+            &self.stats,
+            self.link.delivery,
+            self.peer_lateness.clone(),
+            self.host.clone(),
+        )
     }
 
     /// For a run that failed on timing (replies lost, deadlines missed, overruns), the likely

@@ -321,6 +321,10 @@ struct RunInfo {
     trajectory_description: String,
     assumed_speed: Vec<String>,
     started: Instant,
+    /// The host's steal and interrupt times when the loop started.
+    host_before: Option<rl_rt::HostTimes>,
+    /// Other programs' real-time threads when the loop started.
+    rt_before: Vec<rl_rt::preflight::rt_threads::RtThread>,
 }
 
 /// A running controller: a real-time thread stepping a [`Controller`](super::Controller) with the law `L` (by
@@ -402,6 +406,8 @@ where
         };
         let (law_info, controller, setup) = prepared.into_controller(law, &options)?;
         let (inputs_tx, inputs_rx) = input::channel(controller.model(), options.input_capacity);
+        let host_before = rl_rt::HostTimes::read();
+        let rt_before = rl_rt::preflight::rt_threads::other_rt_threads();
         let spawned = rt_loop::spawn(controller, inputs_rx, setup, &options)?;
         Ok(Self {
             thread: spawned.thread,
@@ -423,6 +429,8 @@ where
                 trajectory_description: law_info.description,
                 assumed_speed: law_info.assumed_speed,
                 started: Instant::now(),
+                host_before,
+                rt_before,
             },
         })
     }

@@ -7,6 +7,7 @@ use std::thread;
 use super::RunInfo;
 use super::rt_loop::LoopOutcome;
 use crate::controller::control::RunEnd;
+use crate::controller::lateness::HostActivity;
 use crate::controller::law::ControlLaw;
 use crate::controller::plan::UNKNOWN_SPEED;
 use crate::controller::report::{RunReport, Shutdown};
@@ -37,7 +38,20 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         mut controller,
         stats,
         loop_error,
+        run_delay,
     } = outcome;
+    // What else ran: the host's times over the run, other programs' real-time threads seen
+    // at its start or its end.
+    let mut rt = info.rt_before.clone();
+    rt.extend(rl_rt::preflight::rt_threads::other_rt_threads());
+    let host = HostActivity {
+        loop_run_delay: run_delay,
+        host: info
+            .host_before
+            .zip(rl_rt::HostTimes::read())
+            .map(|(before, after)| after.since(&before)),
+        other_rt: HostActivity::other_programs(&rt),
+    };
     let shutdown = shut_down(controller.robot_mut());
     let end = controller.end();
     let mut failure = loop_error.map(|e| format!("control loop: {e}"));
@@ -97,6 +111,7 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         telemetry_dropped: dropped,
         notes: Vec::new(),
         peer_lateness: None,
+        host,
         failure,
     }
 }

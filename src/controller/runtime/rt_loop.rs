@@ -14,6 +14,7 @@ use rl_drivers::{DeviceError as _, ErrorKind};
 use rl_rt::exchange::{MailboxWriter, QueueReceiver, QueueSender, mailbox, queue};
 use rl_rt::{
     CyclicLoop, LoopStats, MonoTime, PhaseShift, RtThread, StopFlag, StopLevel, ThreadError,
+    ThreadWait,
 };
 
 use super::prepare::LoopSetup;
@@ -32,6 +33,8 @@ pub(super) struct LoopOutcome<R, const B: usize, const J: usize, L: ControlLaw<B
     pub(super) controller: Box<Controller<R, B, J, L>>,
     pub(super) stats: LoopStats,
     pub(super) loop_error: Option<String>,
+    /// How long the thread waited for its CPU, in all, during the loop (schedstat).
+    pub(super) run_delay: Option<Duration>,
 }
 
 /// The running thread and what the caller reads of it.
@@ -192,12 +195,19 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
             None => looped,
         };
         let mut stats = looped.new_stats();
+        // The thread's wait for its CPU over the loop (read without allocating): a late
+        // wake-up longer than it was the host's, not another thread's.
+        let waited_before = ThreadWait::current();
         let result = looped.run_into(&mut stats, |cycle| self.cycle(cycle));
+        let run_delay = waited_before
+            .zip(ThreadWait::current())
+            .map(|(before, after)| after.since(&before).run_delay);
         self.controller.close_inputs();
         Some(LoopOutcome {
             controller: self.controller,
             stats,
             loop_error: result.err().map(|e| e.to_string()),
+            run_delay,
         })
     }
 
