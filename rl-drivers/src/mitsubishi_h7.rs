@@ -241,7 +241,8 @@ pub struct H7Counters {
     /// R3 connections opened again by `stop` after the controller dropped one.
     pub r3_reconnects: u64,
     /// Steps that sent nothing because the previous request was still unanswered: the
-    /// controller was a cycle behind, and waiting for that reply lets it catch up.
+    /// controller was behind (one cycle, or several after a stall), and waiting for that reply
+    /// lets its queue drain.
     pub held: u64,
     /// When replies reached this machine's kernel, against when the steps read them and
     /// against their steps' deadlines (kernel receive timestamps; empty where the kernel gives
@@ -273,8 +274,10 @@ pub struct MitsubishiH7 {
     last_used: Option<u32>,
     /// The last request sent and not answered yet, and when it was sent.
     outstanding: Option<(u32, Instant)>,
-    /// The last step saw the controller answer the packet before its own: a cycle behind.
-    behind: bool,
+    /// The controller is behind (it answered an earlier request than the outstanding one at a
+    /// tick): the time by which it will have answered the outstanding request, one tick per
+    /// request still queued before it, plus a reply wait.
+    behind: Option<Instant>,
     measured: [f64; MAX_AXES],
     measured_from: Measured,
     commanded: Option<[f32; MAX_AXES]>,
@@ -329,7 +332,7 @@ impl MitsubishiH7 {
             c_count: 0,
             last_used: None,
             outstanding: None,
-            behind: false,
+            behind: None,
             measured: [0.0; MAX_AXES],
             measured_from: Measured::None,
             commanded: None,
@@ -676,6 +679,15 @@ impl MitsubishiH7 {
         }
     }
 
+    /// The controller answered request `c` at a tick while this step waits for `sent`: it needs
+    /// `sent − c` more ticks (when that is a backlog it can have: fewer than [`GIVEN_UP`]).
+    fn note_behind(&mut self, c: u32, sent: u32) {
+        let ahead = sent.wrapping_sub(c);
+        if (1..GIVEN_UP as u32).contains(&ahead) {
+            self.behind = Some(Instant::now() + UPDATE_PERIOD * ahead + self.config.reply_timeout);
+        }
+    }
+
     /// Classifies a datagram of `n` bytes in `rx` against the packet with counter `sent`.
     fn verdict(&mut self, n: usize, sent: u32) -> Verdict {
         const OP: Operation = Operation::Step;
@@ -745,6 +757,8 @@ impl MitsubishiH7 {
     /// Uses a checked reply: measured joints, and the joints whose command the controller
     /// changed (clamped at a position or speed limit).
     fn accept(&mut self, reply: Packet) {
+        // In step again: the controller answered the request this step waited for.
+        self.behind = None;
         self.last_used = Some(reply.c_count);
         self.counters.replies += 1;
         let joints = [
@@ -828,7 +842,7 @@ impl Driver for MitsubishiH7 {
         self.c_count = 0;
         self.last_used = None;
         self.outstanding = None;
-        self.behind = false;
+        self.behind = None;
         self.commanded = None;
         self.limit = [false; MAX_AXES];
         self.last_latency = None;
@@ -929,18 +943,17 @@ impl Driver for MitsubishiH7 {
             });
         let deadline = begin + timeout;
         let deadline_epoch = timestamp::since_epoch().saturating_add(timeout);
-        // A controller a cycle behind (two requests reached it within one of its cycles, and it
-        // answers one per cycle: the last step saw the reply to the packet before its own)
-        // stays behind while we send one packet a cycle. This step then sends nothing and
-        // waits for the reply to the last request, so the controller's queue drains; a request
-        // older than a reply timeout plus a cycle is given up instead.
+        // A controller behind (requests reached it faster than it answers them, one per cycle:
+        // the last step saw the reply to an earlier packet than its own) stays behind while we
+        // send one packet a cycle — after its thread or the network stalled for a few cycles,
+        // for good. This step then sends nothing and waits for the reply to the last request,
+        // so the controller's queue drains by one a cycle; a request not answered by a reply
+        // wait
+        // plus the ticks the controller still needed is given up instead.
         let held = self
             .outstanding
-            .filter(|(_, at)| {
-                self.behind && at.elapsed() < self.config.reply_timeout + UPDATE_PERIOD
-            })
+            .filter(|_| self.behind.is_some_and(|until| begin < until))
             .map(|(c, _)| c);
-        self.behind = false;
         let sent = held.unwrap_or(self.c_count);
         if held.is_some() {
             // Counted here: its reply may already be waiting below.
@@ -979,8 +992,14 @@ impl Driver for MitsubishiH7 {
                         }
                     }
                     // Late or corrupt: counted, never used. A late reply's kernel timestamp
-                    // tells how late it reached this machine.
-                    Verdict::Late(c) => self.note_late_arrival(c),
+                    // tells how late it reached this machine; while holding, it tells how far
+                    // behind the controller still is.
+                    Verdict::Late(c) => {
+                        self.note_late_arrival(c);
+                        if held.is_some() {
+                            self.note_behind(c, sent);
+                        }
+                    }
                     Verdict::Bad(_) => {}
                 },
                 None => break,
@@ -1035,13 +1054,13 @@ impl Driver for MitsubishiH7 {
                     self.accept(reply);
                     return Ok(());
                 }
-                // The controller answered our previous packet only now, at this cycle's tick:
-                // it is a cycle behind, and would stay so while we send one packet a cycle.
-                Verdict::Late(c) if c == sent.wrapping_sub(1) && held.is_none() => {
+                // The controller answered an earlier packet only now, at this cycle's tick: it
+                // is behind by the packets after it, and would stay so while we send one packet
+                // a cycle.
+                Verdict::Late(c) => {
                     self.note_late_arrival(c);
-                    self.behind = true;
+                    self.note_behind(c, sent);
                 }
-                Verdict::Late(c) => self.note_late_arrival(c),
                 Verdict::Bad(e) => return Err(e),
             }
         }

@@ -595,3 +595,66 @@ fn a_controller_a_cycle_behind_is_caught_up_by_holding_one_request() {
     );
     robot.stop().unwrap();
 }
+
+/// A controller held up for four of its cycles (its thread stalled, or the network held the
+/// packets) finds four requests queued and answers one a cycle: a client that went on sending
+/// one a cycle would stay four cycles behind for good — every later reply late, the link dead
+/// (a 27 ms stall of the fake ended `rl run` with "10 replies lost in a row"). The driver holds
+/// its requests while the queue drains and is back in step: the stall costs the cycles it
+/// lasted and the cycles the queue needs to drain, with the default one-period reply wait.
+#[test]
+fn a_controller_stalled_for_cycles_is_caught_up_by_holding_requests() {
+    use rl_drivers::fake::h7_controller::ForwardKinematics;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    const STALL: u32 = 4;
+    let stall = Arc::new(AtomicBool::new(false));
+    let stalls = stall.clone();
+    // The pose feedback the driver asks for is computed in the fake's cycle.
+    let fake = fake_with(|c| {
+        c.kinematics = Some(ForwardKinematics::new(move |_| {
+            if stalls.swap(false, Ordering::Relaxed) {
+                std::thread::sleep(UPDATE_PERIOD * STALL);
+            }
+            None
+        }));
+    });
+    let mut c = config(&fake);
+    c.reply_timeout = UPDATE_PERIOD;
+    let mut robot = started(c);
+    // One step a period, on this (real-time, where allowed) thread.
+    let mut outcomes = Vec::new();
+    let mut next = Instant::now();
+    for k in 0..60 {
+        if k == 10 {
+            stall.store(true, Ordering::Relaxed);
+        }
+        outcomes.push(robot.step().is_ok());
+        next += UPDATE_PERIOD;
+        if let Some(wait) = next.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+    }
+    let c = robot.counters();
+    let s = fake.status();
+    let failed: Vec<usize> = (0..outcomes.len()).filter(|&k| !outcomes[k]).collect();
+    let context = format!("failed steps {failed:?}\n{c:?}\n{s:?}");
+    assert!(
+        s.max_tick_lateness >= UPDATE_PERIOD * STALL,
+        "the fake was held up: {context}"
+    );
+    // The stall is felt, and over: the steps after it drain the queue and the last thirty
+    // are all answered in time.
+    assert!(!failed.is_empty(), "{context}");
+    assert!(outcomes[30..].iter().all(|&ok| ok), "{context}");
+    let first = failed[0];
+    let last = failed[failed.len() - 1];
+    assert!(
+        last - first < 2 * STALL as usize + 2,
+        "the stall cost steps {first} to {last}: {context}"
+    );
+    // Held requests drained it: the queue the stall left was more than one request.
+    assert!(c.held >= u64::from(STALL) - 1, "{context}");
+    println!("a {STALL}-cycle stall: {context}");
+    robot.stop().unwrap();
+}
