@@ -10,8 +10,13 @@
 //! 1 cm `ee_link` box inside `wrist_3_link`). Links the SRDF names but
 //! the model lacks are reported as warnings (MoveIt ignores them too), not errors: SRDFs are
 //! often shared between variants of a robot.
+//!
+//! Which SRDF a robot uses is one rule, [`for_robot`]: the one given, else the SRDF beside its
+//! URDF (`NAME.srdf` for `NAME.urdf`, in the same directory), else none. Every command of the
+//! `rl` tool that uses collision pairs (`plan`, `run --plan`, `run --view`, `scene`, `view`)
+//! and rl-plan's robot loader take it from there.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::read_text;
 use super::xml::{at, attr, children, number, parse, robot_root};
@@ -88,6 +93,23 @@ pub fn apply_str(text: &str, model: &mut Model) -> Result<SrdfReport, SgError> {
         ));
     }
     Ok(report)
+}
+
+/// `NAME.srdf` beside `NAME.urdf` (same directory, same stem), if that file exists.
+pub fn beside(urdf: &Path) -> Option<PathBuf> {
+    let p = urdf.with_extension("srdf");
+    p.is_file().then_some(p)
+}
+
+/// The SRDF the robot in `model` uses: `given` if any, else, when `model` is a URDF, the SRDF
+/// [`beside`] it if there is one, else none (adjacent links and links rigidly joined are then
+/// not checked against each other).
+pub fn for_robot(model: &Path, given: Option<&Path>) -> Option<PathBuf> {
+    match given {
+        Some(path) => Some(path.to_path_buf()),
+        None if super::is_urdf(model) => beside(model),
+        None => None,
+    }
 }
 
 /// Applies the SRDF file at `path` to `model`.
