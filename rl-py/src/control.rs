@@ -214,7 +214,7 @@ fn start<const N: usize>(
 #[pymethods]
 impl ControlRun {
     #[new]
-    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=0.25, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true))]
+    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=rl::controller::runtime::DEFAULT_SPEED, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -232,23 +232,10 @@ impl ControlRun {
         telemetry: bool,
     ) -> PyResult<Self> {
         let spec = DeviceSpec::parse(device).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let period = match rate {
-            None => None,
-            Some(hz) if hz.is_finite() && (0.1..=20_000.0).contains(&hz) => {
-                if spec.fixed_period() {
-                    return Err(PyValueError::new_err(
-                        "rate: an H7 controller (and the fake one) runs at its own 7.11 ms \
-                         cycle; rate applies to coach:// and CiA 402 drives",
-                    ));
-                }
-                Some(Duration::from_secs_f64(1.0 / hz))
-            }
-            Some(hz) => {
-                return Err(PyValueError::new_err(format!(
-                    "rate={hz}: give a control rate in Hz between 0.1 and 20000"
-                )));
-            }
-        };
+        let period = rate
+            .map(|hz| spec.period_for_rate(hz))
+            .transpose()
+            .map_err(|e| PyValueError::new_err(format!("rate={}", e.message())))?;
         let duration = match duration {
             None => None,
             Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s)),
