@@ -522,7 +522,7 @@ fn no_path_and_uncertified_paths_are_said_on_stderr() {
         rl(&a.iter().map(String::as_str).collect::<Vec<_>>())
     };
     // No time to plan: no path.
-    let o = run(&["--time", "1us"]);
+    let o = run(&["--plan-time", "1us"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -531,7 +531,7 @@ fn no_path_and_uncertified_paths_are_said_on_stderr() {
     assert!(err.contains("no path found"), "{err}");
     // A path: the warning if and only if the JSON says it is not certified.
     for seed in ["1", "2"] {
-        let o = run(&["--seed", seed, "--time", "30s"]);
+        let o = run(&["--seed", seed, "--plan-time", "30s"]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{err}");
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();

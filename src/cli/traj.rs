@@ -27,7 +27,7 @@ use rl_core::traj::{
 };
 
 use super::output::{Replacement, errln, write_error};
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 
 /// Most axes a waypoint file may have.
 pub const MAX_AXES: usize = 12;
@@ -157,6 +157,18 @@ fn run_on_big_stack(args: TrajArgs) -> CliResult {
             "--blend must be in (0, 1], got {}",
             args.blend
         )));
+    }
+    if args.profile != Profile::ParabolicBlend {
+        refuse_given(
+            &["blend"],
+            &format!(
+                "to --profile {}: it sets parabolic-blend's blends",
+                args.profile.name()
+            ),
+        )?;
+    }
+    if args.plot.is_none() {
+        refuse_given(&["unit"], "without --plot: it labels the plot's axes")?;
     }
     let waypoints = read_waypoints(&args.file)?;
     // Output files first: a path that cannot be written fails before any work. Each is
