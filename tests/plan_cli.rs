@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use rl::controller::runtime::DEFAULT_SPEED;
 use serde_json::Value;
 
 fn data(p: &str) -> PathBuf {
@@ -88,7 +89,7 @@ fn plan_a_motionbenchmaker_problem() {
     assert!(rows[0].iter().all(|x| x.is_finite()));
     // The trajectory: t, positions, velocities, accelerations; ends at the path's goal and
     // stays within the panda's speed limits (2.3925 rad/s for joints 1–4, 2.871 for 5–7, at
-    // --speed 0.5).
+    // the default --speed, rl run's too).
     let (th, tr) = csv(&traj);
     assert_eq!(th.len(), 1 + 3 * 7);
     assert_eq!(th[0], "t");
@@ -98,7 +99,7 @@ fn plan_a_motionbenchmaker_problem() {
     }
     for row in &tr {
         for k in 0..7 {
-            let limit = if k < 4 { 2.3925 } else { 2.871 } * 0.5;
+            let limit = if k < 4 { 2.3925 } else { 2.871 } * DEFAULT_SPEED;
             assert!(
                 row[8 + k].abs() <= limit * (1.0 + 1e-9),
                 "joint {k} at t={}",
