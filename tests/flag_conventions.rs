@@ -38,9 +38,10 @@ fn help(args: &[&str]) -> String {
 /// The help of `--flag`: its line and the lines below it up to the next flag or heading (the
 /// long help puts its default on a line of its own).
 fn help_line(text: &str, flag: &str) -> String {
-    let mut lines = text
-        .lines()
-        .skip_while(|l| !l.trim_start().starts_with(&format!("{flag} ")));
+    let mut lines = text.lines().skip_while(|l| {
+        let l = l.trim();
+        !(l == flag || l.starts_with(&format!("{flag} ")))
+    });
     let first = lines
         .next()
         .unwrap_or_else(|| panic!("no {flag} in\n{text}"));
@@ -364,6 +365,19 @@ fn flags_that_do_not_apply_are_refused_naming_the_flag() {
             ],
             "--floating-base",
         ),
+        (vec!["model", "eval", &puma, "--normalize"], "--normalize"),
+        (
+            vec![
+                "model",
+                "bench",
+                &puma,
+                "--states-file",
+                "s.txt",
+                "--states",
+                "4",
+            ],
+            "--states",
+        ),
     ];
     for (args, flag) in cases {
         let o = rl(&args);
@@ -400,6 +414,32 @@ fn flags_that_do_not_apply_are_refused_naming_the_flag() {
     assert_eq!(o.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).ok();
     std::fs::remove_dir_all(Path::new(arm).parent().unwrap()).ok();
+}
+
+#[test]
+fn a_sampling_period_is_written_the_same_way_everywhere() {
+    let dir = tmp("dt");
+    let wp = dir.join("wp.csv");
+    std::fs::write(&wp, "a,b\n0,0\n1,1\n").unwrap();
+    let traj = |dt: &str| {
+        let o = rl(&[
+            "traj",
+            wp.to_str().unwrap(),
+            "--profile",
+            "quintic",
+            "--vmax",
+            "1",
+            "--dt",
+            dt,
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o.stdout
+    };
+    assert_eq!(traj("0.25"), traj("250ms"));
+    for cmd in [&["traj"][..], &["plan"]] {
+        help_line(&help(cmd), "--dt <DURATION>");
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Every flag the README's tool summary gives a subcommand is one that subcommand's `--help`

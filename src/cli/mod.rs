@@ -142,6 +142,16 @@ pub fn refuse_given(flags: &[&str], why: &str) -> Result<(), CliError> {
     }
 }
 
+/// Seconds as a number: a bare number (any: the caller checks its range, so `-0.01` reaches
+/// that check) or a duration with a unit as [`parse_duration`] takes it (`10ms`), so that a
+/// sampling period is written the same way in every subcommand.
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) => Ok(x),
+        Err(_) => parse_duration(text).map(|d| d.as_secs_f64()),
+    }
+}
+
 /// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.
 pub fn parse_duration(text: &str) -> Result<Duration, String> {
     let t = text.trim();

@@ -58,8 +58,9 @@ pub struct PlanArgs {
     /// accelerations), sampled every --dt.
     #[arg(long)]
     pub trajectory: Option<PathBuf>,
-    /// Sampling period of --trajectory.
-    #[arg(long, value_parser = parse_duration, default_value = "10ms")]
+    /// Sampling period of --trajectory: a duration (e.g. 10ms) or a bare number of seconds, as
+    /// `rl traj --dt` takes it.
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "10ms")]
     pub dt: Duration,
     /// Fraction of the model's speed limits for --trajectory, in (0, 1] (the same default as
     /// `rl run --speed`).

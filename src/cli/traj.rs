@@ -27,7 +27,7 @@ use rl_core::traj::{
 };
 
 use super::output::{Replacement, errln, write_error};
-use super::{CliError, CliResult, refuse_given};
+use super::{CliError, CliResult, parse_seconds, refuse_given};
 
 /// Most axes a waypoint file may have.
 pub const MAX_AXES: usize = 12;
@@ -94,8 +94,9 @@ pub struct TrajArgs {
     /// Jerk limit (unit/s³): one value or one per axis.
     #[arg(long, allow_hyphen_values = true)]
     pub jmax: Option<String>,
-    /// Sample period in seconds.
-    #[arg(long, default_value_t = 0.001)]
+    /// Sample period: a duration (e.g. 1ms, 0.5s) or a bare number of seconds, as `rl plan
+    /// --dt` takes it.
+    #[arg(long, value_name = "DURATION", default_value = "1ms", value_parser = parse_seconds)]
     pub dt: f64,
     /// Blend length for parabolic-blend, as a fraction (0, 1] of the neighbouring segments.
     #[arg(long, default_value_t = 0.2)]
