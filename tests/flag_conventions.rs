@@ -365,6 +365,23 @@ fn flags_that_do_not_apply_are_refused_naming_the_flag() {
             ],
             "--floating-base",
         ),
+        (
+            vec!["fake-robot", "h7", "--model", &puma, "--dof", "3"],
+            "--dof",
+        ),
+        (
+            vec![
+                "fake-robot",
+                "ethercat",
+                "--interface",
+                "lo",
+                "--model",
+                &puma,
+                "--devices",
+                "3",
+            ],
+            "--devices",
+        ),
         (vec!["model", "eval", &puma, "--normalize"], "--normalize"),
         (
             vec![

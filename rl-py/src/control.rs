@@ -105,14 +105,17 @@ impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
 /// stops the device safely.
 ///
 /// Args:
-///     device: as `rl run --device`: `fake-h7` (default: a fake Mitsubishi H7 in this process
-///         on loopback), `h7://HOST[:PORT][?r3=PORT]`, `coach://HOST[:PORT]`, `fake-cia402`,
-///         `cannelloni+udp://HOST:PORT[?nodes=1-6]`, `socketcan://IFACE`, `ethercat://IF`.
+///     device: as `rl run --device` (the device table `rl::devices::DEVICE_FORMS`, listed by
+///         `rl run --help`): `fake-h7` (default: a fake Mitsubishi H7 in this process on
+///         loopback), `h7://HOST[:PORT][?r3=PORT]`, `coach://HOST[:PORT]`, `fake-cia402`,
+///         `cannelloni+udp://HOST:PORT[?nodes=1-6]`, `cannelloni+tcp://HOST:PORT`,
+///         `socketcan://IFACE`, `ethercat://IF`, `franka://HOST[:PORT]`,
+///         `ur://HOST[:PORT][?power-on]`.
 ///     model: a `Model` or a model file (default: the embedded Mitsubishi RV-6SL).
 ///     duration: stop (at rest, along the path) after this many seconds.
-///     speed: fraction of the model's speed limits, in (0, 1].
+///     speed: fraction of the model's speed limits, in (0, 1] (default 0.25, as `rl run`).
 ///     waypoints: (k, dof) joint positions to visit (default: a tour from the limits).
-///     rate: control rate, Hz (devices with their own cycle, the H7, refuse it).
+///     rate: control rate, Hz, 0.1 to 20000 (the H7, on its fixed cycle, refuses any).
 ///     priority: SCHED_FIFO priority of the loop thread.
 ///     cpus: CPUs to pin the loop thread to.
 ///     lock_memory: mlockall before the loop (locks the whole Python process; off by default).

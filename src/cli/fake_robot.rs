@@ -15,7 +15,7 @@ use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, ForwardKinematics};
 
 use super::capacity::WithModel;
 use super::output::outln;
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 
 mod devices;
 
@@ -350,6 +350,9 @@ fn joints(q: &[f64]) -> String {
 fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     let mut limits = None;
     let mut kinematics = None;
+    if args.model.is_some() {
+        refuse_given(&["dof"], "with --model: the model gives the joint count")?;
+    }
     let mut dof = args.dof;
     let mut home = None;
     if let Some(arm) = Arm::for_fake(args.model.as_deref(), args.dof, "the fake H7 simulates")? {
@@ -655,6 +658,12 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::ecat_segment::description::Profile;
     use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
     let units = args.units.units()?;
+    if args.model.is_some() {
+        refuse_given(
+            &["devices"],
+            "with --model: one drive per joint of the model",
+        )?;
+    }
     let arm = Arm::for_fake(args.model.as_deref(), args.devices, "the fake drives move")?;
     let devices = arm.as_ref().map_or(args.devices, |a| a.limits.len());
     if devices == 0 || devices > 64 {
