@@ -434,6 +434,31 @@ fn flags_that_do_not_apply_are_refused_naming_the_flag() {
 }
 
 #[test]
+fn plan_bench_refuses_an_output_directory_before_any_run() {
+    let problems = path("tests/data/mbm/panda/problems");
+    for flag in ["--out", "--paths"] {
+        let o = rl(&["plan", "bench", &problems, flag, "/dev/null/x"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag}: {err}");
+        assert!(err.contains(&format!("{flag} /dev/null/x")), "{err}");
+        assert!(o.stdout.is_empty(), "{flag}: the runs went ahead");
+    }
+    let o = rl(&[
+        "plan",
+        "bench",
+        "/nonexistent",
+        "--model",
+        &path("tests/data/mbm/panda/panda.urdf"),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
 fn a_sampling_period_is_written_the_same_way_everywhere() {
     let dir = tmp("dt");
     let wp = dir.join("wp.csv");

@@ -609,7 +609,15 @@ fn find_urdf(dir: &Path, given: &Option<PathBuf>) -> Result<PathBuf, CliError> {
 fn run_bench(b: BenchArgs) -> CliResult {
     let urdf = find_urdf(&b.dir, &b.model)?;
     let robot = load_robot(&urdf, &b.common)?;
-    let mut problems = mbm::find_problems(&b.dir).map_err(failed)?;
+    // A problem set that cannot be read is a bad argument (exit 2), and so is an output
+    // directory that cannot be made: both are found before any run.
+    let mut problems = mbm::find_problems(&b.dir).map_err(usage)?;
+    for (flag, dir) in [("--paths", &b.paths), ("--out", &b.out)] {
+        if let Some(dir) = dir {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| usage(format!("{flag} {}: {e}", dir.display())))?;
+        }
+    }
     if let Some(n) = b.limit {
         problems.truncate(n);
     }
@@ -672,7 +680,6 @@ fn run_bench(b: BenchArgs) -> CliResult {
     .map_err(failed)?;
     outln!("{}", bench::vamp_table(&runs))?;
     if let Some(dir) = &b.paths {
-        std::fs::create_dir_all(dir).map_err(|e| failed(format!("{}: {e}", dir.display())))?;
         for r in runs.iter().filter(|r| r.run == 0) {
             if let Some(path) = r.result.as_ref().and_then(|x| x.optimized.as_ref()) {
                 let file = dir.join(format!("{}.csv", r.problem.replace(['/', '.'], "_")));
@@ -681,7 +688,6 @@ fn run_bench(b: BenchArgs) -> CliResult {
         }
     }
     if let Some(out) = &b.out {
-        std::fs::create_dir_all(out).map_err(|e| failed(format!("{}: {e}", out.display())))?;
         let setup = format!(
             "robot {}\nchecker {spheres}\nplanner {} (range {:?}), sampler {}, resolution {} rad, optimiser {}, time {:?}",
             urdf.display(),
