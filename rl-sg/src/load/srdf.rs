@@ -169,6 +169,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_urdf_takes_the_srdf_given_else_the_one_beside_it() {
+        let dir = std::env::temp_dir().join(format!("rl-sg-srdf-rule-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (urdf, lone, rlmdl) = (
+            dir.join("arm.urdf"),
+            dir.join("lone.urdf"),
+            dir.join("arm.xml"),
+        );
+        for f in [&urdf, &lone] {
+            std::fs::write(f, r#"<robot name="arm"><link name="a"/></robot>"#).unwrap();
+        }
+        std::fs::write(&rlmdl, "<rl><model/></rl>").unwrap();
+        std::fs::write(dir.join("arm.srdf"), r#"<robot name="arm"/>"#).unwrap();
+        let given = dir.join("other.srdf");
+        assert_eq!(for_robot(&urdf, None), Some(dir.join("arm.srdf")));
+        assert_eq!(for_robot(&urdf, Some(&given)), Some(given.clone()));
+        assert_eq!(for_robot(&lone, None), None);
+        // Not a URDF: no SRDF unless given, whatever lies beside it.
+        assert_eq!(for_robot(&rlmdl, None), None);
+        assert_eq!(for_robot(&rlmdl, Some(&given)), Some(given));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn named_states_are_read_in_file_order_with_bad_values_refused() {
         let s = named_states_str(
             r#"<robot name="r">
