@@ -50,11 +50,123 @@ const H7_PORT: u16 = 10000;
 /// H7 R3 TCP port.
 const R3_PORT: u16 = 10001;
 
-/// The devices `--device` accepts, for messages.
-pub const DEVICES: &str = "fake-h7, h7://HOST[:PORT][?r3=PORT], coach://HOST[:PORT], fake-cia402, \
-     cannelloni+udp://HOST:PORT[?nodes=1-6][&units=…], cannelloni+tcp://HOST:PORT[?listen][&nodes=…], \
-     socketcan://IFACE[?nodes=…], ethercat://IF[?units=…], franka://HOST[:PORT] or \
-     ur://HOST[:PORT][?power-on]";
+/// One form of device text [`DeviceSpec::parse`] accepts: a row of the device table, from
+/// which `rl run --help`, the parse errors and the tests take the list of forms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeviceForm {
+    /// The form, e.g. `h7://HOST[:PORT][?r3=PORT]`.
+    pub form: &'static str,
+    /// What it drives, in a few words.
+    pub what: &'static str,
+    /// The control period it runs at unless `--rate` gives another, as the help says it.
+    pub period: &'static str,
+    /// Whether the device runs at its own fixed cycle, so that a rate is refused
+    /// ([`DeviceSpec::fixed_period`]).
+    pub fixed_period: bool,
+    /// A text of this form that parses without a network or a device (for the tests).
+    pub example: &'static str,
+}
+
+/// Every form of device text, in the order the help lists them.
+pub const DEVICE_FORMS: &[DeviceForm] = &[
+    DeviceForm {
+        form: "fake-h7",
+        what: "a fake Mitsubishi H7 controller in this process on loopback",
+        period: "its fixed 7.11 ms cycle",
+        fixed_period: true,
+        example: "fake-h7",
+    },
+    DeviceForm {
+        form: "h7://HOST[:PORT][?r3=PORT]",
+        what: "a MELFA controller (UDP 10000, R3 on TCP 10001 by default)",
+        period: "its fixed 7.11 ms cycle",
+        fixed_period: true,
+        example: "h7://127.0.0.1?r3=10001",
+    },
+    DeviceForm {
+        form: "coach://HOST[:PORT]",
+        what: "an RL visualiser streamed the commanded joints (port 11235)",
+        period: "10 ms",
+        fixed_period: false,
+        example: "coach://127.0.0.1",
+    },
+    DeviceForm {
+        form: "fake-cia402",
+        what: "fake CiA 402 drives in this process on cannelloni UDP loopback",
+        period: "2 ms",
+        fixed_period: false,
+        example: "fake-cia402",
+    },
+    DeviceForm {
+        form: "cannelloni+udp://HOST:PORT[?nodes=1-6][&units=…]",
+        what: "CiA 402 drives over CANopen through a cannelloni UDP gateway",
+        period: "2 ms",
+        fixed_period: false,
+        example: "cannelloni+udp://127.0.0.1:20000?nodes=1-6",
+    },
+    DeviceForm {
+        form: "cannelloni+tcp://HOST:PORT[?listen][&nodes=…][&units=…]",
+        what: "the same over cannelloni TCP",
+        period: "2 ms",
+        fixed_period: false,
+        example: "cannelloni+tcp://127.0.0.1:20000",
+    },
+    DeviceForm {
+        form: "socketcan://IFACE[?nodes=…][&units=…]",
+        what: "CiA 402 drives over CANopen on a SocketCAN interface",
+        period: "2 ms",
+        fixed_period: false,
+        example: "socketcan://can0?nodes=1-6",
+    },
+    DeviceForm {
+        form: "ethercat://IF[?units=…]",
+        what: "CiA 402 drives on an EtherCAT segment on interface IF (root or CAP_NET_RAW)",
+        period: "1 ms",
+        fixed_period: false,
+        example: "ethercat://eth1",
+    },
+    DeviceForm {
+        form: "franka://HOST[:PORT]",
+        what: "a Franka FR3 or Panda over FCI, joint positions (port 1337)",
+        period: "the robot's 1 ms",
+        fixed_period: false,
+        example: "franka://127.0.0.1",
+    },
+    DeviceForm {
+        form: "ur://HOST[:PORT][?power-on]",
+        what: "a Universal Robots arm over RTDE (port 30004)",
+        period: "the controller's 2 ms",
+        fixed_period: false,
+        example: "ur://127.0.0.1?power-on",
+    },
+];
+
+/// The control rates a device takes, Hz (lowest, highest); the device's own cycle may allow
+/// less ([`DeviceSpec::period_for_rate`]).
+pub const RATE_HZ: (f64, f64) = (0.1, 20_000.0);
+
+/// The forms of [`DEVICE_FORMS`] in one line, for messages: `fake-h7, h7://…, … or ur://…`.
+pub fn device_forms() -> String {
+    let forms: Vec<&str> = DEVICE_FORMS.iter().map(|f| f.form).collect();
+    match forms.split_last() {
+        Some((last, [])) => (*last).to_owned(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
+/// The table as the help of a `--device` flag: one line per form, what it drives and the
+/// control period it runs at unless a rate is given.
+pub fn device_help() -> String {
+    let mut text = String::from("The robot [default: fake-h7]. One of:");
+    for f in DEVICE_FORMS {
+        text.push_str(&format!("\n  {}: {}; {}", f.form, f.what, f.period));
+        if f.fixed_period {
+            text.push_str(" (no --rate)");
+        }
+    }
+    text
+}
 
 /// The form of `units=` (and `--units`), for messages.
 pub const UNITS_FORM: &str = "cpr:N,gear:G[,feed:F][,torque:NM][,lead:M], each value one number \
@@ -396,9 +508,11 @@ impl InProcessFake {
 }
 
 impl DeviceSpec {
-    /// Parses one of [`DEVICES`].
+    /// Parses one of [`DEVICE_FORMS`].
     pub fn parse(text: &str) -> Result<Self, SpecError> {
-        let bad = |why: String| SpecError::usage(format!("--device {text}: {why} (use {DEVICES})"));
+        let bad = |why: String| {
+            SpecError::usage(format!("--device {text}: {why} (use {})", device_forms()))
+        };
         if text == "fake-h7" {
             return Ok(Self::FakeH7);
         }
@@ -478,6 +592,25 @@ impl DeviceSpec {
     /// Whether the device runs at its own fixed cycle (`--rate` is refused).
     pub fn fixed_period(&self) -> bool {
         matches!(self, Self::H7 { .. } | Self::FakeH7)
+    }
+
+    /// The control period of a rate of `hz` asked for this device: [`RATE_HZ`] holds the rates
+    /// taken; a device on its fixed cycle ([`DeviceSpec::fixed_period`]) refuses any. The
+    /// message names neither the flag nor the keyword: the caller puts its own before it.
+    pub fn period_for_rate(&self, hz: f64) -> Result<Duration, SpecError> {
+        let (low, high) = RATE_HZ;
+        if !(hz.is_finite() && (low..=high).contains(&hz)) {
+            return Err(SpecError::usage(format!(
+                "{hz}: give a control rate in Hz between {low} and {high}"
+            )));
+        }
+        if self.fixed_period() {
+            return Err(SpecError::usage(format!(
+                "{hz}: an H7 controller (and the fake one) runs at its own 7.11 ms cycle; a \
+                 rate applies to the other devices"
+            )));
+        }
+        Ok(Duration::from_secs_f64(1.0 / hz))
     }
 
     /// Gives the drives' units (`--units`); refused for a device that has none, or when the
@@ -853,6 +986,29 @@ fn resolve(host: &str, default_port: u16) -> Result<SocketAddr, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_form_of_the_table_parses_and_says_whether_it_takes_a_rate() {
+        for f in DEVICE_FORMS {
+            let spec = DeviceSpec::parse(f.example)
+                .unwrap_or_else(|e| panic!("{} ({}): {e}", f.form, f.example));
+            assert_eq!(spec.fixed_period(), f.fixed_period, "{}", f.form);
+            assert_eq!(
+                spec.period_for_rate(100.0).is_ok(),
+                !f.fixed_period,
+                "{}",
+                f.form
+            );
+            assert!(device_forms().contains(f.form) && device_help().contains(f.form));
+        }
+        let e = DeviceSpec::parse("tcp://1.2.3.4").unwrap_err();
+        assert!(e.message().contains(&device_forms()), "{e}");
+        let coach = DeviceSpec::parse("coach://127.0.0.1").unwrap();
+        assert_eq!(coach.period_for_rate(200.0), Ok(Duration::from_millis(5)));
+        for hz in [0.0, -5.0, f64::NAN, 20_001.0] {
+            assert!(coach.period_for_rate(hz).is_err(), "{hz}");
+        }
+    }
 
     #[test]
     fn devices_parse_with_default_ports() {

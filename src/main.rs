@@ -61,7 +61,9 @@ fn allow_negative_numbers(command: clap::Command) -> clap::Command {
 }
 
 fn main() -> ExitCode {
-    let matches = allow_negative_numbers(Cli::command()).get_matches();
+    let command = allow_negative_numbers(Cli::command());
+    let matches = command.clone().get_matches();
+    cli::record_given(&command, &matches);
     let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(e) => e.exit(),

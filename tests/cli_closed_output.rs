@@ -122,7 +122,7 @@ fn fake_robots() {
         "127.0.0.1:0",
         "--r3-bind",
         "127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "2",
     ]);
     check(&[
@@ -130,7 +130,7 @@ fn fake_robots() {
         "coach",
         "--bind",
         "127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "2",
     ]);
     check(&[
@@ -138,7 +138,7 @@ fn fake_robots() {
         "canopen",
         "--bus",
         "cannelloni+udp://127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "2",
     ]);
     // Raw Ethernet on the loopback interface: as root the segment starts and its first line
@@ -148,7 +148,7 @@ fn fake_robots() {
         "ethercat",
         "--interface",
         "lo",
-        "--seconds",
+        "--duration",
         "2",
     ]);
 }

@@ -27,7 +27,7 @@ fn rl_run_drives_the_fake_ethercat_segment() {
     let mut fake = ns
         .command(rl)
         .args(["fake-robot", "ethercat", "--interface", "ecs"])
-        .args(["--model", model, "--seconds", "60"])
+        .args(["--model", model, "--duration", "60"])
         .stdout(Stdio::piped())
         .spawn()
         .expect("rl fake-robot ethercat");

@@ -26,7 +26,7 @@ fn the_fake_drives_serve_our_master_and_record_the_bus() {
     let model = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/rlmdl/planar3.xml");
     let log_arg = log.to_str().expect("a UTF-8 path");
     let (child, first, bus) =
-        fake_drives(&["--model", model, "--seconds", "4", "--candump", log_arg]);
+        fake_drives(&["--model", model, "--duration", "4", "--candump", log_arg]);
     assert!(first.contains("nodes [1, 2, 3]"), "{first}");
     let bus = bus.as_str();
     let mut config = Cia402Config::new(CanAddress::parse(bus).unwrap(), &[1, 2, 3])
@@ -64,11 +64,11 @@ fn bad_arguments_exit_with_2() {
             "canopen",
             "--bus",
             "can://x",
-            "--seconds",
+            "--duration",
             "1",
         ][..],
-        &["fake-robot", "canopen", "--nodes", "0-3", "--seconds", "1"],
-        &["fake-robot", "canopen", "--nodes", "1-9", "--seconds", "1"],
+        &["fake-robot", "canopen", "--nodes", "0-3", "--duration", "1"],
+        &["fake-robot", "canopen", "--nodes", "1-9", "--duration", "1"],
         &[
             "fake-robot",
             "canopen",
@@ -76,7 +76,7 @@ fn bad_arguments_exit_with_2() {
             "1,2",
             "--model",
             concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/rlmdl/planar3.xml"),
-            "--seconds",
+            "--duration",
             "1",
         ],
     ] {
@@ -144,7 +144,7 @@ fn rl_run_reads_the_units_the_fake_drives_are_given_or_is_refused_without_them()
         "4096",
         "--gear",
         "121",
-        "--seconds",
+        "--duration",
         "60",
     ]);
     pairs::run_until_on_time("units read", 1000.0, || run_on(&bus, &[]));
@@ -158,7 +158,7 @@ fn rl_run_reads_the_units_the_fake_drives_are_given_or_is_refused_without_them()
         "--gear",
         "121",
         "--no-unit-objects",
-        "--seconds",
+        "--duration",
         "60",
     ]);
     let out = run_on(&bus, &[]);

@@ -22,7 +22,7 @@ fn h7_fake_takes_the_models_joints() {
         "127.0.0.1:0",
         "--r3-bind",
         "127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "1",
     ]);
     assert!(
@@ -40,7 +40,7 @@ fn h7_fake_refuses_quaternion_joints() {
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/rlmdl/box-6d-300505.sixDof.xml"
     );
-    let out = rl(&["fake-robot", "h7", "--model", model, "--seconds", "1"]);
+    let out = rl(&["fake-robot", "h7", "--model", model, "--duration", "1"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("quaternion"));
 }
@@ -70,7 +70,7 @@ fn h7_fake_with_a_model_answers_poses_from_its_kinematics() {
             "127.0.0.1:0",
             "--r3-bind",
             "127.0.0.1:0",
-            "--seconds",
+            "--duration",
             "3",
         ])
         .stdout(Stdio::piped())

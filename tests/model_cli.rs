@@ -232,7 +232,7 @@ fn over_the_largest_capacity_the_message_says_which_and_how() {
     let err = refused(&["run", "--model", file, "--duration", "1s"], &said);
     assert!(err.contains("--model: "), "{err}");
     refused(
-        &["fake-robot", "h7", "--model", file, "--seconds", "1"],
+        &["fake-robot", "h7", "--model", file, "--duration", "1"],
         &said,
     );
 }
@@ -370,7 +370,7 @@ fn a_zero_speed_or_effort_limit_means_not_given() {
         "127.0.0.1:0",
         "--r3-bind",
         "127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "1",
     ]);
     assert!(

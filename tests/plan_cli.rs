@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use rl::controller::runtime::DEFAULT_SPEED;
 use serde_json::Value;
 
 fn data(p: &str) -> PathBuf {
@@ -88,7 +89,7 @@ fn plan_a_motionbenchmaker_problem() {
     assert!(rows[0].iter().all(|x| x.is_finite()));
     // The trajectory: t, positions, velocities, accelerations; ends at the path's goal and
     // stays within the panda's speed limits (2.3925 rad/s for joints 1–4, 2.871 for 5–7, at
-    // --speed 0.5).
+    // the default --speed, rl run's too).
     let (th, tr) = csv(&traj);
     assert_eq!(th.len(), 1 + 3 * 7);
     assert_eq!(th[0], "t");
@@ -98,7 +99,7 @@ fn plan_a_motionbenchmaker_problem() {
     }
     for row in &tr {
         for k in 0..7 {
-            let limit = if k < 4 { 2.3925 } else { 2.871 } * 0.5;
+            let limit = if k < 4 { 2.3925 } else { 2.871 } * DEFAULT_SPEED;
             assert!(
                 row[8 + k].abs() <= limit * (1.0 + 1e-9),
                 "joint {k} at t={}",
@@ -522,7 +523,7 @@ fn no_path_and_uncertified_paths_are_said_on_stderr() {
         rl(&a.iter().map(String::as_str).collect::<Vec<_>>())
     };
     // No time to plan: no path.
-    let o = run(&["--time", "1us"]);
+    let o = run(&["--plan-time", "1us"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -531,7 +532,7 @@ fn no_path_and_uncertified_paths_are_said_on_stderr() {
     assert!(err.contains("no path found"), "{err}");
     // A path: the warning if and only if the JSON says it is not certified.
     for seed in ["1", "2"] {
-        let o = run(&["--seed", seed, "--time", "30s"]);
+        let o = run(&["--seed", seed, "--plan-time", "30s"]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{err}");
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();

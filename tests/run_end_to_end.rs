@@ -628,7 +628,7 @@ fn run_against_fake_coach(model: &str, viewer_knows_it: bool) -> Output {
         "coach",
         "--bind",
         "127.0.0.1:0",
-        "--seconds",
+        "--duration",
         "30",
     ]);
     if viewer_knows_it {

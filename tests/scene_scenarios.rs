@@ -82,7 +82,7 @@ fn rl_view_draws_a_scenario_where_the_planner_checks_it() {
         let sc = Scenario::load(std::path::Path::new(&file)).unwrap();
         let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
             .args(["view", &file, "--http", "127.0.0.1:0", "--no-coach"])
-            .args(["--seconds", "120"])
+            .args(["--duration", "120"])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
@@ -183,7 +183,7 @@ fn rl_plan_solves_the_rv6sl_and_tx60l_scenarios() {
         "rlplan/staeubli-tx60l_wall_rrtConCon.xml",
     ] {
         let out = rl_within(
-            &["plan", &data(rel), "--time", "20s", "--seed", "0"],
+            &["plan", &data(rel), "--plan-time", "20s", "--seed", "0"],
             Duration::from_secs(120),
         );
         assert!(

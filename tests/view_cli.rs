@@ -35,7 +35,7 @@ fn start_view() -> (std::process::Child, String, String) {
             "127.0.0.1:0",
             "--coach",
             "127.0.0.1:0",
-            "--seconds",
+            "--duration",
             "120",
         ])
         .stdout(Stdio::piped())
@@ -90,7 +90,7 @@ fn view_warns_about_a_page_beyond_loopback() {
         "--http",
         "0.0.0.0:0",
         "--no-coach",
-        "--seconds",
+        "--duration",
         "0",
     ]);
     assert!(
@@ -121,7 +121,7 @@ fn view_takes_an_rl_scene_with_its_kinematics_as_rl_coach_mdl_does() {
     let root = env!("CARGO_MANIFEST_DIR");
     let scene = format!("{root}/tests/data/rlsg/unimation-puma560_boxes.convex.xml");
     let kin = format!("{root}/tests/data/rlmdl/unimation-puma560.xml");
-    let args = ["--http", "127.0.0.1:0", "--no-coach", "--seconds", "0"];
+    let args = ["--http", "127.0.0.1:0", "--no-coach", "--duration", "0"];
     let out = rl(&[
         &["view", scene.as_str(), "--kinematics", kin.as_str()][..],
         &args[..],
@@ -223,7 +223,7 @@ fn view_takes_per_robot_flags_and_refuses_what_does_not_fit() {
     let ur5 = format!("{root}/tests/data/mbm/ur5/ur5.urdf");
     let srdf = format!("{root}/tests/data/mbm/ur5/ur5.srdf");
     let scenario = format!("{root}/tests/data/rlplan/unimation-puma560_boxes_rrtConCon.xml");
-    let args = ["--http", "127.0.0.1:0", "--no-coach", "--seconds", "0"];
+    let args = ["--http", "127.0.0.1:0", "--no-coach", "--duration", "0"];
     let run = |extra: &[&str]| rl(&[&["view"][..], extra, &args[..]].concat());
     // Two ur5s, the second placed and given the SRDF: loads.
     let out = run(&[

@@ -105,14 +105,17 @@ impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
 /// stops the device safely.
 ///
 /// Args:
-///     device: as `rl run --device`: `fake-h7` (default: a fake Mitsubishi H7 in this process
-///         on loopback), `h7://HOST[:PORT][?r3=PORT]`, `coach://HOST[:PORT]`, `fake-cia402`,
-///         `cannelloni+udp://HOST:PORT[?nodes=1-6]`, `socketcan://IFACE`, `ethercat://IF`.
+///     device: as `rl run --device` (the device table `rl::devices::DEVICE_FORMS`, listed by
+///         `rl run --help`): `fake-h7` (default: a fake Mitsubishi H7 in this process on
+///         loopback), `h7://HOST[:PORT][?r3=PORT]`, `coach://HOST[:PORT]`, `fake-cia402`,
+///         `cannelloni+udp://HOST:PORT[?nodes=1-6]`, `cannelloni+tcp://HOST:PORT`,
+///         `socketcan://IFACE`, `ethercat://IF`, `franka://HOST[:PORT]`,
+///         `ur://HOST[:PORT][?power-on]`.
 ///     model: a `Model` or a model file (default: the embedded Mitsubishi RV-6SL).
 ///     duration: stop (at rest, along the path) after this many seconds.
-///     speed: fraction of the model's speed limits, in (0, 1].
+///     speed: fraction of the model's speed limits, in (0, 1] (default 0.25, as `rl run`).
 ///     waypoints: (k, dof) joint positions to visit (default: a tour from the limits).
-///     rate: control rate, Hz (devices with their own cycle, the H7, refuse it).
+///     rate: control rate, Hz, 0.1 to 20000 (the H7, on its fixed cycle, refuses any).
 ///     priority: SCHED_FIFO priority of the loop thread.
 ///     cpus: CPUs to pin the loop thread to.
 ///     lock_memory: mlockall before the loop (locks the whole Python process; off by default).
@@ -214,7 +217,7 @@ fn start<const N: usize>(
 #[pymethods]
 impl ControlRun {
     #[new]
-    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=0.25, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true))]
+    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=rl::controller::runtime::DEFAULT_SPEED, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -232,23 +235,10 @@ impl ControlRun {
         telemetry: bool,
     ) -> PyResult<Self> {
         let spec = DeviceSpec::parse(device).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let period = match rate {
-            None => None,
-            Some(hz) if hz.is_finite() && (0.1..=20_000.0).contains(&hz) => {
-                if spec.fixed_period() {
-                    return Err(PyValueError::new_err(
-                        "rate: an H7 controller (and the fake one) runs at its own 7.11 ms \
-                         cycle; rate applies to coach:// and CiA 402 drives",
-                    ));
-                }
-                Some(Duration::from_secs_f64(1.0 / hz))
-            }
-            Some(hz) => {
-                return Err(PyValueError::new_err(format!(
-                    "rate={hz}: give a control rate in Hz between 0.1 and 20000"
-                )));
-            }
-        };
+        let period = rate
+            .map(|hz| spec.period_for_rate(hz))
+            .transpose()
+            .map_err(|e| PyValueError::new_err(format!("rate={}", e.message())))?;
         let duration = match duration {
             None => None,
             Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s)),

@@ -15,7 +15,7 @@ use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config, ForwardKinematics};
 
 use super::capacity::WithModel;
 use super::output::outln;
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 
 mod devices;
 
@@ -59,9 +59,10 @@ pub struct FrankaArgs {
     /// With --model: serve it and take its limits, but keep the arm kinematic.
     #[arg(long)]
     pub kinematic: bool,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// Arguments of `rl fake-robot ethercat`.
@@ -83,9 +84,10 @@ pub struct EthercatArgs {
     pub free_run: bool,
     #[command(flatten)]
     pub units: DriveUnitsArgs,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// The units of the fake drives (`rl fake-robot canopen` and `ethercat`): what they report in
@@ -168,9 +170,10 @@ pub struct H7Args {
     /// Filter time constant in ms until a client's program sets its own (MXT's third argument).
     #[arg(long, default_value_t = 0)]
     pub filter_ms: u32,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// Arguments of `rl fake-robot coach`.
@@ -185,9 +188,10 @@ pub struct CoachArgs {
     /// its first joint line.
     #[arg(long)]
     pub model: Option<std::path::PathBuf>,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// Runs `rl fake-robot`.
@@ -226,11 +230,11 @@ fn interrupt_flag() -> Result<Arc<AtomicBool>, CliError> {
     Ok(flag)
 }
 
-/// Calls `status` once per second until Ctrl-C, `seconds` have passed or `status` fails
+/// Calls `status` once per second until Ctrl-C, `duration` has passed or `status` fails
 /// (standard output closed), and returns that failure.
 fn every_second(
     stop: &AtomicBool,
-    seconds: Option<u64>,
+    duration: Option<Duration>,
     mut status: impl FnMut(u64) -> Result<(), CliError>,
 ) -> Result<(), CliError> {
     let start = Instant::now();
@@ -242,7 +246,7 @@ fn every_second(
             status(elapsed)?;
             next = elapsed + 1;
         }
-        if seconds.is_some_and(|s| elapsed >= s) {
+        if duration.is_some_and(|d| start.elapsed() >= d) {
             break;
         }
     }
@@ -346,6 +350,9 @@ fn joints(q: &[f64]) -> String {
 fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     let mut limits = None;
     let mut kinematics = None;
+    if args.model.is_some() {
+        refuse_given(&["dof"], "with --model: the model gives the joint count")?;
+    }
     let mut dof = args.dof;
     let mut home = None;
     if let Some(arm) = Arm::for_fake(args.model.as_deref(), args.dof, "the fake H7 simulates")? {
@@ -393,7 +400,7 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let shown = shown.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let rate = s.packets - last;
             last = s.packets;
@@ -450,7 +457,7 @@ fn run_coach(args: &CoachArgs, stop: &AtomicBool) -> CliResult {
         .map_err(|e| CliError::failed(format!("Coach server on {}: {e}", args.bind)))?;
     let shown = outln!("Coach server on {}; Ctrl-C to stop", server.addr());
     let shown = shown.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = server.status();
             let mut models: Vec<_> = s.joints.iter().collect();
             models.sort_by_key(|(m, _)| **m);
@@ -510,9 +517,10 @@ pub struct CanopenArgs {
     /// Record every frame to this candump log (for can-utils).
     #[arg(long)]
     pub candump: Option<std::path::PathBuf>,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// `1-6`, `1,3,5`, `1-3,7` to node ids (each 1..=127, no repeats, at most 8).
@@ -600,7 +608,7 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let rate = s.frames_received - last;
             last = s.frames_received;
@@ -650,6 +658,12 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::ecat_segment::description::Profile;
     use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
     let units = args.units.units()?;
+    if args.model.is_some() {
+        refuse_given(
+            &["devices"],
+            "with --model: one drive per joint of the model",
+        )?;
+    }
     let arm = Arm::for_fake(args.model.as_deref(), args.devices, "the fake drives move")?;
     let devices = arm.as_ref().map_or(args.devices, |a| a.limits.len());
     if devices == 0 || devices > 64 {
@@ -709,7 +723,7 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let c = fake.counters();
             let rate = c.frames - last;
             last = c.frames;
@@ -775,7 +789,7 @@ fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let rate = s.states - last;
             last = s.states;

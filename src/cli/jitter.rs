@@ -14,7 +14,7 @@ use rl_rt::{
 };
 
 use super::output::{Replacement, errln, out, outln};
-use super::{CliError, CliResult, parse_duration};
+use super::{CliError, CliResult, parse_duration, refuse_given};
 
 /// Largest `--histogram-range-us`: one second in 1 µs bins (8 MB of counters).
 pub const MAX_HISTOGRAM_RANGE_US: usize = 1_000_000;
@@ -104,6 +104,9 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
             "--histogram-range-us {}: give 1 to {MAX_HISTOGRAM_RANGE_US} µs",
             args.histogram_range_us
         )));
+    }
+    if args.cycles.is_some() {
+        refuse_given(&["duration"], "with --cycles: the run is counted in cycles")?;
     }
     let period = Duration::from_micros(args.interval_us);
     let cycles = match args.cycles {

@@ -15,6 +15,7 @@ pub mod traj;
 pub mod view;
 
 use std::fmt;
+use std::sync::OnceLock;
 use std::time::Duration;
 
 /// A command's failure: a message for the user and the process exit code.
@@ -95,6 +96,61 @@ impl From<rl::devices::SpecError> for CliError {
 }
 
 pub type CliResult = Result<std::process::ExitCode, CliError>;
+
+/// The long names (without `--`) of the flags given on the command line to the subcommand that
+/// runs, as [`record_given`] found them.
+static GIVEN: OnceLock<Vec<String>> = OnceLock::new();
+
+/// Records which flags of the subcommand that runs were given on the command line (not taken
+/// from their defaults), for [`given`] and [`refuse_given`]. Called once, by `main`.
+pub fn record_given(command: &clap::Command, matches: &clap::ArgMatches) {
+    let (mut command, mut matches) = (command, matches);
+    while let Some((name, sub)) = matches.subcommand() {
+        match command.find_subcommand(name) {
+            Some(c) => (command, matches) = (c, sub),
+            None => break,
+        }
+    }
+    let given = matches
+        .ids()
+        .filter(|id| {
+            matches.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine)
+        })
+        .filter_map(|id| {
+            command
+                .get_arguments()
+                .find(|a| a.get_id() == id)
+                .and_then(|a| a.get_long())
+                .map(str::to_owned)
+        })
+        .collect();
+    let _ = GIVEN.set(given);
+}
+
+/// Whether `--long` was given on the command line (an alias counts as its flag).
+pub fn given(long: &str) -> bool {
+    GIVEN.get().is_some_and(|g| g.iter().any(|f| f == long))
+}
+
+/// The one rule for flags that do not apply: the first of `flags` (long names, without `--`)
+/// given on the command line is refused (exit code 2) with `--FLAG does not apply WHY`, e.g.
+/// `refuse_given(&["optimizer"], "to an RL scenario (rlplan XML): …")`.
+pub fn refuse_given(flags: &[&str], why: &str) -> Result<(), CliError> {
+    match flags.iter().find(|f| given(f)) {
+        Some(flag) => Err(CliError::usage(format!("--{flag} does not apply {why}"))),
+        None => Ok(()),
+    }
+}
+
+/// Seconds as a number: a bare number (any: the caller checks its range, so `-0.01` reaches
+/// that check) or a duration with a unit as [`parse_duration`] takes it (`10ms`), so that a
+/// sampling period is written the same way in every subcommand.
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) => Ok(x),
+        Err(_) => parse_duration(text).map(|d| d.as_secs_f64()),
+    }
+}
 
 /// Parses `500ms`, `30s`, `2m`, `1h`, `250us`, or a bare number of seconds.
 pub fn parse_duration(text: &str) -> Result<Duration, String> {

@@ -19,7 +19,7 @@ use serde_json::json;
 
 use super::capacity::{self, WithModel};
 use super::output::{errln, outln};
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 
 /// Most benchmark states (`--states`): 100 000 states of a 256-DOF model take about 600 MB.
 pub const MAX_STATES: usize = 100_000;
@@ -443,6 +443,12 @@ impl WithModel for Eval {
 }
 
 fn eval<const N: usize>(a: &EvalArgs, mut loaded: Box<LoadedModel<N>>) -> CliResult {
+    if a.q.is_none() {
+        refuse_given(
+            &["normalize"],
+            "without --q: the home and neutral positions have unit quaternions",
+        )?;
+    }
     warn(&loaded);
     if let Some(g) = a.gravity.as_deref() {
         let g = parse_vec("gravity", Some(g), 3)?;
@@ -884,6 +890,9 @@ fn bench(a: BenchArgs) -> CliResult {
             "--rounds {}: give 1 to {MAX_ROUNDS} rounds",
             a.rounds
         )));
+    }
+    if a.states_file.is_some() {
+        refuse_given(&["states"], "with --states-file: its states are timed")?;
     }
     refuse_debug_build(cfg!(debug_assertions))?;
     // A states file is read before anything is timed, so a bad one fails at once.

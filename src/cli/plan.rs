@@ -15,6 +15,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
+use rl::controller::runtime::DEFAULT_SPEED;
 use rl_core::traj::Trajectory;
 use rl_plan::bench::{self, BenchOptions, CheckerKind, Run};
 use rl_plan::execute::{Execution, ExecutionLimits};
@@ -30,8 +31,8 @@ use rl_plan::verifier::Verifier;
 use rl_plan::{JointSpace, Path as PlanPath, PlanError, PlanOptions, PlanResult, Validity, plan};
 use serde_json::json;
 
-use super::output::Replacement;
-use super::{CliError, CliResult, parse_duration};
+use super::output::{Replacement, outln};
+use super::{CliError, CliResult, given, parse_duration, refuse_given};
 
 /// Arguments of `rl plan`.
 #[derive(Args, Debug)]
@@ -57,11 +58,13 @@ pub struct PlanArgs {
     /// accelerations), sampled every --dt.
     #[arg(long)]
     pub trajectory: Option<PathBuf>,
-    /// Sampling period of --trajectory.
-    #[arg(long, value_parser = parse_duration, default_value = "10ms")]
+    /// Sampling period of --trajectory: a duration (e.g. 10ms) or a bare number of seconds, as
+    /// `rl traj --dt` takes it.
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "10ms")]
     pub dt: Duration,
-    /// Fraction of the model's speed limits for --trajectory, in (0, 1].
-    #[arg(long, default_value_t = 0.5)]
+    /// Fraction of the model's speed limits for --trajectory, in (0, 1] (the same default as
+    /// `rl run --speed`).
+    #[arg(long, default_value_t = DEFAULT_SPEED)]
     pub speed: f64,
     /// Clearance below which a path's edge is not certified, m: every edge of the returned path
     /// is checked by conservative advancement on the exact geometry (nothing passes between
@@ -86,9 +89,16 @@ pub struct CommonArgs {
     /// Random seed (the same seed gives the same path).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Time budget for planning (and again for optimising).
-    #[arg(long, value_parser = parse_duration, default_value = "1s")]
-    pub time: Duration,
+    /// Time budget for planning, and as much again for shortening the path (an RL scenario:
+    /// its file's budget unless given).
+    #[arg(
+        long,
+        alias = "time",
+        value_parser = parse_duration,
+        value_name = "DURATION",
+        default_value = "1s"
+    )]
+    pub plan_time: Duration,
     /// Collision checker: hybrid (spheres that cover the meshes, the file's spheres, then the
     /// exact meshes where they disagree: exact results at sphere speed), spheres (SIMD only;
     /// conservative unless --raw-spheres), or exact (meshes only).
@@ -133,7 +143,7 @@ impl Default for CommonArgs {
             srdf: None,
             planner: "rrt-connect".into(),
             seed: 0,
-            time: Duration::from_secs(1),
+            plan_time: Duration::from_secs(1),
             checker: Checker::Hybrid,
             spheres: None,
             raw_spheres: false,
@@ -208,6 +218,18 @@ fn usage(e: impl std::fmt::Display) -> CliError {
 pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
     let mut planner =
         PlannerKind::parse(&c.planner).map_err(|e| usage(format!("--planner: {e}")))?;
+    if planner.rrt_settings_mut().is_none() {
+        refuse_given(
+            &["range", "no-dynamic-domain"],
+            &format!("to --planner {} (they set RRT extensions)", c.planner),
+        )?;
+    }
+    if c.checker == Checker::Exact {
+        refuse_given(
+            &["spheres", "raw-spheres"],
+            "with --checker exact (it checks the meshes only)",
+        )?;
+    }
     if let Some(s) = planner.rrt_settings_mut() {
         // VAMP's settings: range 1 rad (its UR5: 1.5), trees balanced, dynamic domain; the
         // f32 k-d tree for nearest neighbours (where the space has circles or rotations, the
@@ -246,8 +268,8 @@ pub(crate) fn options(c: &CommonArgs) -> Result<PlanOptions, CliError> {
         optimizer,
         optimizer_verifier: None,
         seed: c.seed,
-        time: c.time,
-        optimize_time: c.time,
+        time: c.plan_time,
+        optimize_time: c.plan_time,
         try_direct: true,
     })
 }
@@ -281,6 +303,12 @@ pub fn run(args: PlanArgs) -> CliResult {
     if let Some(PlanCommand::Bench(b)) = args.command {
         return run_bench(b);
     }
+    if args.no_certify {
+        refuse_given(
+            &["certify-margin"],
+            "with --no-certify (nothing is certified)",
+        )?;
+    }
     let model = args.model.as_ref().ok_or_else(|| {
         usage("give a robot (URDF with --scene and --request) or an rlplan scenario")
     })?;
@@ -288,29 +316,54 @@ pub fn run(args: PlanArgs) -> CliResult {
     let is_scenario = rl_core::loader::read_text(model, max)
         .map(|t| t.contains("<rlplan") || t.contains("<rl>"))
         .map_err(|e| usage(e.to_string()))?;
-    if is_scenario && args.trajectory.is_some() {
-        return Err(usage(
-            "--trajectory is written for URDF robots only (a scenario's path: --out)",
-        ));
+    if is_scenario {
+        // A scenario names its own planner, optimiser, model and scene: the flags that choose
+        // them (and the trajectory's, written for URDF robots only) are refused, not ignored.
+        refuse_given(
+            &[
+                "scene",
+                "request",
+                "srdf",
+                "planner",
+                "checker",
+                "spheres",
+                "raw-spheres",
+                "sampler",
+                "optimizer",
+                "resolution",
+                "range",
+                "no-dynamic-domain",
+                "trajectory",
+                "dt",
+                "speed",
+            ],
+            "to an RL scenario (rlplan XML): the file names its planner, optimiser, model and \
+             scene (a scenario's path: --out)",
+        )?;
+    } else if args.trajectory.is_none() {
+        refuse_given(
+            &["dt", "speed"],
+            "without --trajectory (they time the trajectory)",
+        )?;
     }
     // Output files before any work: one that cannot be created fails first, and each is moved
     // over an existing file only once written.
     let out_file = args.out.as_deref().map(create).transpose()?;
     let trajectory_file = args.trajectory.as_deref().map(create).transpose()?;
-    let (space, result, checker_name, certified) = if is_scenario {
+    let (space, result, checker_name, certified, budget) = if is_scenario {
         // A file that cannot be read or understood is a bad argument (exit 2), as in every
         // subcommand; a problem that cannot be solved is a failure (exit 1).
         let sc = Scenario::load(model).map_err(usage)?;
         let (mut space, mut checker) = sc.build().map_err(usage)?;
         override_limits(&mut space, &args.common)?;
         let mut opts = sc.options(args.common.seed);
-        if args.common.time != Duration::from_secs(1) {
-            opts.time = args.common.time;
-            opts.optimize_time = args.common.time;
+        if given("plan-time") {
+            opts.time = args.common.plan_time;
+            opts.optimize_time = args.common.plan_time;
         }
         let r = plan(&space, &mut checker, &sc.start, &sc.goal, &opts).map_err(failed)?;
         let cert = certify(&args, &r, Some(&mut checker))?;
-        (space, r, "exact", cert)
+        (space, r, "exact", cert, opts.time)
     } else {
         let (scene, request) = match (&args.scene, &args.request) {
             (Some(s), Some(r)) => (s, r),
@@ -359,7 +412,7 @@ pub fn run(args: PlanArgs) -> CliResult {
             let names = robot.space.number_names();
             write_trajectory(t, file, &robot, path, args.speed, args.dt, &names)?;
         }
-        (robot.space, r, name, cert)
+        (robot.space, r, name, cert, opts.time)
     };
     if let (Some(out), Some(file), Some(path)) = (&args.out, out_file, &result.optimized) {
         write_path_to(out, file, &space, path)?;
@@ -370,7 +423,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     if !result.solved {
         eprintln!(
             "rl plan: no path found by {} within {:?} ({} iterations)",
-            result.planner, args.common.time, result.iterations
+            result.planner, budget, result.iterations
         );
     } else if certified["certified"] == json!(false) {
         let why = match (&certified["failure"], &certified["unsupported"]) {
@@ -389,10 +442,10 @@ pub fn run(args: PlanArgs) -> CliResult {
     }
     let mut json = result_json(&space, &result, checker_name, args.common.seed);
     json["certified"] = certified;
-    println!(
+    outln!(
         "{}",
         serde_json::to_string_pretty(&json).unwrap_or_default()
-    );
+    )?;
     Ok(if result.solved {
         ExitCode::SUCCESS
     } else {
@@ -556,7 +609,15 @@ fn find_urdf(dir: &Path, given: &Option<PathBuf>) -> Result<PathBuf, CliError> {
 fn run_bench(b: BenchArgs) -> CliResult {
     let urdf = find_urdf(&b.dir, &b.model)?;
     let robot = load_robot(&urdf, &b.common)?;
-    let mut problems = mbm::find_problems(&b.dir).map_err(failed)?;
+    // A problem set that cannot be read is a bad argument (exit 2), and so is an output
+    // directory that cannot be made: both are found before any run.
+    let mut problems = mbm::find_problems(&b.dir).map_err(usage)?;
+    for (flag, dir) in [("--paths", &b.paths), ("--out", &b.out)] {
+        if let Some(dir) = dir {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| usage(format!("{flag} {}: {e}", dir.display())))?;
+        }
+    }
     if let Some(n) = b.limit {
         problems.truncate(n);
     }
@@ -617,9 +678,8 @@ fn run_bench(b: BenchArgs) -> CliResult {
         }
     })
     .map_err(failed)?;
-    println!("{}", bench::vamp_table(&runs));
+    outln!("{}", bench::vamp_table(&runs))?;
     if let Some(dir) = &b.paths {
-        std::fs::create_dir_all(dir).map_err(|e| failed(format!("{}: {e}", dir.display())))?;
         for r in runs.iter().filter(|r| r.run == 0) {
             if let Some(path) = r.result.as_ref().and_then(|x| x.optimized.as_ref()) {
                 let file = dir.join(format!("{}.csv", r.problem.replace(['/', '.'], "_")));
@@ -628,7 +688,6 @@ fn run_bench(b: BenchArgs) -> CliResult {
         }
     }
     if let Some(out) = &b.out {
-        std::fs::create_dir_all(out).map_err(|e| failed(format!("{}: {e}", out.display())))?;
         let setup = format!(
             "robot {}\nchecker {spheres}\nplanner {} (range {:?}), sampler {}, resolution {} rad, optimiser {}, time {:?}",
             urdf.display(),
@@ -637,7 +696,7 @@ fn run_bench(b: BenchArgs) -> CliResult {
             b.common.sampler,
             b.common.resolution,
             b.common.optimizer,
-            b.common.time
+            b.common.plan_time
         );
         for p in &problems {
             let mine: Vec<Run> = runs

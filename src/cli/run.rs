@@ -47,7 +47,7 @@ use self::progress::ProgressDisplay;
 use super::capacity::{self, WithModel};
 use super::output::{Replacement, out, outln};
 use super::plan::{CommonArgs, load_robot, options as plan_options};
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 use rl::devices::{self as device, DeviceSpec};
 
 /// A positive duration: the shared [`super::parse_duration`] units, zero refused.
@@ -56,6 +56,29 @@ fn parse_duration(text: &str) -> Result<Duration, String> {
         d if d.is_zero() => Err(format!("`{text}`: the duration must be positive")),
         d => Ok(d),
     }
+}
+
+/// `--rate`'s help: what it takes, from the library's range and device table.
+fn rate_help() -> String {
+    let (low, high) = device::RATE_HZ;
+    let fixed: Vec<&str> = device::DEVICE_FORMS
+        .iter()
+        .filter(|f| f.fixed_period)
+        .map(|f| f.form)
+        .collect();
+    format!(
+        "Control rate in Hz, a number from {low} to {high}, at most the device's own rate; {} \
+         run at their fixed cycle and refuse it [default: the device's period, listed under \
+         --device]",
+        fixed.join(" and ")
+    )
+}
+
+/// `--speed`'s help, with the library's default.
+fn speed_help() -> String {
+    format!(
+        "Fraction of the model's speed limits to plan with, in (0, 1] [default: {DEFAULT_SPEED}]"
+    )
 }
 
 /// Rows kept in memory for the plot (older ones are thinned out when it fills).
@@ -67,11 +90,8 @@ pub struct RunArgs {
     /// Robot model (URDF or RL XML) [default: the embedded Mitsubishi RV-6SL].
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
-    /// The robot: fake-h7 (in-process fake controller), h7://HOST[:PORT][?r3=PORT] (a MELFA
-    /// controller; ports 10000 and 10001 by default), coach://HOST[:PORT] (stream the
-    /// commanded joints to an RL visualiser; port 11235) or ethercat://IF (CiA 402 drives on an
-    /// EtherCAT segment on interface IF; needs root or CAP_NET_RAW) [default: fake-h7].
-    #[arg(long, value_name = "DEVICE")]
+    // The help is the library's device table (rl::devices::DEVICE_FORMS).
+    #[arg(long, value_name = "DEVICE", help = device::device_help())]
     pub device: Option<String>,
     /// Waypoints in rad (m for prismatic joints): a header row, then one row per waypoint with a
     /// column per joint in the model's order. The tour starts where the robot is and returns
@@ -81,9 +101,8 @@ pub struct RunArgs {
     /// Stop (at rest, along the path) after this long: e.g. 3s, 500ms, 2m.
     #[arg(long, value_parser = parse_duration)]
     pub duration: Option<Duration>,
-    /// Control rate in Hz, for devices that allow it (fake-h7, coach) [default: the device's
-    /// period: 7.11 ms for H7, 10 ms for Coach].
-    #[arg(long, value_name = "HZ")]
+    // The range is the library's (rl::devices::RATE_HZ).
+    #[arg(long, value_name = "HZ", help = rate_help())]
     pub rate: Option<f64>,
     /// SCHED_FIFO priority of the control thread [default: 80].
     #[arg(long)]
@@ -91,8 +110,8 @@ pub struct RunArgs {
     /// Pin the control thread to this CPU.
     #[arg(long)]
     pub cpu: Option<usize>,
-    /// Fraction of the model's speed limits to plan with, in (0, 1] [default: 0.25].
-    #[arg(long)]
+    // The default is the library's (rl::controller::runtime::DEFAULT_SPEED), as `rl plan`'s.
+    #[arg(long, value_name = "FRACTION", help = speed_help())]
     pub speed: Option<f64>,
     /// Write per-cycle telemetry as CSV: time, commanded and measured joints, feed-forward
     /// torques, wake-up latency, step time, and the run's state (running, braking, fault,
@@ -144,7 +163,8 @@ pub struct RunArgs {
     /// MoveIt motion plan request (YAML) with the start state and the joint goal.
     #[arg(long, value_name = "REQUEST.yaml", help_heading = "Planned motion")]
     pub request: Option<PathBuf>,
-    /// SRDF with the allowed collision pairs [default: the .srdf beside the URDF].
+    /// SRDF with the allowed collision pairs, for the plan and the view [default: the .srdf
+    /// beside the URDF (same stem)].
     #[arg(long, value_name = "FILE", help_heading = "Planned motion")]
     pub srdf: Option<PathBuf>,
     /// Planner: rrt-connect, rrt-con-con, rrt-ext-ext, rrt-dual, rrt-goal-bias, rrt, prm
@@ -275,6 +295,12 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
         let spec = device::UnitsSpec::parse(text).map_err(|e| CliError::usage(format!("--{e}")))?;
         device.set_units(spec)?;
     }
+    if args.no_supervision {
+        refuse_given(
+            &["tracking-bound", "rest-after-lost"],
+            "with --no-supervision: no fault is acted on",
+        )?;
+    }
     let rest = args
         .rest_after_lost
         .unwrap_or(Supervision::default().rest_after_lost);
@@ -287,21 +313,11 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
              lost replies in a row"
         )));
     }
-    let mut period = None;
-    if let Some(hz) = args.rate {
-        if !(hz.is_finite() && (0.1..=20_000.0).contains(&hz)) {
-            return Err(CliError::usage(format!(
-                "--rate {hz}: give a control rate in Hz between 0.1 and 20000"
-            )));
-        }
-        if device.fixed_period() {
-            return Err(CliError::usage(
-                "--rate: an H7 controller (and the fake one) runs at its own 7.11 ms cycle; \
-                 --rate applies to coach://",
-            ));
-        }
-        period = Some(Duration::from_secs_f64(1.0 / hz));
-    }
+    let period = args
+        .rate
+        .map(|hz| device.period_for_rate(hz))
+        .transpose()
+        .map_err(|e| CliError::usage(format!("--rate {}", e.message())))?;
     if let Some(s) = args.speed {
         if !(s > 0.0 && s <= 1.0) {
             return Err(CliError::usage(format!(
@@ -335,7 +351,8 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
     let given: Vec<&str> = [
         ("--scene", args.scene.is_some()),
         ("--request", args.request.is_some()),
-        ("--srdf", args.srdf.is_some()),
+        // The SRDF's allowed pairs serve the view too.
+        ("--srdf", args.srdf.is_some() && args.view.is_none()),
         ("--planner", args.planner.is_some()),
         ("--seed", args.seed.is_some()),
         ("--plan-time", args.plan_time.is_some()),
@@ -346,6 +363,12 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
     .filter(|(_, on)| *on)
     .map(|(flag, _)| *flag)
     .collect();
+    if args.model.is_none() {
+        refuse_given(
+            &["srdf"],
+            "to the embedded RV-6SL, which has no SRDF: give --model ROBOT.urdf",
+        )?;
+    }
     if !args.plan {
         return match given.first() {
             Some(flag) => Err(CliError::usage(format!(
@@ -382,7 +405,7 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
         common.seed = seed;
     }
     if let Some(t) = args.plan_time {
-        common.time = t;
+        common.plan_time = t;
     }
     let options = plan_options(&common)?;
     Ok(Some(PlanSetup {
@@ -428,7 +451,7 @@ fn plan_for_run<const B: usize, const J: usize>(
     eprintln!(
         "rl run: planning a collision-free path with {} (seed {}, {:?} budget) before starting, \
          to be executed {}",
-        setup.common.planner, setup.common.seed, setup.common.time, setup.execution
+        setup.common.planner, setup.common.seed, setup.common.plan_time, setup.execution
     );
     match plan_motion_with::<B, J>(
         model,

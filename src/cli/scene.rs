@@ -21,7 +21,7 @@ use serde_json::{Value, json};
 
 use super::output::outln;
 use super::placement::{ScenarioRobot, is_scenario, parse_place};
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, refuse_given};
 
 /// Capacity of the robots `rl scene` loads (bodies and degrees of freedom), as the tool had
 /// before its capacities ([`super::capacity::CAPACITIES`]); fixed here because rl-sg's robot setup
@@ -102,8 +102,9 @@ pub struct RobotArgs {
     /// pair with the scene's first model's in order, its <ignore> elements apply.
     #[arg(long, value_name = "FILE")]
     kinematics: Option<PathBuf>,
-    /// The SRDF with the robot's allowed collision pairs (default: adjacent links and links
-    /// rigidly joined are not checked against each other).
+    /// The SRDF with the robot's allowed collision pairs [default: the .srdf beside the URDF
+    /// (same stem); without one, adjacent links and links rigidly joined are not checked
+    /// against each other].
     #[arg(long, value_name = "FILE")]
     srdf: Option<PathBuf>,
     /// Obstacles: a MoveIt planning scene (.yaml), an RL scene (rlsg XML or .wrl) or a URDF.
@@ -225,15 +226,27 @@ fn setup(r: &RobotArgs) -> Result<Setup, CliError> {
         Some(s) => (s.scene.clone(), Some(s.kinematics.clone())),
         None => (r.model.clone(), r.kinematics.clone()),
     };
+    if load::is_urdf(&model) {
+        refuse_given(
+            &["kinematics"],
+            "to a URDF robot: the URDF is its kinematic model",
+        )?;
+    } else {
+        refuse_given(
+            &["floating-base", "mimic-independent"],
+            "to an RL scene's robot: they set how URDF joints load",
+        )?;
+    }
     let place = match (&scenario, &r.place) {
         (Some(s), _) => Some(s.place),
         (None, Some(p)) => Some(parse_place(p, "--place")?),
         (None, None) => None,
     };
+    let srdf = rl_sg::load::srdf::for_robot(&model, r.srdf.as_deref());
     let setup = load::RobotSetup {
         model,
         kinematics,
-        srdf: r.srdf.clone(),
+        srdf,
         environment: r.env.clone(),
         urdf: UrdfOptions {
             floating_base: r.floating_base,

@@ -27,7 +27,7 @@ use rl_core::traj::{
 };
 
 use super::output::{Replacement, errln, write_error};
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, parse_seconds, refuse_given};
 
 /// Most axes a waypoint file may have.
 pub const MAX_AXES: usize = 12;
@@ -94,8 +94,9 @@ pub struct TrajArgs {
     /// Jerk limit (unit/s³): one value or one per axis.
     #[arg(long, allow_hyphen_values = true)]
     pub jmax: Option<String>,
-    /// Sample period in seconds.
-    #[arg(long, default_value_t = 0.001)]
+    /// Sample period: a duration (e.g. 1ms, 0.5s) or a bare number of seconds, as `rl plan
+    /// --dt` takes it.
+    #[arg(long, value_name = "DURATION", default_value = "1ms", value_parser = parse_seconds)]
     pub dt: f64,
     /// Blend length for parabolic-blend, as a fraction (0, 1] of the neighbouring segments.
     #[arg(long, default_value_t = 0.2)]
@@ -157,6 +158,18 @@ fn run_on_big_stack(args: TrajArgs) -> CliResult {
             "--blend must be in (0, 1], got {}",
             args.blend
         )));
+    }
+    if args.profile != Profile::ParabolicBlend {
+        refuse_given(
+            &["blend"],
+            &format!(
+                "to --profile {}: it sets parabolic-blend's blends",
+                args.profile.name()
+            ),
+        )?;
+    }
+    if args.plot.is_none() {
+        refuse_given(&["unit"], "without --plot: it labels the plot's axes")?;
     }
     let waypoints = read_waypoints(&args.file)?;
     // Output files first: a path that cannot be written fails before any work. Each is

@@ -106,10 +106,10 @@ pub struct ViewArgs {
     /// or .wrl) or a URDF.
     #[arg(long, value_name = "SCENE")]
     pub env: Option<PathBuf>,
-    /// A robot's SRDF: its allowed collision pairs (default: adjacent links are not checked
-    /// against each other) and the named state it starts at (`home`, else `ready`, else the
-    /// first `<group_state>`). `I=FILE` for robot I; without it, the first --srdf is robot 0's,
-    /// the next robot 1's, … (repeatable).
+    /// A robot's SRDF: its allowed collision pairs and the named state it starts at (`home`,
+    /// else `ready`, else the first `<group_state>`) [default: the .srdf beside a URDF (same
+    /// stem); without one, adjacent links are not checked against each other]. `I=FILE` for
+    /// robot I; without it, the first --srdf is robot 0's, the next robot 1's, … (repeatable).
     #[arg(long, value_name = "[I=]FILE")]
     pub srdf: Vec<String>,
     /// Where a robot's world frame stands in the scene: x,y,z (m) or x,y,z,rx,ry,rz (m,
@@ -140,11 +140,12 @@ pub struct ViewArgs {
     #[arg(long, value_name = "ADDR", default_value_t = rl_view::DEFAULT_COACH)]
     pub coach: SocketAddr,
     /// No Coach listener.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "coach")]
     pub no_coach: bool,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// `I=FILE` or `FILE` (a path whose text before `=` is not a number is a path).
@@ -224,6 +225,23 @@ fn load_options(args: &ViewArgs) -> Result<LoadOptions, CliError> {
     for (i, f) in srdf_values(&args.srdf)? {
         robot(&mut robots, i).srdf = Some(f);
     }
+    // URDF robots without --srdf take the SRDF beside them (rl-sg's one rule); robot indices
+    // count an RL scene's robots (one per --kinematics).
+    let mut index = 0;
+    for m in &models {
+        match m {
+            ModelSource::File(path) => {
+                if robots.get(index).is_none_or(|r| r.srdf.is_none()) {
+                    if let Some(f) = rl_sg::load::srdf::for_robot(path, None) {
+                        robot(&mut robots, index).srdf = Some(f);
+                    }
+                }
+                index += 1;
+            }
+            ModelSource::RlScene { kinematics, .. } => index += kinematics.len(),
+            _ => index += 1,
+        }
+    }
     Ok(LoadOptions {
         models,
         env: args.env.clone(),
@@ -299,10 +317,7 @@ pub fn run(args: ViewArgs) -> CliResult {
     }
     let start = std::time::Instant::now();
     while !stop.is_stop_requested() {
-        if args
-            .seconds
-            .is_some_and(|s| start.elapsed() >= Duration::from_secs(s))
-        {
+        if args.duration.is_some_and(|d| start.elapsed() >= d) {
             break;
         }
         std::thread::sleep(Duration::from_millis(50));

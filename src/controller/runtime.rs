@@ -65,7 +65,8 @@ use self::rt_loop::LoopOutcome;
 
 /// Default real-time priority of the control thread.
 pub const DEFAULT_PRIORITY: i32 = 80;
-/// Default fraction of the model's speed limits the plan uses.
+/// Default fraction of the model's speed limits a trajectory uses: the one default of `rl run
+/// --speed`, `rl plan --speed` (its `--trajectory`) and the Python `ControlRun`.
 pub const DEFAULT_SPEED: f64 = 0.25;
 /// Bytes of telemetry records the queue holds (the caller drains it while the loop runs).
 pub const TELEMETRY_BYTES: usize = 4 << 20;

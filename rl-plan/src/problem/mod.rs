@@ -78,15 +78,15 @@ pub fn spherized_beside(urdf: &Path) -> Option<PathBuf> {
     p.exists().then_some(p)
 }
 
-/// `NAME.srdf` beside `NAME.urdf`, if it exists.
+/// `NAME.srdf` beside `NAME.urdf`, if it exists (rl-sg's one rule,
+/// [`rl_sg::load::srdf::beside`]).
 pub fn srdf_beside(urdf: &Path) -> Option<PathBuf> {
-    let p = urdf.with_extension("srdf");
-    p.exists().then_some(p)
+    rl_sg::load::srdf::beside(urdf)
 }
 
 impl Robot {
     /// Loads a URDF robot. `srdf`: an SRDF to apply (`None`: the `.srdf` beside the URDF, if
-    /// any). Spheres: `spheres` if given, else the `_spherized.urdf` beside it, else fitted;
+    /// any: [`rl_sg::load::srdf::for_robot`]). Spheres: `spheres` if given, else the `_spherized.urdf` beside it, else fitted;
     /// spheres from a file are grown to cover the collision meshes ([`COVER_SPACING`]).
     /// Mimic joints are loaded as independent joints.
     pub fn load_urdf(
@@ -113,7 +113,7 @@ impl Robot {
         let robot =
             load_robot::<MAX_BODIES>(urdf, &UrdfGeometryOptions::default(), &options, &mut cache)?;
         let mut geometry = robot.model;
-        let srdf = srdf.map(Path::to_path_buf).or_else(|| srdf_beside(urdf));
+        let srdf = rl_sg::load::srdf::for_robot(urdf, srdf);
         if let Some(s) = &srdf {
             rl_sg::load::srdf::apply_file(s, &mut geometry)?;
         }

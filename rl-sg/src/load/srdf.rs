@@ -10,8 +10,13 @@
 //! 1 cm `ee_link` box inside `wrist_3_link`). Links the SRDF names but
 //! the model lacks are reported as warnings (MoveIt ignores them too), not errors: SRDFs are
 //! often shared between variants of a robot.
+//!
+//! Which SRDF a robot uses is one rule, [`for_robot`]: the one given, else the SRDF beside its
+//! URDF (`NAME.srdf` for `NAME.urdf`, in the same directory), else none. Every command of the
+//! `rl` tool that uses collision pairs (`plan`, `run --plan`, `run --view`, `scene`, `view`)
+//! and rl-plan's robot loader take it from there.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::read_text;
 use super::xml::{at, attr, children, number, parse, robot_root};
@@ -90,6 +95,23 @@ pub fn apply_str(text: &str, model: &mut Model) -> Result<SrdfReport, SgError> {
     Ok(report)
 }
 
+/// `NAME.srdf` beside `NAME.urdf` (same directory, same stem), if that file exists.
+pub fn beside(urdf: &Path) -> Option<PathBuf> {
+    let p = urdf.with_extension("srdf");
+    p.is_file().then_some(p)
+}
+
+/// The SRDF the robot in `model` uses: `given` if any, else, when `model` is a URDF, the SRDF
+/// [`beside`] it if there is one, else none (adjacent links and links rigidly joined are then
+/// not checked against each other).
+pub fn for_robot(model: &Path, given: Option<&Path>) -> Option<PathBuf> {
+    match given {
+        Some(path) => Some(path.to_path_buf()),
+        None if super::is_urdf(model) => beside(model),
+        None => None,
+    }
+}
+
 /// Applies the SRDF file at `path` to `model`.
 pub fn apply_file(path: &Path, model: &mut Model) -> Result<SrdfReport, SgError> {
     let text = read_text(path)?;
@@ -145,6 +167,30 @@ pub fn named_states_file(path: &Path) -> Result<Vec<NamedState>, SgError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_urdf_takes_the_srdf_given_else_the_one_beside_it() {
+        let dir = std::env::temp_dir().join(format!("rl-sg-srdf-rule-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (urdf, lone, rlmdl) = (
+            dir.join("arm.urdf"),
+            dir.join("lone.urdf"),
+            dir.join("arm.xml"),
+        );
+        for f in [&urdf, &lone] {
+            std::fs::write(f, r#"<robot name="arm"><link name="a"/></robot>"#).unwrap();
+        }
+        std::fs::write(&rlmdl, "<rl><model/></rl>").unwrap();
+        std::fs::write(dir.join("arm.srdf"), r#"<robot name="arm"/>"#).unwrap();
+        let given = dir.join("other.srdf");
+        assert_eq!(for_robot(&urdf, None), Some(dir.join("arm.srdf")));
+        assert_eq!(for_robot(&urdf, Some(&given)), Some(given.clone()));
+        assert_eq!(for_robot(&lone, None), None);
+        // Not a URDF: no SRDF unless given, whatever lies beside it.
+        assert_eq!(for_robot(&rlmdl, None), None);
+        assert_eq!(for_robot(&rlmdl, Some(&given)), Some(given));
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn named_states_are_read_in_file_order_with_bad_values_refused() {

@@ -538,7 +538,7 @@ async function scenarioSteps() {
   const scenario = data('rlplan/unimation-puma560_boxes_rrtConCon.xml');
   const csv = path.join(dir, 'plan.csv');
   const planned = await new Promise((resolve) => {
-    const p = spawn(rlBin, ['plan', scenario, '--time', '20s', '--out', csv], { cwd: repo, stdio: ['ignore', 'ignore', 'pipe'] });
+    const p = spawn(rlBin, ['plan', scenario, '--plan-time', '20s', '--out', csv], { cwd: repo, stdio: ['ignore', 'ignore', 'pipe'] });
     let err = '';
     p.stderr.on('data', (d) => { err += d; });
     p.once('exit', (code) => resolve({ code, err }));

@@ -51,9 +51,10 @@ pub struct FtArgs {
     /// The unloaded sensor's reading (what a bias removes).
     #[arg(long, value_parser = six, allow_negative_numbers = true)]
     pub offset: Option<[f64; 6]>,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// Runs `rl fake-robot ft`.
@@ -102,7 +103,7 @@ pub fn run_ft(args: &FtArgs, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let rate = s.records - last;
             last = s.records;
@@ -156,9 +157,10 @@ pub struct GripperArgs {
     /// An object between the fingers, this wide (m): a closing grasp stops on it.
     #[arg(long)]
     pub object: Option<f64>,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// Runs `rl fake-robot gripper`.
@@ -220,7 +222,7 @@ pub fn run_gripper(args: &GripperArgs, stop: &AtomicBool) -> CliResult {
         wires.join(", ")
     );
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let g = s.status;
             outln!(
@@ -276,9 +278,10 @@ pub struct UrArgs {
     /// the dashboard); by default it is running, as after an operator's start-up.
     #[arg(long)]
     pub power_off: bool,
-    /// Stop after this many seconds instead of waiting for Ctrl-C.
-    #[arg(long)]
-    pub seconds: Option<u64>,
+    /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
+    /// is seconds).
+    #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
+    pub duration: Option<std::time::Duration>,
 }
 
 /// The fakes' threads run SCHED_FIFO 85 where the process may (as the other stand-alone fakes,
@@ -344,7 +347,7 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
-        every_second(stop, args.seconds, |t| {
+        every_second(stop, args.duration, |t| {
             let s = fake.status();
             let rate = s.outputs_sent - last;
             last = s.outputs_sent;

@@ -23,11 +23,16 @@ pub(super) fn start(args: &RunArgs) -> Result<Option<ViewHook>, CliError> {
         // Drawn with RL's visual meshes.
         None => crate::cli::view::embedded_rv6sl(),
     };
-    // A planned run shows its obstacles (and the SRDF's allowed pairs) too.
+    // A planned run shows its obstacles too; a URDF robot's allowed pairs are the SRDF's it
+    // plans with (--srdf, else the one beside the URDF: rl-sg's one rule).
+    let srdf = args
+        .model
+        .as_deref()
+        .and_then(|m| rl_sg::load::srdf::for_robot(m, args.srdf.as_deref()));
     let load = rl_view::LoadOptions {
         models: vec![robot],
         env: args.scene.clone().filter(|_| args.plan),
-        srdf: args.srdf.clone().filter(|_| args.plan),
+        srdf,
         ..rl_view::LoadOptions::default()
     };
     let hook =
