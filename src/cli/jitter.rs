@@ -254,7 +254,7 @@ fn jitter_json(
     // rl-rt writes the schema; it is valid JSON by construction (tested there and below).
     let loop_stats: serde_json::Value =
         serde_json::from_str(&stats.to_json()).unwrap_or(serde_json::Value::Null);
-    serde_json::json!({
+    let value = serde_json::json!({
         "loop": loop_stats,
         "cycles": stats.cycles(),
         "overruns": stats.overruns,
@@ -281,14 +281,21 @@ fn jitter_json(
         "major_faults": report.counters.map(|c| c.major_faults),
         "involuntary_switches": report.counters.map(|c| c.involuntary_switches),
         "step": { "mean_us": us(step.mean_ns), "max_us": us(step.max_ns) },
-    })
+    });
+    rl::json::versioned("jitter", 1, value)
 }
 
 /// Runs `rl preflight`.
 pub fn run_preflight(args: PreflightArgs) -> CliResult {
     let report = preflight::check();
     if args.json {
-        outln!("{}", report.to_json())?;
+        // rl-rt writes the findings as an array; the tool's output is an object with the
+        // version key and the array as `findings`.
+        let findings: serde_json::Value =
+            serde_json::from_str(&report.to_json()).unwrap_or(serde_json::Value::Null);
+        let value =
+            rl::json::versioned("preflight", 1, serde_json::json!({ "findings": findings }));
+        outln!("{value}")?;
     } else {
         out!("{report}")?;
         let worst = report.worst();

@@ -390,6 +390,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     let mut json = result_json(&space, &result, checker_name, args.common.seed);
     json["certified"] = certified;
     println!(
+    rl::json::tag("plan", 1, &mut json);
         "{}",
         serde_json::to_string_pretty(&json).unwrap_or_default()
     );

@@ -346,6 +346,7 @@ fn check(a: CheckArgs) -> CliResult {
         out["environment_bodies"] = json!(r.environment_bodies);
     }
     outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default())?;
+    rl::json::tag("scene.check", 1, &mut out);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -459,13 +460,17 @@ fn dump(a: DumpArgs) -> CliResult {
             .collect();
         configs.push(json!({"q": q, "poses": poses}));
     }
-    let out = json!({
-        "robot_model": s.scene.models()[s.robot.0].name(),
-        "shapes": shapes,
-        "self_pairs": self_pairs,
-        "environment_pairs": env_pairs,
-        "configs": configs,
-    });
+    let out = rl::json::versioned(
+        "scene.dump",
+        1,
+        json!({
+            "robot_model": s.scene.models()[s.robot.0].name(),
+            "shapes": shapes,
+            "self_pairs": self_pairs,
+            "environment_pairs": env_pairs,
+            "configs": configs,
+        }),
+    );
     outln!("{}", serde_json::to_string(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
@@ -546,9 +551,11 @@ fn info(a: InfoArgs) -> CliResult {
             .collect();
         outln!(
             "{}",
-            serde_json::to_string_pretty(
-                &json!({"file": a.file.display().to_string(), "models": models})
-            )
+            serde_json::to_string_pretty(&rl::json::versioned(
+                "scene.info",
+                1,
+                json!({"file": a.file.display().to_string(), "models": models})
+            ))
             .unwrap_or_default()
         )?;
         return Ok(ExitCode::SUCCESS);
@@ -750,3 +757,4 @@ fn bench(a: BenchArgs) -> CliResult {
     }
     Ok(ExitCode::SUCCESS)
 }
+        rl::json::tag("scene.bench", 1, &mut v);
