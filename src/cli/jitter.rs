@@ -4,6 +4,8 @@
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
@@ -14,6 +16,7 @@ use rl_rt::{
 };
 
 use super::output::{Replacement, errln, out, outln};
+use super::progress::{LIVE_INTERVAL, ProgressLine, fraction};
 use super::{CliError, CliResult, parse_duration};
 
 /// Largest `--histogram-range-us`: one second in 1 µs bins (8 MB of counters).
@@ -182,8 +185,17 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         .max_cycles(cycles)
         .stop_flag(&stop)
         .histogram_range(Duration::from_micros(args.histogram_range_us as u64));
+    // The step only counts its cycles (one relaxed store): this thread reads the count for the
+    // progress line, on a terminal only.
+    let cycles_run = Arc::new(AtomicU64::new(0));
+    let counter = Arc::clone(&cycles_run);
     let thread = builder
-        .spawn(move || looped.run(|_cycle| ControlFlow::Continue(())))
+        .spawn(move || {
+            looped.run(|cycle| {
+                counter.store(cycle.index + 1, Ordering::Relaxed);
+                ControlFlow::Continue(())
+            })
+        })
         .map_err(|e| match e {
             rl_rt::ThreadError::InvalidPriority { .. }
             | rl_rt::ThreadError::InvalidCpu { .. }
@@ -195,6 +207,22 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         })?;
     let granted = thread.granted().clone();
     let cpu_dma_latency_us = latency_hint.as_ref().map(|h| h.max_latency_us());
+    let mut line = ProgressLine::stderr("rl jitter: ");
+    if line.is_active() {
+        while !thread.is_finished() {
+            std::thread::sleep(LIVE_INTERVAL);
+            let done = cycles_run.load(Ordering::Relaxed);
+            line.update(|| {
+                format!(
+                    "{} cycles, {:.1} s",
+                    fraction(done as usize, cycles as usize),
+                    done as f64 * period.as_secs_f64()
+                )
+            });
+        }
+        line.clear();
+    }
+    drop(line);
     let report = match thread.join() {
         Ok(Ok(report)) => report,
         Ok(Err(e @ LoopError::Overrun { .. })) => return Err(CliError::failed(e.to_string())),
