@@ -89,7 +89,7 @@ pub struct JitterArgs {
 /// Arguments of `rl preflight`.
 #[derive(Args, Debug)]
 pub struct PreflightArgs {
-    /// Print the findings as a JSON array.
+    /// Print the findings as JSON (`{"schema": "rl.preflight/1", "findings": [...]}`).
     #[arg(long)]
     pub json: bool,
     /// Exit with code 1 if any finding is a warning or a failure (for scripts and CI).
