@@ -13,6 +13,7 @@
 
 pub mod controller;
 pub mod devices;
+pub mod json;
 // Inlined, so that `cargo doc --no-deps` documents the three crates as modules of this one and
 // every link from here lands on a page that exists.
 #[doc(inline)]

@@ -50,7 +50,7 @@ fn answers_every_line_and_samples_to_the_end() {
     assert_eq!(out.len(), 4);
     // Rest to rest: 1 m at 1 m/s, 2 m/s², 10 m/s³ takes 1/1 + 1/2 + 2/10 = 1.7 s.
     assert_eq!(out[0]["result"], "ok");
-    assert!((out[0]["duration"].as_f64().expect("duration") - 1.7).abs() < 1e-12);
+    assert!((out[0]["duration_s"].as_f64().expect("duration_s") - 1.7).abs() < 1e-12);
     assert_eq!(out[0]["violation"], Value::Null);
     let samples = &out[0]["samples"];
     let t: Vec<f64> = serde_json::from_value(samples["t"].clone()).expect("times");
@@ -66,7 +66,10 @@ fn answers_every_line_and_samples_to_the_end() {
     assert_eq!(out[2]["error"], "TargetOutsideLimits");
     assert_eq!(out[2]["axis"], 0);
     assert_eq!(out[3]["result"], "ok");
-    assert_eq!(out[3]["sections"].as_array().expect("sections").len(), 3);
+    assert_eq!(
+        out[3]["sections_s"].as_array().expect("sections_s").len(),
+        3
+    );
     assert_eq!(out[3]["violation"], Value::Null);
 
     // A line that is not a job is answered as such, the others still are, and the exit status
@@ -93,7 +96,7 @@ fn edge_case_fixtures_agree_through_the_cli() {
         let job: Value = serde_json::from_str(line).expect("json");
         assert!(answer["violation"].is_null(), "{answer} for {line}");
         if let Some(theirs) = job["ruckig"]["duration"].as_f64() {
-            let ours = answer["duration"]
+            let ours = answer["duration_s"]
                 .as_f64()
                 .unwrap_or_else(|| panic!("ours failed: {answer} for {line}"));
             // The same duration, or shorter where Ruckig's is not time-optimal (one edge case).

@@ -18,7 +18,7 @@ use crate::validity::Validity;
 
 pub mod certify;
 
-pub use certify::{Certificate, CertifyOptions, PathCertificate, Uncertified};
+pub use certify::{Certificate, CertifyOptions, CertifyProgress, PathCertificate, Uncertified};
 
 /// Body capacity of the kinematic models the planners load.
 pub const MAX_BODIES: usize = 32;

@@ -145,6 +145,31 @@ fn a_thin_plate_between_the_verifiers_samples_is_caught() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn a_path_tells_its_progress_edge_by_edge() {
+    let dir = std::env::temp_dir().join(format!("rl-plan-certify-progress-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let urdf = dir.join("bar.urdf");
+    std::fs::write(&urdf, BAR_URDF).unwrap();
+    let robot = Robot::load_urdf(&urdf, None, None).unwrap();
+    let mut exact = robot.exact_checker(plate_at(0.3)).unwrap();
+    let path = rl_plan::Path::from_points(1, &[vec![-0.5], vec![-0.3], vec![-0.1], vec![0.1]]);
+    let options = CertifyOptions::default();
+    let mut seen = Vec::new();
+    let c = exact
+        .certify_path_with_progress(&path, &options, &mut |p| seen.push(*p))
+        .unwrap();
+    assert!(c.is_certified(), "{c:?}");
+    // Told before the first edge and after each one, steps adding up to the certificate's.
+    let done: Vec<_> = seen.iter().map(|p| (p.edges_done, p.edges)).collect();
+    assert_eq!(done, [(0, 3), (1, 3), (2, 3), (3, 3)]);
+    assert_eq!(seen.last().unwrap().steps, c.steps);
+    assert!(seen.windows(2).all(|w| w[0].steps < w[1].steps));
+    // The plain call gives the same certificate.
+    assert_eq!(exact.certify_path(&path, &options).unwrap(), c);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A free-floating 1 m bar (URDF `floating` joint: translation and a quaternion), its body from
 /// the joint's origin out along x.
 const FLOATING_BAR_URDF: &str = r#"<robot name="floating_bar">

@@ -78,7 +78,7 @@ def compare(category, args, rl, record):
                     stats["failed"] += 1
                     problem = "failed"
                 else:
-                    d = mine["duration"]
+                    d = mine["duration_s"]
                     rel = abs(d - duration) / max(abs(duration), 1e-12)
                     if d < duration - TOLERANCE * abs(duration) - 1e-12 and not mine.get("violation"):
                         stats["shorter"] += 1

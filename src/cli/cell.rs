@@ -178,6 +178,8 @@ fn watch(args: WatchArgs) -> CliResult {
     let mut rates: BTreeMap<String, Rate> = BTreeMap::new();
     let started = Instant::now();
     let mut summary_due = Instant::now() + Duration::from_secs(1);
+    // One JSON object per line, each with the version key (docs/json.md).
+    let versioned = |v: serde_json::Value| rl::json::versioned("cell.watch", 1, v).to_string();
     let json_token = |t: &rl_cell::ros2::names::Token| {
         serde_json::json!({"kind": t.kind, "namespace": t.namespace, "node": t.node,
             "topic": t.topic, "type": t.type_name, "zid": t.zid})
@@ -197,7 +199,7 @@ fn watch(args: WatchArgs) -> CliResult {
                     None
                 }
                 Event::Joined(t) => Some(if args.json {
-                    serde_json::json!({"event": "joined", "entity": json_token(&t)}).to_string()
+                    versioned(serde_json::json!({"event": "joined", "entity": json_token(&t)}))
                 } else {
                     format!(
                         "joined: node {} in {} (zenoh {})",
@@ -205,7 +207,7 @@ fn watch(args: WatchArgs) -> CliResult {
                     )
                 }),
                 Event::Left(t) => Some(if args.json {
-                    serde_json::json!({"event": "left", "entity": json_token(&t)}).to_string()
+                    versioned(serde_json::json!({"event": "left", "entity": json_token(&t)}))
                 } else {
                     format!("left: node {} in {} (zenoh {})", t.node, t.namespace, t.zid)
                 }),
@@ -230,19 +232,21 @@ fn watch(args: WatchArgs) -> CliResult {
                         None
                     }
                     Body::Text(text) => Some(if args.json {
-                        serde_json::json!({"event": "message", "topic": topic, "type": type_name,
+                        versioned(
+                            serde_json::json!({"event": "message", "topic": topic, "type": type_name,
                             "sequence": attachment.map(|a| a.sequence_number),
                             "age_s": attachment.map(|a| (received_unix_ns - a.source_timestamp) as f64 * 1e-9),
-                            "text": text})
-                        .to_string()
+                            "text": text}),
+                        )
                     } else {
                         format!("{topic}: {text}")
                     }),
                     other => Some(if args.json {
-                        serde_json::json!({"event": "message", "topic": topic, "type": type_name,
+                        versioned(
+                            serde_json::json!({"event": "message", "topic": topic, "type": type_name,
                             "sequence": attachment.map(|a| a.sequence_number),
-                            "body": format!("{other:?}")})
-                        .to_string()
+                            "body": format!("{other:?}")}),
+                        )
                     } else {
                         format!("{topic} ({type_name}): {other:?}")
                     }),
@@ -261,10 +265,11 @@ fn watch(args: WatchArgs) -> CliResult {
                     .map(|j| j.position.clone())
                     .unwrap_or_default();
                 let line = if args.json {
-                    serde_json::json!({"event": "joint_states", "topic": topic, "per_s": r.count,
+                    versioned(
+                        serde_json::json!({"event": "joint_states", "topic": topic, "per_s": r.count,
                         "total": r.total, "lost": r.gaps, "sequence": r.last_seq,
-                        "names": r.last.as_ref().map(|j| j.name.clone()), "position": positions})
-                    .to_string()
+                        "names": r.last.as_ref().map(|j| j.name.clone()), "position": positions}),
+                    )
                 } else {
                     let shown: Vec<String> = positions.iter().map(|v| format!("{v:.4}")).collect();
                     format!(

@@ -4,6 +4,8 @@
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
@@ -14,6 +16,7 @@ use rl_rt::{
 };
 
 use super::output::{Replacement, errln, out, outln};
+use super::progress::{LIVE_INTERVAL, ProgressLine, fraction};
 use super::{CliError, CliResult, parse_duration, refuse_given};
 
 /// Largest `--histogram-range-us`: one second in 1 µs bins (8 MB of counters).
@@ -86,7 +89,7 @@ pub struct JitterArgs {
 /// Arguments of `rl preflight`.
 #[derive(Args, Debug)]
 pub struct PreflightArgs {
-    /// Print the findings as a JSON array.
+    /// Print the findings as JSON (`{"schema": "rl.preflight/1", "findings": [...]}`).
     #[arg(long)]
     pub json: bool,
     /// Exit with code 1 if any finding is a warning or a failure (for scripts and CI).
@@ -185,8 +188,17 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         .max_cycles(cycles)
         .stop_flag(&stop)
         .histogram_range(Duration::from_micros(args.histogram_range_us as u64));
+    // The step only counts its cycles (one relaxed store): this thread reads the count for the
+    // progress line, on a terminal only.
+    let cycles_run = Arc::new(AtomicU64::new(0));
+    let counter = Arc::clone(&cycles_run);
     let thread = builder
-        .spawn(move || looped.run(|_cycle| ControlFlow::Continue(())))
+        .spawn(move || {
+            looped.run(|cycle| {
+                counter.store(cycle.index + 1, Ordering::Relaxed);
+                ControlFlow::Continue(())
+            })
+        })
         .map_err(|e| match e {
             rl_rt::ThreadError::InvalidPriority { .. }
             | rl_rt::ThreadError::InvalidCpu { .. }
@@ -198,6 +210,22 @@ pub fn run_jitter(args: JitterArgs) -> CliResult {
         })?;
     let granted = thread.granted().clone();
     let cpu_dma_latency_us = latency_hint.as_ref().map(|h| h.max_latency_us());
+    let mut line = ProgressLine::stderr("rl jitter: ");
+    if line.is_active() {
+        while !thread.is_finished() {
+            std::thread::sleep(LIVE_INTERVAL);
+            let done = cycles_run.load(Ordering::Relaxed);
+            line.update(|| {
+                format!(
+                    "{} cycles, {:.1} s",
+                    fraction(done as usize, cycles as usize),
+                    done as f64 * period.as_secs_f64()
+                )
+            });
+        }
+        line.clear();
+    }
+    drop(line);
     let report = match thread.join() {
         Ok(Ok(report)) => report,
         Ok(Err(e @ LoopError::Overrun { .. })) => return Err(CliError::failed(e.to_string())),
@@ -257,7 +285,7 @@ fn jitter_json(
     // rl-rt writes the schema; it is valid JSON by construction (tested there and below).
     let loop_stats: serde_json::Value =
         serde_json::from_str(&stats.to_json()).unwrap_or(serde_json::Value::Null);
-    serde_json::json!({
+    let value = serde_json::json!({
         "loop": loop_stats,
         "cycles": stats.cycles(),
         "overruns": stats.overruns,
@@ -284,14 +312,21 @@ fn jitter_json(
         "major_faults": report.counters.map(|c| c.major_faults),
         "involuntary_switches": report.counters.map(|c| c.involuntary_switches),
         "step": { "mean_us": us(step.mean_ns), "max_us": us(step.max_ns) },
-    })
+    });
+    rl::json::versioned("jitter", 1, value)
 }
 
 /// Runs `rl preflight`.
 pub fn run_preflight(args: PreflightArgs) -> CliResult {
     let report = preflight::check();
     if args.json {
-        outln!("{}", report.to_json())?;
+        // rl-rt writes the findings as an array; the tool's output is an object with the
+        // version key and the array as `findings`.
+        let findings: serde_json::Value =
+            serde_json::from_str(&report.to_json()).unwrap_or(serde_json::Value::Null);
+        let value =
+            rl::json::versioned("preflight", 1, serde_json::json!({ "findings": findings }));
+        outln!("{value}")?;
     } else {
         out!("{report}")?;
         let worst = report.worst();

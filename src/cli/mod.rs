@@ -9,6 +9,7 @@ pub mod otg;
 pub mod output;
 pub mod placement;
 pub mod plan;
+pub mod progress;
 pub mod run;
 pub mod scene;
 pub mod traj;

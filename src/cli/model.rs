@@ -286,12 +286,17 @@ fn info<const N: usize>(a: &InfoArgs, loaded: &LoadedModel<N>) -> CliResult {
                        "mimic": mimic})
             })
             .collect();
-        let out = json!({"name": m.name(), "format": format!("{:?}", loaded.format),
+        let out = rl::json::versioned(
+            "model.info",
+            1,
+            json!({"name": m.name(),
+            "format": format!("{:?}", loaded.format),
             "dof": m.dof(), "nq": m.nq(), "bodies": m.body_count(),
-            "mass": total_mass, "moving_mass": m.moving_mass(),
-            "gravity": m.gravity().to_array(), "joints": joints,
+            "mass_kg": total_mass, "moving_mass_kg": m.moving_mass(),
+            "gravity_m_s2": m.gravity().to_array(), "joints": joints,
             "tools": tools.iter().map(|(n, b)| json!({"name": n, "body": b})).collect::<Vec<_>>(),
-            "warnings": loaded.warnings});
+            "warnings": loaded.warnings}),
+        );
         outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default())?;
         return Ok(ExitCode::SUCCESS);
     }
@@ -491,7 +496,8 @@ fn eval<const N: usize>(a: &EvalArgs, mut loaded: Box<LoadedModel<N>>) -> CliRes
         tools.push(json!({
             "name": tool.name.as_str(),
             "position": x.translation.to_array(),
-            "quaternion_wxyz": [quat.w, quat.x, quat.y, quat.z],
+            // x, y, z, w: the order of every quaternion the tool prints or reads.
+            "quat_xyzw": [quat.x, quat.y, quat.z, quat.w],
             "jacobian": jac.iter().map(|row| row[..n].to_vec()).collect::<Vec<_>>(),
         }));
     }
@@ -522,6 +528,7 @@ fn eval<const N: usize>(a: &EvalArgs, mut loaded: Box<LoadedModel<N>>) -> CliRes
     if let Some(e) = forward_error {
         out["qdd_error"] = json!(e);
     }
+    rl::json::tag("model.eval", 1, &mut out);
     outln!("{}", serde_json::to_string(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
@@ -953,7 +960,10 @@ impl WithModel for Bench {
             if a.states_file.is_some() {
                 obj.insert("rnea_check".into(), json!(rnea_check(m, &states)?));
             }
-            outln!("{}", serde_json::Value::Object(obj))?;
+            outln!(
+                "{}",
+                rl::json::versioned("model.bench", 1, serde_json::Value::Object(obj))
+            )?;
         } else {
             outln!(
                 "{} ({} DOF), median of {} rounds over {} {} states, Jacobian of tool {}",

@@ -9,8 +9,8 @@
 //! be the strings `"inf"` and `"-inf"` (an unlimited derivative). Keys `ruckig` and `meta` are
 //! ignored (the fixtures carry Ruckig's answer there); any other key is an error.
 //!
-//! Output per job: `{"result": "ok", "duration": s, "min_durations": [..]}` (with waypoints
-//! `"sections": [..]`, the duration of each section, instead of `min_durations`), or
+//! Output per job: `{"result": "ok", "duration_s": s, "min_durations_s": [..]}` (with waypoints
+//! `"sections_s": [..]`, the duration of each section, instead of `min_durations_s`), or
 //! `{"result": "error", "error": KIND, "axis": i, "message": text}` for an input the generator
 //! refuses (a typed error: what and which axis), or `{"result": "invalid", "message": text}`
 //! for a line that is not a job. With `--samples DT`: `"samples": {"t": [..], "p": [[per axis],
@@ -89,6 +89,7 @@ pub fn run(args: OtgArgs) -> CliResult {
                 json!({"result": "invalid", "message": format!("line {}: {message}", number + 1)})
             }
         };
+        let answer = rl::json::versioned("otg", 1, answer);
         serde_json::to_writer(&mut out, &answer)
             .map_err(|e| write_error("standard output", e.into()))?;
         out.write_all(b"\n")
@@ -154,7 +155,7 @@ fn solve<const N: usize>(job: &Value, samples: Option<f64>, verify: bool) -> Res
             Err(e) => return Ok(error_answer(&e)),
         };
         answer.insert(
-            "min_durations".into(),
+            "min_durations_s".into(),
             trajectory.min_durations().to_vec().into(),
         );
         let free = input.interface == Interface::Velocity;
@@ -171,7 +172,7 @@ fn solve<const N: usize>(job: &Value, samples: Option<f64>, verify: bool) -> Res
             Err(e) => return Ok(error_answer(&e)),
         };
         let sections: Vec<f64> = trajectory.sections().iter().map(|s| s.duration()).collect();
-        answer.insert("sections".into(), sections.into());
+        answer.insert("sections_s".into(), sections.into());
         let violation = verify
             .then(|| trajectory.limit_violation(&input.limits, VERIFY_TOLERANCE))
             .flatten();
@@ -180,11 +181,11 @@ fn solve<const N: usize>(job: &Value, samples: Option<f64>, verify: bool) -> Res
             .transpose()?;
         (trajectory.duration(), violation, sampled)
     };
-    answer.insert("duration".into(), duration.into());
+    answer.insert("duration_s".into(), duration.into());
     if verify {
         let violation = violation.map(|v| {
             json!({"axis": v.axis, "derivative": format!("{:?}", v.derivative).to_lowercase(),
-                   "time": v.time, "value": v.value, "limit": v.limit})
+                   "time_s": v.time, "value": v.value, "limit": v.limit})
         });
         answer.insert("violation".into(), violation.unwrap_or(Value::Null));
     }

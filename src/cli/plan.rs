@@ -25,13 +25,14 @@ use rl_plan::problem::moveit::MotionRequest;
 use rl_plan::problem::rlplan::Scenario;
 use rl_plan::problem::{COVER_SPACING, Robot, mbm};
 use rl_plan::sampler::SamplerKind;
-use rl_plan::scene::CertifyOptions;
+use rl_plan::scene::{CertifyOptions, CertifyProgress};
 use rl_plan::space::parse_bounds;
 use rl_plan::verifier::Verifier;
 use rl_plan::{JointSpace, Path as PlanPath, PlanError, PlanOptions, PlanResult, Validity, plan};
 use serde_json::json;
 
 use super::output::{Replacement, outln};
+use super::progress::{ProgressLine, fraction};
 use super::{CliError, CliResult, given, parse_duration, refuse_given};
 
 /// Arguments of `rl plan`.
@@ -442,6 +443,7 @@ pub fn run(args: PlanArgs) -> CliResult {
     }
     let mut json = result_json(&space, &result, checker_name, args.common.seed);
     json["certified"] = certified;
+    rl::json::tag("plan", 1, &mut json);
     outln!(
         "{}",
         serde_json::to_string_pretty(&json).unwrap_or_default()
@@ -474,7 +476,21 @@ fn certify(
         ..Default::default()
     };
     let started = std::time::Instant::now();
-    let c = match exact.certify_path(path, &options) {
+    let mut line = ProgressLine::stderr("rl plan: ");
+    let mut show = |p: &CertifyProgress| {
+        line.update(|| {
+            format!(
+                "certifying edge {} of {}, {} steps, {:.1} s",
+                (p.edges_done + 1).min(p.edges),
+                p.edges,
+                p.steps,
+                started.elapsed().as_secs_f64()
+            )
+        })
+    };
+    let c = exact.certify_path_with_progress(path, &options, &mut show);
+    line.clear();
+    let c = match c {
         Ok(c) => c,
         // A model the motion bound does not cover (a helical joint, say): the plan stands,
         // uncertified, and the JSON says why.
@@ -656,28 +672,31 @@ fn run_bench(b: BenchArgs) -> CliResult {
         rl_plan::fast::Backend::detect().name()
     );
     let verbose = b.verbose;
+    let total = problems.len() * b.runs;
+    let (mut done, mut solved) = (0, 0);
+    let mut line = ProgressLine::stderr("rl plan bench: ");
+    let started = std::time::Instant::now();
     let runs = bench::run_mbm(&robot, &problems, &opts, &mut |r: &Run| {
+        done += 1;
+        solved += usize::from(r.result.as_ref().is_some_and(|x| x.solved));
         if verbose {
-            match &r.result {
-                Some(res) => eprintln!(
-                    "{} run {}: solved {} {:.1} µs, {} iterations, {} checks{}",
-                    r.problem,
-                    r.run,
-                    res.solved,
-                    res.planning_time.as_secs_f64() * 1e6,
-                    res.iterations,
-                    res.planning_checks,
-                    match r.fine_valid {
-                        Some(true) => ", fine check: valid",
-                        Some(false) => ", fine check: COLLISION",
-                        None => "",
-                    }
-                ),
-                None => eprintln!("{} run {}: invalid start or goal", r.problem, r.run),
-            }
+            // The run's own line replaces the progress line, which comes back below it.
+            line.clear();
         }
+        print_run(verbose, r);
+        line.update(|| {
+            format!(
+                "{} runs, {solved} solved, {:.0} s, last {} run {}",
+                fraction(done, total),
+                started.elapsed().as_secs_f64(),
+                r.problem,
+                r.run
+            )
+        });
     })
     .map_err(failed)?;
+    line.clear();
+    drop(line);
     outln!("{}", bench::vamp_table(&runs))?;
     if let Some(dir) = &b.paths {
         for r in runs.iter().filter(|r| r.run == 0) {
@@ -735,4 +754,28 @@ fn run_bench(b: BenchArgs) -> CliResult {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `--verbose`: one line per run on standard error.
+fn print_run(verbose: bool, r: &Run) {
+    if !verbose {
+        return;
+    }
+    match &r.result {
+        Some(res) => eprintln!(
+            "{} run {}: solved {} {:.1} µs, {} iterations, {} checks{}",
+            r.problem,
+            r.run,
+            res.solved,
+            res.planning_time.as_secs_f64() * 1e6,
+            res.iterations,
+            res.planning_checks,
+            match r.fine_valid {
+                Some(true) => ", fine check: valid",
+                Some(false) => ", fine check: COLLISION",
+                None => "",
+            }
+        ),
+        None => eprintln!("{} run {}: invalid start or goal", r.problem, r.run),
+    }
 }

@@ -787,6 +787,7 @@ fn drive<const B: usize, const J: usize>(
         if let (Some(obj), Some(cell)) = (json.as_object_mut(), cell_json) {
             obj.insert("zenoh".into(), cell);
         }
+        rl::json::tag("run", 1, &mut json);
         outln!("{json}")
     } else {
         out!("{report}")

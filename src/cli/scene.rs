@@ -21,6 +21,7 @@ use serde_json::{Value, json};
 
 use super::output::outln;
 use super::placement::{ScenarioRobot, is_scenario, parse_place};
+use super::progress::{ProgressLine, fraction};
 use super::{CliError, CliResult, refuse_given};
 
 /// Capacity of the robots `rl scene` loads (bodies and degrees of freedom), as the tool had
@@ -358,6 +359,7 @@ fn check(a: CheckArgs) -> CliResult {
         out["environment_min_distance"] = distance_json(&r.environment_min_distance);
         out["environment_bodies"] = json!(r.environment_bodies);
     }
+    rl::json::tag("scene.check", 1, &mut out);
     outln!("{}", serde_json::to_string_pretty(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
@@ -472,13 +474,17 @@ fn dump(a: DumpArgs) -> CliResult {
             .collect();
         configs.push(json!({"q": q, "poses": poses}));
     }
-    let out = json!({
-        "robot_model": s.scene.models()[s.robot.0].name(),
-        "shapes": shapes,
-        "self_pairs": self_pairs,
-        "environment_pairs": env_pairs,
-        "configs": configs,
-    });
+    let out = rl::json::versioned(
+        "scene.dump",
+        1,
+        json!({
+            "robot_model": s.scene.models()[s.robot.0].name(),
+            "shapes": shapes,
+            "self_pairs": self_pairs,
+            "environment_pairs": env_pairs,
+            "configs": configs,
+        }),
+    );
     outln!("{}", serde_json::to_string(&out).unwrap_or_default())?;
     Ok(ExitCode::SUCCESS)
 }
@@ -559,9 +565,11 @@ fn info(a: InfoArgs) -> CliResult {
             .collect();
         outln!(
             "{}",
-            serde_json::to_string_pretty(
-                &json!({"file": a.file.display().to_string(), "models": models})
-            )
+            serde_json::to_string_pretty(&rl::json::versioned(
+                "scene.info",
+                1,
+                json!({"file": a.file.display().to_string(), "models": models})
+            ))
             .unwrap_or_default()
         )?;
         return Ok(ExitCode::SUCCESS);
@@ -605,8 +613,10 @@ fn info(a: InfoArgs) -> CliResult {
 }
 
 /// Median over `rounds` of the mean ns per call of `query` over all configurations, each
-/// configuration set (untimed) by `set` before its calls.
+/// configuration set (untimed) by `set` before its calls; `tick` is called after each round
+/// (untimed: the progress line).
 fn per_query(
+    tick: &dyn Fn(),
     configs: usize,
     rounds: usize,
     mut set: impl FnMut(usize),
@@ -629,6 +639,7 @@ fn per_query(
                 }
                 total += t.elapsed().as_secs_f64();
             }
+            tick();
             total * 1e9 / (configs * reps) as f64
         })
         .collect();
@@ -662,8 +673,25 @@ fn bench(a: BenchArgs) -> CliResult {
             .set_configuration(robot, km, &mut d, q(c));
     };
     let mut out: Vec<(&str, f64)> = Vec::new();
+    // Progress: rounds of every query timed so far, on a terminal only.
+    let queries = if s.env { 8 } else { 6 };
+    let total = queries * a.rounds.max(1);
+    let rounds_done = std::cell::Cell::new(0);
+    let line = std::cell::RefCell::new(ProgressLine::stderr("rl scene bench: "));
+    let started = Instant::now();
+    let tick = || {
+        rounds_done.set(rounds_done.get() + 1);
+        line.borrow_mut().update(|| {
+            format!(
+                "{} rounds of {queries} queries, {:.0} s",
+                fraction(rounds_done.get(), total),
+                started.elapsed().as_secs_f64()
+            )
+        });
+    };
     let next = std::cell::Cell::new(0);
     let update = per_query(
+        &tick,
         configs,
         a.rounds,
         |_| {},
@@ -681,11 +709,13 @@ fn bench(a: BenchArgs) -> CliResult {
     let own = CollisionFilter::SelfCollision(robot);
     out.push((
         "self_collision",
-        per_query(configs, a.rounds, set, || scene.borrow().is_colliding(&own)),
+        per_query(&tick, configs, a.rounds, set, || {
+            scene.borrow().is_colliding(&own)
+        }),
     ));
     out.push((
         "self_distance",
-        per_query(configs, a.rounds, set, || {
+        per_query(&tick, configs, a.rounds, set, || {
             scene.borrow().min_distance(&own).is_some()
         }),
     ));
@@ -693,11 +723,13 @@ fn bench(a: BenchArgs) -> CliResult {
         let env = CollisionFilter::Against(robot);
         out.push((
             "environment",
-            per_query(configs, a.rounds, set, || scene.borrow().is_colliding(&env)),
+            per_query(&tick, configs, a.rounds, set, || {
+                scene.borrow().is_colliding(&env)
+            }),
         ));
         out.push((
             "environment_distance",
-            per_query(configs, a.rounds, set, || {
+            per_query(&tick, configs, a.rounds, set, || {
                 scene.borrow().min_distance(&env).is_some()
             }),
         ));
@@ -727,7 +759,7 @@ fn bench(a: BenchArgs) -> CliResult {
         let mut d = data.borrow_mut();
         let _ = rl_core::algo::forward_position(km, &mut d, q(c));
     };
-    let sphere_path = per_query(configs, a.rounds, fk, || {
+    let sphere_path = per_query(&tick, configs, a.rounds, fk, || {
         let d = data.borrow();
         caps.update(&d);
         caps.min_distance(&spheres).is_some()
@@ -736,11 +768,12 @@ fn bench(a: BenchArgs) -> CliResult {
     let pairs = fitted.self_pairs.clone();
     out.push((
         "sphere_path_self",
-        per_query(configs, a.rounds, fk, || {
+        per_query(&tick, configs, a.rounds, fk, || {
             caps.update(&data.borrow());
             caps.min_self_distance(&pairs).is_some()
         }),
     ));
+    line.borrow_mut().clear();
     let name = scene.borrow().models()[robot.0].name().to_string();
     if a.json {
         let mut v = json!({
@@ -750,6 +783,7 @@ fn bench(a: BenchArgs) -> CliResult {
         for (k, ns) in &out {
             v[format!("{k}_ns")] = json!(ns);
         }
+        rl::json::tag("scene.bench", 1, &mut v);
         outln!("{}", serde_json::to_string(&v).unwrap_or_default())?;
     } else {
         outln!(

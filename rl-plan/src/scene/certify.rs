@@ -76,6 +76,17 @@ pub struct Certificate {
     pub min_distance: f64,
 }
 
+/// How far [`SceneValidity::certify_path_with_progress`] has got.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CertifyProgress {
+    /// Edges certified so far.
+    pub edges_done: usize,
+    /// Edges of the path.
+    pub edges: usize,
+    /// Advancement steps taken so far (configurations measured).
+    pub steps: usize,
+}
+
 /// A path's edges certified one after the other.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PathCertificate {
@@ -345,6 +356,17 @@ impl SceneValidity {
         path: &crate::path::Path,
         options: &CertifyOptions,
     ) -> Result<PathCertificate, PlanError> {
+        self.certify_path_with_progress(path, options, &mut |_| {})
+    }
+
+    /// [`SceneValidity::certify_path`], telling `progress` before the first edge and after each
+    /// certified one what was done so far (a command shows it; this prints nothing).
+    pub fn certify_path_with_progress(
+        &mut self,
+        path: &crate::path::Path,
+        options: &CertifyOptions,
+        progress: &mut dyn FnMut(&CertifyProgress),
+    ) -> Result<PathCertificate, PlanError> {
         let edges = path.len().saturating_sub(1);
         let mut out = PathCertificate {
             edges,
@@ -353,12 +375,22 @@ impl SceneValidity {
             min_distance: f64::INFINITY,
             failure: None,
         };
+        progress(&CertifyProgress {
+            edges_done: 0,
+            edges,
+            steps: 0,
+        });
         for e in 0..edges {
             match self.certify_edge(path.point(e), path.point(e + 1), options)? {
                 Ok(c) => {
                     out.certified += 1;
                     out.steps += c.steps;
                     out.min_distance = out.min_distance.min(c.min_distance);
+                    progress(&CertifyProgress {
+                        edges_done: e + 1,
+                        edges,
+                        steps: out.steps,
+                    });
                 }
                 Err(why) => {
                     out.failure = Some((e, why));
