@@ -19,7 +19,7 @@ const SPINNERS: usize = 3;
 const CAUSES: [&str; 5] = [
     "likely cause: the fake H7 ran up to",
     "likely cause: the loop woke up to",
-    "likely cause: both the loop (woke up to",
+    "likely cause: both the loop (up to",
     "likely cause: replies arrived late at the kernel",
     "likely cause: nobody measured was late",
 ];

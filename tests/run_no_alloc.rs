@@ -221,18 +221,28 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
     for _ in 0..50 {
         assert!(!control.cycle().finished);
     }
+    // The sender counts what it has sent; each cycle waits (yielding its CPU, without allocating) for
+    // the sends its place in the run is owed, so that targets and inputs arrive across the
+    // cycles however the machine schedules the two threads (a loaded machine once ran all 400
+    // cycles before the sender's second target).
+    let sent = std::sync::Arc::new(std::sync::atomic::AtomicU32::new(0));
+    let sent_by = sent.clone();
     let sender = std::thread::spawn(move || {
         for i in 0..200 {
             let mut g = goal.clone();
             g[1] += 1e-4 * f64::from(i);
             let _ = tx.send_position(&g);
             let _ = tx.send([0.1, 0.2, 0.3]);
+            sent_by.store(i + 1, std::sync::atomic::Ordering::Release);
             std::thread::sleep(std::time::Duration::from_micros(200));
         }
     });
     let mut finished = false;
     let counted = allocations(|| {
-        for _ in 0..400 {
+        for k in 0..400u32 {
+            while sent.load(std::sync::atomic::Ordering::Acquire) < (k / 2).min(200) {
+                std::thread::yield_now();
+            }
             finished |= control.cycle().finished;
         }
     });

@@ -391,7 +391,8 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         self.read_feedback();
         // Statistics describe the motion up to the first fault: after it the feedback or the
         // command may not be trustworthy.
-        if self.feedback.fresh && self.fault.is_none() {
+        let counted = self.feedback.fresh && self.fault.is_none();
+        if counted {
             let dof = self.dof;
             self.tracking
                 .record_error(&self.setpoint[..dof], &self.feedback.position[..dof]);
@@ -410,6 +411,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             feed_forward: [0.0; J],
             wakeup_latency_ns: 0,
             step_ns: 0,
+            counted,
             state: RunState::Running,
         };
         if self.end.is_none() {

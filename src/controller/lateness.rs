@@ -123,7 +123,7 @@ impl HostActivity {
     }
 
     /// Why a thread that woke up to `late` behind its deadline was late: it waited for its CPU
-    /// (another thread's doing), or its wake-up itself came late (the host's).
+    /// (another thread's doing), or it was held up while not waiting for one (the host's).
     fn why_late(&self, late: Duration) -> String {
         let others = if self.other_rt.is_empty() {
             "no other program runs at real-time priority".to_owned()
@@ -135,15 +135,17 @@ impl HostActivity {
         };
         match self.loop_run_delay {
             Some(waited) if waited < late => format!(
-                "the loop's thread waited only {:.2} ms in all for its CPU, so its wake-up itself \
-                 came late: the host held the CPU (a hypervisor running other work, or the \
-                 kernel with interrupts off; {}); {others}",
+                "the loop's thread waited only {:.2} ms in all for its CPU, so nothing on this \
+                 machine ran in its place: the host held the CPU (a hypervisor running other \
+                 work, or the kernel with interrupts off; {}); {others}",
                 ms(waited),
                 self.host_times()
             ),
             Some(waited) => format!(
                 "the loop's thread waited {:.2} ms in all for its CPU, enough to explain it: \
-                 other work at its priority or above took it ({others})",
+                 something else held its CPU — a thread at its priority or above, or the kernel \
+                 working for another task where it does not preempt (without PREEMPT_RT: see \
+                 `rl preflight`); {others}",
                 ms(waited)
             ),
             None if self.other_rt.is_empty() => format!(
@@ -162,6 +164,9 @@ pub struct Lateness {
     pub period: Duration,
     /// The loop's worst wake-up lateness.
     pub loop_wakeup_max: Duration,
+    /// How far the loop's longest step ran past its period (zero when every step fit): a
+    /// thread held up inside its step passes its next deadlines without waking late for them.
+    pub loop_step_overrun_max: Duration,
     /// Deadlines the loop passed over without a cycle.
     pub missed_deadlines: u64,
     /// When the replies reached the kernel (empty without receive timestamps).
@@ -202,6 +207,9 @@ impl Lateness {
         Self {
             period: Duration::from_nanos(stats.period_ns),
             loop_wakeup_max: Duration::from_nanos(stats.wakeup.summary().max_ns),
+            loop_step_overrun_max: Duration::from_nanos(
+                stats.step.summary().max_ns.saturating_sub(stats.period_ns),
+            ),
             missed_deadlines: stats.missed_deadlines,
             delivery,
             peer,
@@ -209,9 +217,12 @@ impl Lateness {
         }
     }
 
-    /// The loop's worst lateness: a late wake-up, or a reply it read late.
+    /// The loop's worst lateness: a late wake-up, a step that ran past its period, or a reply
+    /// it read late.
     fn loop_max(&self) -> Duration {
-        self.loop_wakeup_max.max(self.delivery.max_wait)
+        self.loop_wakeup_max
+            .max(self.loop_step_overrun_max)
+            .max(self.delivery.max_wait)
     }
 
     /// `late` as a share of `cycle` (0 for a zero cycle).
@@ -255,6 +266,13 @@ impl Lateness {
             ms(self.loop_wakeup_max),
             ms(self.period)
         );
+        if !self.loop_step_overrun_max.is_zero() {
+            let _ = write!(
+                out,
+                ", ran a step {:.2} ms past it",
+                ms(self.loop_step_overrun_max)
+            );
+        }
         if let Some(waited) = self.host.loop_run_delay {
             let _ = write!(
                 out,
@@ -330,6 +348,13 @@ impl Lateness {
                     ms(self.loop_wakeup_max),
                     ms(self.period)
                 );
+                if self.loop_step_overrun_max > self.loop_wakeup_max {
+                    let _ = write!(
+                        s,
+                        " and ran a step {:.2} ms past its period",
+                        ms(self.loop_step_overrun_max)
+                    );
+                }
                 if self.delivery.max_wait > self.loop_wakeup_max {
                     let _ = write!(
                         s,
@@ -346,7 +371,7 @@ impl Lateness {
             Culprit::LoopAndPeer => {
                 let p = self.peer.as_ref();
                 format!(
-                    "both the loop (woke up to {:.2} ms late against its {:.2} ms period) and {} \
+                    "both the loop (up to {:.2} ms late against its {:.2} ms period) and {} \
                      (up to {:.2} ms late against its {:.2} ms cycle) were held up: {}",
                     ms(self.loop_max()),
                     ms(self.period),
@@ -390,6 +415,7 @@ impl Lateness {
         json!({
             "period_ms": ms(self.period),
             "loop_wakeup_max_ms": ms(self.loop_wakeup_max),
+            "loop_step_overrun_max_ms": ms(self.loop_step_overrun_max),
             "missed_deadlines": self.missed_deadlines,
             "replies_timestamped": self.delivery.timestamped,
             "reply_wait_max_ms": ms(self.delivery.max_wait),
@@ -451,6 +477,7 @@ mod tests {
         Lateness {
             period: PERIOD,
             loop_wakeup_max: Duration::from_secs_f64(loop_ms / 1e3),
+            loop_step_overrun_max: Duration::ZERO,
             missed_deadlines: 0,
             delivery,
             peer: peer_ms.map(|m| PeerLateness {
@@ -519,8 +546,8 @@ mod tests {
         let why = l.likely_cause();
         assert!(
             why.contains(
-                "the loop's thread waited only 0.05 ms in all for its CPU, so its wake-up itself \
-                 came late: the host held the CPU"
+                "the loop's thread waited only 0.05 ms in all for its CPU, so nothing on this \
+                 machine ran in its place: the host held the CPU"
             ),
             "{why}"
         );
@@ -538,8 +565,10 @@ mod tests {
         let why = l.likely_cause();
         assert!(
             why.contains(
-                "the loop's thread waited 5.00 ms in all for its CPU, enough to explain it: other \
-                 work at its priority or above took it (other programs' real-time threads: cyclictest (pid 4242, \
+                "the loop's thread waited 5.00 ms in all for its CPU, enough to explain it: \
+                 something else held its CPU — a thread at its priority or above, or the kernel \
+                 working for another task where it does not preempt (without PREEMPT_RT: see \
+                 `rl preflight`); other programs' real-time threads: cyclictest (pid 4242, \
                  SCHED_FIFO 95)"
             ),
             "{why}"
@@ -548,6 +577,30 @@ mod tests {
         assert_eq!(json["loop_run_delay_ms"], 5.0);
         assert_eq!(json["host_steal_ms"], 20.0);
         assert_eq!(json["other_rt_threads"][0]["name"], "cyclictest");
+    }
+
+    #[test]
+    fn a_step_held_past_its_period_is_the_loops_lateness() {
+        // Held inside its step, the loop woke on time for every deadline it did not pass.
+        let mut l = lateness(0.07, Some(150.2), Delivery::default());
+        l.loop_step_overrun_max = Duration::from_millis(148);
+        l.host.loop_run_delay = Some(Duration::from_micros(500));
+        assert_eq!(l.culprit(), Culprit::LoopAndPeer);
+        let why = l.likely_cause();
+        assert!(
+            why.starts_with("both the loop (up to 148.00 ms late against its 7.11 ms period)"),
+            "{why}"
+        );
+        assert!(
+            why.contains("nothing on this machine ran in its place"),
+            "{why}"
+        );
+        assert!(
+            l.summary().contains(", ran a step 148.00 ms past it"),
+            "{}",
+            l.summary()
+        );
+        assert_eq!(l.to_json()["loop_step_overrun_max_ms"], 148.0);
     }
 
     #[test]
@@ -599,7 +652,7 @@ mod tests {
         assert_eq!(l.culprit(), Culprit::LoopAndPeer);
         assert!(
             l.likely_cause().starts_with(
-                "both the loop (woke up to 29.90 ms late against its 7.11 ms period) and the \
+                "both the loop (up to 29.90 ms late against its 7.11 ms period) and the \
                  fake H7 (up to 30.20 ms late against its 7.11 ms cycle) were held up"
             ),
             "{}",

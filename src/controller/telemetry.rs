@@ -56,6 +56,10 @@ pub struct CycleRecord<const J: usize = DEFAULT_JOINTS> {
     /// From wake-up to the end of the control step, device exchange included, ns (filled by
     /// the loop).
     pub step_ns: u64,
+    /// The report's tracking statistics count this cycle: its measurement came with this
+    /// cycle's reply and no fault had been found yet (false: a lost reply, whose `measured` is
+    /// the last one held, or a cycle after the first fault).
+    pub counted: bool,
     /// What the run was doing.
     pub state: RunState,
 }
@@ -70,12 +74,15 @@ impl<const J: usize> CycleRecord<J> {
         feed_forward: [0.0; J],
         wakeup_latency_ns: 0,
         step_ns: 0,
+        counted: false,
         state: RunState::Running,
     };
 }
 
 /// Writes the CSV header:
-/// `cycle,t_s,cmd_<joint>…,meas_<joint>…,ff_<joint>…,latency_us,step_us,state`.
+/// `cycle,t_s,cmd_<joint>…,meas_<joint>…,ff_<joint>…,latency_us,step_us,counted,state`
+/// (`counted`: 1 when the report's tracking statistics count the row — a fresh measurement
+/// before the first fault — else 0).
 pub fn write_header<W: Write>(mut w: W, joints: &[String]) -> io::Result<()> {
     write!(w, "cycle,t_s")?;
     for prefix in ["cmd", "meas", "ff"] {
@@ -83,7 +90,7 @@ pub fn write_header<W: Write>(mut w: W, joints: &[String]) -> io::Result<()> {
             write!(w, ",{prefix}_{}", sanitize(j))?;
         }
     }
-    writeln!(w, ",latency_us,step_us,state")
+    writeln!(w, ",latency_us,step_us,counted,state")
 }
 
 /// Writes one record as a CSV row for `dof` joints.
@@ -103,9 +110,10 @@ pub fn write_row<W: Write, const J: usize>(
     }
     writeln!(
         w,
-        ",{:.3},{:.3},{}",
+        ",{:.3},{:.3},{},{}",
         r.wakeup_latency_ns as f64 / 1e3,
         r.step_ns as f64 / 1e3,
+        u8::from(r.counted),
         r.state.as_str()
     )
 }

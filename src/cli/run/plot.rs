@@ -1,5 +1,6 @@
 //! `--plot`: joint tracking and the wake-up latency histogram on one SVG page.
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use plotters::prelude::*;
@@ -77,25 +78,15 @@ pub fn draw<const J: usize>(
         .draw()
         .map_err(|x| e(&x))?;
 
-    // Tracking error.
-    let err_max = rows
-        .iter()
-        .flat_map(|r| (0..dof).map(move |k| (r.commanded[k] - r.measured[k]).abs()))
-        .fold(1e-6, f64::max)
-        * 1e3;
+    // Tracking error: solid where the report's statistics count it (fresh replies up to the
+    // first fault), faded elsewhere; the fault marked; each joint's bound where it fits.
+    let panel = ErrorPanel::new(report, rows);
     let mut chart = ChartBuilder::on(&middle)
-        .caption(
-            format!(
-                "tracking error (commanded − measured): max {:.3} mrad, rms {:.3} mrad",
-                report.tracking_error_max * 1e3,
-                report.tracking_error_rms * 1e3
-            ),
-            ("sans-serif", 20),
-        )
+        .caption(panel.caption(report), ("sans-serif", 20))
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t_end, (-1.05 * err_max)..(1.05 * err_max))
+        .build_cartesian_2d(0.0..t_end, (-1.05 * panel.y_max)..(1.05 * panel.y_max))
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
@@ -104,12 +95,47 @@ pub fn draw<const J: usize>(
         .draw()
         .map_err(|x| e(&x))?;
     for k in 0..dof {
+        let c = colour(k);
+        let error = |r: &CycleRecord<J>| (r.time_s, (r.commanded[k] - r.measured[k]) * 1e3);
+        // Every cycle faded, the counted ones solid over it (a gap where a reply was lost).
         chart
             .draw_series(LineSeries::new(
-                rows.iter()
-                    .map(|r| (r.time_s, (r.commanded[k] - r.measured[k]) * 1e3)),
-                colour(k).stroke_width(2),
+                rows.iter().map(error),
+                c.mix(0.3).stroke_width(1),
             ))
+            .map_err(|x| e(&x))?;
+        for run in rows.split(|r| !panel.counts(r)) {
+            chart
+                .draw_series(LineSeries::new(run.iter().map(error), c.stroke_width(2)))
+                .map_err(|x| e(&x))?;
+        }
+        if let Some(&b) = panel.bounds.get(k) {
+            for y in [b, -b] {
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        [(0.0, y), (t_end, y)],
+                        6,
+                        4,
+                        c.stroke_width(1),
+                    ))
+                    .map_err(|x| e(&x))?;
+            }
+        }
+    }
+    if let Some(at) = report.fault_at {
+        let (lo, hi) = (-1.05 * panel.y_max, 1.05 * panel.y_max);
+        chart
+            .draw_series(LineSeries::new(
+                [(at.time_s, lo), (at.time_s, hi)],
+                RED.stroke_width(2),
+            ))
+            .map_err(|x| e(&x))?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!(" fault at cycle {}, t = {:.3} s", at.cycle, at.time_s),
+                (at.time_s, 0.9 * hi),
+                ("sans-serif", 16).into_font().color(&RED),
+            )))
             .map_err(|x| e(&x))?;
     }
 
@@ -154,6 +180,111 @@ pub fn draw<const J: usize>(
     root.present().map_err(|x| e(&x))
 }
 
+/// What the tracking-error panel shows: the largest error the report's statistics count
+/// (fresh replies before the first fault: the caption's max is the largest solid point), the
+/// largest after the fault or on a lost reply (faded), and the joints' bounds that fit.
+struct ErrorPanel {
+    /// The first fault's cycle, if any.
+    fault_cycle: Option<u64>,
+    /// Largest counted error, mrad.
+    counted_max: f64,
+    /// Largest error not counted (after the fault, or on a lost reply), mrad.
+    other_max: f64,
+    /// The y axis' half range, mrad.
+    y_max: f64,
+    /// Each joint's tracking bound, mrad, where it fits the panel (empty where none does).
+    bounds: Vec<f64>,
+    /// Bounds too large to draw next to the errors, mrad (smallest, largest).
+    off_scale: Option<(f64, f64)>,
+}
+
+impl ErrorPanel {
+    /// Bounds are drawn when the largest is at most this many times the largest error: beyond,
+    /// the curves would flatten to a line.
+    const BOUND_SCALE: f64 = 4.0;
+
+    fn new<const J: usize>(report: &RunReport, rows: &[CycleRecord<J>]) -> Self {
+        let dof = report.joints.len();
+        let fault_cycle = report.fault_at.map(|a| a.cycle);
+        let mut panel = Self {
+            fault_cycle,
+            counted_max: 0.0,
+            other_max: 0.0,
+            y_max: 0.0,
+            bounds: Vec::new(),
+            off_scale: None,
+        };
+        for r in rows {
+            let worst = (0..dof)
+                .map(|k| (r.commanded[k] - r.measured[k]).abs() * 1e3)
+                .fold(0.0, f64::max);
+            if panel.counts(r) {
+                panel.counted_max = panel.counted_max.max(worst);
+            } else {
+                panel.other_max = panel.other_max.max(worst);
+            }
+        }
+        let errors = panel.counted_max.max(panel.other_max).max(1e-3);
+        let bounds: Vec<f64> = report
+            .tracking_bound
+            .iter()
+            .take(dof)
+            .map(|b| b * 1e3)
+            .filter(|b| b.is_finite() && *b > 0.0)
+            .collect();
+        let largest = bounds.iter().copied().fold(0.0, f64::max);
+        if !bounds.is_empty() && largest <= Self::BOUND_SCALE * errors {
+            panel.y_max = errors.max(largest);
+            panel.bounds = bounds;
+        } else {
+            panel.y_max = errors;
+            if !bounds.is_empty() {
+                let smallest = bounds.iter().copied().fold(f64::INFINITY, f64::min);
+                panel.off_scale = Some((smallest, largest));
+            }
+        }
+        panel
+    }
+
+    /// Whether the report's statistics count this cycle's error.
+    fn counts<const J: usize>(&self, r: &CycleRecord<J>) -> bool {
+        r.counted
+    }
+
+    fn caption(&self, report: &RunReport) -> String {
+        let mut s = format!(
+            "tracking error: max {:.3} mrad, rms {:.3} mrad{}",
+            self.counted_max,
+            report.tracking_error_rms * 1e3,
+            if self.fault_cycle.is_some() {
+                " up to the fault"
+            } else {
+                ""
+            }
+        );
+        if self.other_max > 0.0 {
+            let _ = write!(
+                s,
+                "; faded: {} up to {:.3} mrad",
+                if self.fault_cycle.is_some() {
+                    "after the fault or lost replies"
+                } else {
+                    "lost replies"
+                },
+                self.other_max
+            );
+        }
+        match self.off_scale {
+            Some((lo, hi)) => {
+                let _ = write!(s, "; bounds {lo:.0}–{hi:.0} mrad, off scale");
+            }
+            None if !self.bounds.is_empty() => s.push_str("; bounds dashed"),
+            None => {}
+        }
+        s
+    }
+}
+
 /// The latency histogram's bars (1 µs bins merged into about 100: start µs, end µs, count;
 /// empty ones left out) up to the worst wake-up `max_ns`, and where the x axis ends: after the
 /// last bar (the worst wake-up), so it stands inside the frame, not on it.
@@ -175,7 +306,62 @@ fn latency_bars(bins: &[u64], max_ns: u64) -> (Vec<(f64, f64, u64)>, f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::latency_bars;
+    use super::{CycleRecord, RunReport, draw, latency_bars};
+    use rl::controller::FaultAt;
+
+    /// Two joints tracking within 1 mrad until a fault at cycle 20, then 8 mrad off; one reply
+    /// lost at cycle 10 with a 30 mrad stale error. The caption's max is the counted one (the
+    /// report's), the rest is said faded; the fault is marked; bounds of 5 mrad are drawn, of
+    /// 500 mrad called off scale.
+    #[test]
+    fn the_error_panel_agrees_with_the_report_and_marks_the_fault() {
+        let rows: Vec<CycleRecord<2>> = (0..40u64)
+            .map(|c| {
+                let error = match c {
+                    10 => 0.030,
+                    c if c >= 20 => 0.008,
+                    _ => 0.001 * (c as f64 / 20.0),
+                };
+                CycleRecord {
+                    cycle: c,
+                    time_s: c as f64 * 0.01,
+                    commanded: [error, -error / 2.0],
+                    counted: c != 10 && c < 20,
+                    ..CycleRecord::ZERO
+                }
+            })
+            .collect();
+        let mut report =
+            RunReport::failed_early("m".into(), "d".into(), vec!["a".into(), "b".into()], "x");
+        report.fault_at = Some(FaultAt {
+            cycle: 20,
+            time_s: 0.2,
+        });
+        report.tracking_error_max = 0.00095;
+        let svg = |report: &RunReport, name: &str| {
+            let path = std::env::temp_dir()
+                .join(format!("rl-plot-test-{}-{name}.svg", std::process::id()));
+            draw(&path, report, &rows).expect("drawn");
+            let text = std::fs::read_to_string(&path).expect("svg");
+            let _ = std::fs::remove_file(&path);
+            text
+        };
+        report.tracking_bound = vec![0.005, 0.005];
+        let text = svg(&report, "near");
+        assert!(
+            text.contains("tracking error: max 0.950 mrad"),
+            "the counted max (the report's)"
+        );
+        assert!(
+            text.contains("faded: after the fault or lost replies up to 30.000 mrad"),
+            "{text}"
+        );
+        assert!(text.contains("fault at cycle 20, t = 0.200 s"), "{text}");
+        assert!(text.contains("bounds dashed"), "{text}");
+        report.tracking_bound = vec![0.5, 0.5];
+        let text = svg(&report, "far");
+        assert!(text.contains("bounds 500–500 mrad, off scale"), "{text}");
+    }
 
     /// The bar of the worst wake-up ends inside the frame, with room after it, whatever the
     /// worst wake-up is.
