@@ -303,10 +303,22 @@ impl RunReport {
     }
 }
 
-fn row(out: &mut String, label: &str, values: &[f64], scale: f64, precision: usize) {
+/// The joint table's column widths: each joint's name whole, and at least 9 characters.
+fn column_widths(joints: &[String]) -> Vec<usize> {
+    joints.iter().map(|j| j.chars().count().max(9)).collect()
+}
+
+fn row(
+    out: &mut String,
+    label: &str,
+    widths: &[usize],
+    values: &[f64],
+    scale: f64,
+    precision: usize,
+) {
     let _ = write!(out, "  {label:<24}");
-    for v in values {
-        let _ = write!(out, " {:>9.*}", precision, v * scale);
+    for (v, w) in values.iter().zip(widths) {
+        let _ = write!(out, " {:>w$.*}", precision, v * scale);
     }
     out.push('\n');
 }
@@ -405,14 +417,16 @@ impl fmt::Display for RunReport {
             us(s.max_ns)
         );
         let _ = writeln!(out, "{}", self.lateness().summary());
+        let widths = column_widths(&self.joints);
         let _ = write!(out, "  {:<24}", "joint");
-        for j in &self.joints {
-            let _ = write!(out, " {:>9}", truncate(j, 9));
+        for (j, w) in self.joints.iter().zip(&widths) {
+            let _ = write!(out, " {j:>w$}");
         }
         out.push('\n');
         row(
             &mut out,
             "tracking error max mrad",
+            &widths,
             &self.tracking_max,
             1e3,
             3,
@@ -420,6 +434,7 @@ impl fmt::Display for RunReport {
         row(
             &mut out,
             "tracking error rms mrad",
+            &widths,
             &self.tracking_rms,
             1e3,
             3,
@@ -427,6 +442,7 @@ impl fmt::Display for RunReport {
         row(
             &mut out,
             "tracking bound mrad",
+            &widths,
             &self.tracking_bound,
             1e3,
             1,
@@ -434,6 +450,7 @@ impl fmt::Display for RunReport {
         row(
             &mut out,
             "peak feed-forward N·m",
+            &widths,
             &self.peak_feed_forward,
             1.0,
             2,
@@ -545,9 +562,48 @@ impl fmt::Display for RunReport {
     }
 }
 
-fn truncate(s: &str, n: usize) -> &str {
-    match s.char_indices().nth(n) {
-        Some((i, _)) => &s[..i],
-        None => s,
+#[cfg(test)]
+mod tests {
+    use super::RunReport;
+
+    /// The joint table shows every name whole (a UR's and a Panda's were cut to nine
+    /// characters: `shoulder_ shoulder_`, `panda_joi` ×7), its rows lined up under them.
+    #[test]
+    fn the_joint_table_never_cuts_a_name() {
+        let joints: Vec<String> = ["shoulder_pan_joint", "shoulder_lift_joint", "j3"]
+            .map(String::from)
+            .to_vec();
+        let mut report = RunReport::failed_early("ur".into(), "d".into(), joints.clone(), "x");
+        report.tracking_bound = vec![0.1, 0.25, 1.5];
+        let text = report.to_string();
+        let header = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("joint "))
+            .expect("header");
+        for j in &joints {
+            assert!(header.contains(&format!(" {j}")), "{header}");
+        }
+        // Every row ends where the header ends, and each value ends under its name.
+        for label in ["tracking error max mrad", "tracking bound mrad"] {
+            let row = text
+                .lines()
+                .find(|l| l.trim_start().starts_with(label))
+                .expect(label);
+            assert_eq!(
+                row.chars().count(),
+                header.chars().count(),
+                "{row}\n{header}"
+            );
+        }
+        let bound = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("tracking bound mrad"))
+            .expect("bound row");
+        let end_of = |line: &str, needle: &str| line.find(needle).expect(needle) + needle.len();
+        assert_eq!(end_of(bound, "100.0"), end_of(header, "shoulder_pan_joint"));
+        assert_eq!(
+            end_of(bound, "250.0"),
+            end_of(header, "shoulder_lift_joint")
+        );
     }
 }
