@@ -893,13 +893,45 @@ impl DeviceSpec {
 /// Starts an in-process fake. Real controllers and drives do not share the controller's CPU
 /// time: where the process may, the fake's threads run SCHED_FIFO (they inherit the policy of
 /// the thread that starts them), one priority below the loop's default; else as they are.
+/// The priority of an in-process fake's threads: one below `rl run`'s loop (80), above any
+/// test's loop.
+pub const FAKE_PRIORITY: i32 = 79;
+
+/// Gives the calling thread [`FAKE_PRIORITY`] under SCHED_FIFO where the process may (else it
+/// runs as it is): real controllers and drives answer on their own CPUs, unhindered by the
+/// machine's other programs, and a fake's pacing thread should not be either. For a fake's
+/// `on_thread_start` hook (`FakeH7Config`, `FakeSegmentConfig`, …).
+pub fn fake_thread_realtime() {
+    fake_thread_at(FAKE_PRIORITY);
+}
+
+/// The priority of the threads of a fake in a process of its own (`rl fake-robot …`) and of
+/// the 1 kHz fakes (Franka, EtherCAT) beside a test's loop: above `rl run`'s loop (80), as a
+/// device's own CPU would be.
+pub const FAKE_PROCESS_PRIORITY: i32 = 85;
+
+/// Gives the calling thread [`FAKE_PROCESS_PRIORITY`] under SCHED_FIFO where the process may
+/// (else it runs as it is); see [`fake_thread_realtime`].
+pub fn fake_process_thread_realtime() {
+    fake_thread_at(FAKE_PROCESS_PRIORITY);
+}
+
+/// The calling thread at SCHED_FIFO `priority` where the process may; else unchanged.
+fn fake_thread_at(priority: i32) {
+    let _ = rl_rt::RtThreadBuilder::new("fake")
+        .policy(rl_rt::Policy::Fifo)
+        .priority(priority)
+        .best_effort(true)
+        .apply_to_current();
+}
+
 fn spawn_fake<T: Send + 'static, E: std::fmt::Display>(
     name: &str,
     start: impl FnOnce() -> Result<T, E> + Clone + Send + 'static,
 ) -> Result<T, String> {
     let rt = rl_rt::RtThreadBuilder::new(name)
         .policy(rl_rt::Policy::Fifo)
-        .priority(79)
+        .priority(FAKE_PRIORITY)
         .spawn({
             let start = start.clone();
             move || start().map_err(|e| e.to_string())

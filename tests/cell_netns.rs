@@ -15,6 +15,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod cli;
+mod late;
 mod netns;
 #[path = "../rl-cell/tests/support/mod.rs"]
 mod support;
@@ -98,42 +99,19 @@ fn cutting_the_link_mid_run_leaves_the_run_alone_and_every_loss_counted() {
     // The device link must lose nothing to the cut; a run in which it lost replies while the
     // loop or the fake H7 measured itself late (the report's `lateness`) is the machine's doing
     // and is run again, at most three times (then SKIPPED with the numbers).
-    let mut late = Vec::new();
-    for attempt in 1..=3 {
-        match one_run(&python, attempt) {
-            None => return,
-            Some(why) => {
-                println!("attempt {attempt}: the machine was late: {why}");
-                late.push(why);
-            }
-        }
-    }
-    println!(
-        "SKIPPED: the machine was late in three runs: {}",
-        late.join("; ")
+    let mut attempt = 0;
+    late::while_late(
+        "the cut link",
+        || {
+            attempt += 1;
+            one_run(&python, attempt)
+        },
+        |why| why.clone(),
     );
-}
-
-/// Whether the device link lost replies with the loop or the fake measured late: the reason,
-/// to run again. Any other shortfall fails here.
-fn late_loss(report: &serde_json::Value) -> Option<String> {
-    let lost = report["lost_packets"].as_u64()?;
-    if lost == 0 {
-        return None;
-    }
-    let lateness = &report["lateness"];
-    let culprit = lateness["culprit"].as_str().unwrap_or("");
-    assert!(
-        matches!(culprit, "loop" | "peer" | "loop_and_peer"),
-        "the device link lost {lost} replies with nobody measured late: {lateness}"
-    );
-    Some(format!(
-        "{lost} device replies lost, {culprit} late: {lateness}"
-    ))
 }
 
 /// One run with the link cut mid-way; `Some(why)` when the machine was late (see
-/// [`late_loss`]).
+/// [`late::json_late`]).
 fn one_run(python: &std::path::Path, attempt: u32) -> Option<String> {
     let dir = std::env::temp_dir().join(format!("rl-cell-netns-{}-{attempt}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -202,7 +180,7 @@ fn one_run(python: &std::path::Path, attempt: u32) -> Option<String> {
             String::from_utf8_lossy(&out.stderr)
         )
     });
-    if let Some(why) = late_loss(&report) {
+    if let Some(why) = late::json_late(&report) {
         let _ = std::fs::remove_dir_all(&dir);
         return Some(why);
     }

@@ -252,3 +252,97 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
     assert_eq!(report["zenoh"]["inbound"]["stops"]["accepted"], 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_python_publisher_streams_targets_that_the_arm_follows() {
+    let Some(python) = python() else {
+        println!(
+            "SKIPPED: no Python with eclipse-zenoh and rosbags (scripts/test makes target/cell-venv)"
+        );
+        return;
+    };
+    let _one = one_run_at_a_time();
+    let dir = temp("follow");
+    let csv = dir.join("t.csv");
+    let port = free_port();
+    let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
+        .args([
+            "run",
+            "--follow",
+            "zenoh",
+            "--input-timeout",
+            "10s",
+            "--json",
+            "--zenoh-namespace",
+            "/arm1",
+            "--zenoh-listen",
+        ])
+        .arg(format!("tcp/127.0.0.1:{port}"))
+        .arg("--telemetry")
+        .arg(&csv)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rl runs");
+    let goals = [
+        [0.1, 0.0, 0.1, 0.0, 0.0, 0.0],
+        [0.2, -0.1, 0.3, 0.0, 0.2, 0.0],
+        [-0.1, 0.05, 0.2, 0.1, -0.1, 0.05],
+    ];
+    let target = |n: usize, q: &[f64; 6], after_s: f64| {
+        serde_json::json!({"key": topic_key(0, "/arm1/joint_trajectory", &JOINT_TRAJECTORY),
+            "type": "trajectory_msgs/msg/JointTrajectory", "sequence": n + 1, "after_s": after_s,
+            "msg": {"header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
+                "joint_names": (0..6).map(|k| format!("joint{k}")).collect::<Vec<_>>(),
+                "points": [{"positions": q, "velocities": [], "accelerations": [], "effort": [],
+                    "time_from_start": {"sec": 0, "nanosec": 0}}]}})
+    };
+    let mut samples: Vec<_> = goals
+        .iter()
+        .enumerate()
+        .map(|(n, q)| target(n, q, if n == 0 { 0.5 } else { 1.5 }))
+        .collect();
+    samples.push(
+        serde_json::json!({"key": topic_key(0, "/arm1/stop", &STRING),
+        "type": "std_msgs/msg/String", "sequence": 1, "msg": {"data": "rest"}, "after_s": 2.0}),
+    );
+    let plan = serde_json::json!({"settle_s": 2.0, "samples": samples});
+    let plan_path = dir.join("plan.json");
+    std::fs::write(&plan_path, plan.to_string()).expect("plan");
+    let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
+    assert!(published.status.success());
+    let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
+    let out = run.wait_with_output().expect("output");
+    assert!(
+        ended.is_some(),
+        "the stop request did not end the run: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    let targets = &report["zenoh"]["inbound"]["targets"];
+    assert_eq!(targets["received"], 3, "{targets}");
+    assert_eq!(targets["refused"], 0, "{targets}");
+    assert_eq!(report["inputs"]["targets"], 3, "{report}");
+    assert_eq!(report["law"]["targets"], 3, "{report}");
+    assert_eq!(
+        report["end"], "stopped on request, brought to rest",
+        "{report}"
+    );
+    // The last target stayed 2 s: the arm was commanded exactly there (seven decimals).
+    let last = cli::last_commanded(&csv);
+    for (k, (a, b)) in last.iter().zip(&goals[2]).enumerate() {
+        assert!(
+            (a - b).abs() <= 0.5e-7,
+            "joint {k} commanded at {a}, the target {b}"
+        );
+    }
+    println!(
+        "targets taken at most {:.3} ms after the bridge sent them (period {:.2} ms)",
+        report["law"]["apply_delay_max_s"]
+            .as_f64()
+            .unwrap_or(f64::NAN)
+            * 1e3,
+        report["period_s"].as_f64().unwrap_or(f64::NAN) * 1e3
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

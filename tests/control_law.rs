@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)] // per-joint arrays indexed alike
 
 mod common;
+mod late;
 
 use std::net::{IpAddr, Ipv4Addr};
 use std::sync::Arc;
@@ -72,14 +73,6 @@ where
     (report, rows)
 }
 
-/// Whether the machine was late in this run: the loop overran or missed deadlines, or replies
-/// were lost (on loopback from a fake in this process: its thread was not scheduled in time),
-/// which the supervisor rightly turns into a fault. Other builds on a shared 2-core machine do
-/// this; the simulated devices lose nothing.
-fn machine_late(report: &RunReport) -> bool {
-    report.stats.overruns > 0 || report.stats.missed_deadlines > 0 || report.lost_packets > 0
-}
-
 /// One run at a time: each runs a SCHED_FIFO loop, and several at once on two CPUs (the tests
 /// run in parallel threads) take each other's cycles.
 fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
@@ -87,37 +80,27 @@ fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
     RUNS.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Runs `attempt` (a whole run, from its start) up to three times while it shows the machine
-/// late, and gives back the first run that was on time to be checked; after three late runs
-/// prints SKIPPED with their ends and gives back `None`. Nothing is loosened: an on-time run
-/// is checked in full, and a run that fails on time fails the test.
+/// Runs `attempt` (a whole run, from its start, one at a time) while it shows the machine
+/// late ([`late::any_shortfall`]; see [`late::while_late`]).
 fn on_time<T>(name: &str, attempt: impl FnMut() -> (RunReport, T)) -> Option<(RunReport, T)> {
-    retried(name, attempt, |r, _| machine_late(r))
+    retried(name, attempt, |r, _| late::any_shortfall(r))
 }
 
-/// Runs `attempt` up to three times while `again` says so of its outcome (see [`on_time`]).
+/// Runs `attempt` one at a time while `again` blames its outcome on the machine (see
+/// [`late::while_late`]).
 fn retried<T>(
     name: &str,
     mut attempt: impl FnMut() -> (RunReport, T),
-    again: impl Fn(&RunReport, &T) -> bool,
+    again: impl Fn(&RunReport, &T) -> Option<String>,
 ) -> Option<(RunReport, T)> {
-    let mut late = Vec::new();
-    for n in 1..=3 {
-        let (report, rest) = {
+    late::while_late(
+        name,
+        || {
             let _one = one_run_at_a_time();
             attempt()
-        };
-        if !again(&report, &rest) {
-            return Some((report, rest));
-        }
-        println!("{name}: attempt {n}: the machine was late:\n{report}");
-        late.push(format!("{:?}", report.end));
-    }
-    println!(
-        "SKIPPED: {name}: this machine was late in three runs ({})",
-        late.join("; ")
-    );
-    None
+        },
+        |(report, rest)| again(report, rest),
+    )
 }
 
 /// The arm's joints `q` within 1 mrad of `goal`, its velocities `qd` under 0.01 rad/s.
@@ -232,7 +215,11 @@ impl ControlLaw<16, 8> for Swing {
 #[test]
 fn a_position_law_of_ones_own_drives_the_fake_h7() {
     let Some((report, (rows, fake, brakes, reason))) = on_time("own position law", || {
-        let fake = FakeH7::spawn(FakeH7Config::loopback(6)).expect("fake H7");
+        let fake = FakeH7::spawn(FakeH7Config {
+            on_thread_start: Some(rl::devices::fake_thread_realtime),
+            ..FakeH7Config::loopback(6)
+        })
+        .expect("fake H7");
         let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
             .expect("device");
         let law = Swing::new(0.05);
@@ -652,15 +639,6 @@ fn a_computed_torque_law_takes_a_simulated_arm_to_a_streamed_target() {
     assert!(st.stopped_from.is_some() && !st.powered);
 }
 
-/// The fake FR3's thread at a real-time priority above the loop's (as `rl fake-robot franka`).
-fn realtime_fake_franka() {
-    let _ = rl::rt::RtThreadBuilder::new("fake-franka")
-        .policy(rl::rt::Policy::Fifo)
-        .priority(85)
-        .best_effort(true)
-        .apply_to_current();
-}
-
 /// The computed-torque law on the fake FR3 in torque mode at its 1 kHz (FCI on loopback, the
 /// arm's dynamics integrated by the fake from the same URDF, gravity added by the robot): the
 /// law's torques reach the robot through the driver's torque capability, and a streamed target
@@ -676,16 +654,22 @@ fn a_torque_law_takes_the_fake_franka_to_a_streamed_target() {
     // late) is tried again. Lost commands with both on time fail the test.
     let failed_late = |r: &RunReport, (_, fake): &(Vec<CycleRecord<8>>, FakeFranka)| {
         let f = fake.status();
-        r.exit_code() != 0
+        (r.exit_code() != 0
             && (r.stats.overruns > 0
                 || r.stats.missed_deadlines > 0
                 || f.slips > 0
-                || f.max_lateness_us > 250)
+                || f.max_lateness_us > 250))
+            .then(|| {
+                format!(
+                    "{r}\nthe fake: {} slips, {} µs late at most",
+                    f.slips, f.max_lateness_us
+                )
+            })
     };
     let attempt = || {
         let fake = FakeFranka::spawn(FakeFrankaConfig {
             command_port: 0,
-            on_thread_start: Some(realtime_fake_franka),
+            on_thread_start: Some(rl::devices::fake_process_thread_realtime),
             ..FakeFrankaConfig::loopback().with_urdf(urdf.clone())
         })
         .expect("fake FR3");
@@ -930,4 +914,58 @@ fn the_report_and_the_telemetry_say_when_the_fault_happened() {
         )),
         "{text}"
     );
+}
+
+/// A target the limits cannot reach (at the edge of joint 0's range, moving back in at 0.9 of
+/// its speed: arriving there so needs a turn beyond the limit) is not taken: counted as
+/// unreachable with the generator's reason, the motion to the target before it goes on and
+/// reaches it, and the position limits are never left.
+#[test]
+fn a_target_the_limits_cannot_reach_is_counted_and_not_taken() {
+    let fake = common::immediate_fake(6);
+    let common::LawOnH7 {
+        mut control,
+        tx,
+        start,
+        limits,
+    } = common::law_on_h7(&fake, rl::controller::TargetFollower::<8>::new(), 16);
+    let dof = start.len();
+    let upper = control.model().limits(0).upper;
+    let mut reachable = start.clone();
+    reachable[1] += 0.05;
+    tx.send_position(&reachable).expect("a reachable target");
+    for _ in 0..5 {
+        assert!(!control.cycle().finished);
+    }
+    let mut edge = start.clone();
+    edge[0] = upper - 1e-3;
+    let mut inwards = vec![0.0; dof];
+    inwards[0] = -0.9 * limits.velocity[0];
+    tx.send_position_velocity(&edge, &inwards)
+        .expect("the channel takes it: within the limits, the speed allowed");
+    let mut q = [0.0; 8];
+    for _ in 0..2000 {
+        let cycle = control.cycle();
+        assert!(!cycle.finished);
+        q = cycle.record.commanded;
+        assert!(
+            q[0] <= upper,
+            "joint 0 commanded at {} beyond {upper}",
+            q[0]
+        );
+    }
+    let counts = *control.law().counts();
+    assert_eq!(counts.targets, 1, "{counts:?}");
+    assert_eq!(counts.unreachable, 1, "{counts:?}");
+    assert!(counts.first_unreachable.is_some(), "{counts:?}");
+    assert!(
+        counts.last_reach_s.is_some(),
+        "the first target was reached: {counts:?}"
+    );
+    for (k, (q, goal)) in q[..dof].iter().zip(&reachable).enumerate() {
+        assert!((q - goal).abs() < 1e-9, "joint {k} at {q}, not at {goal}");
+    }
+    let mut robot = control.into_robot();
+    rl::drivers::Device::stop(&mut robot).expect("stop");
+    rl::drivers::Device::close(&mut robot).expect("close");
 }

@@ -6,6 +6,8 @@
 
 use std::time::{Duration, Instant};
 
+mod late;
+
 use rl::controller::{
     ControlRun, CycleRecord, Fault, PlanError, RunEnd, RunError, RunOptions, RunReport,
     Supervision, rv6sl,
@@ -27,6 +29,9 @@ fn options() -> RunOptions {
 fn fake(loaded: &LoadedModel<16>, tweak: impl FnOnce(&mut FakeH7Config)) -> FakeH7 {
     let mut config =
         FakeH7Config::for_model(&loaded.model, &loaded.home_or_neutral()).expect("fake config");
+    // A real controller's cycle runs on its own CPU: the fake's, at a real-time priority above
+    // the loop's, so the other test running beside this one does not shift its phase.
+    config.on_thread_start = Some(rl::devices::fake_thread_realtime);
     tweak(&mut config);
     FakeH7::spawn(config).expect("fake H7")
 }
@@ -90,17 +95,29 @@ fn rlmdl(name: &str) -> LoadedModel<16> {
     .expect("RL model")
 }
 
+/// Runs `run` while it failed from the machine's lateness ([`late::failed_late`]: on a shared
+/// VM the host holds a CPU for milliseconds); see [`late::while_late`]. A timing failure with
+/// nobody late is returned to be checked, and fails its checks.
+fn on_time(what: &str, run: impl Fn() -> (RunReport, FakeH7)) -> Option<(RunReport, FakeH7)> {
+    late::while_late(what, run, |(report, _)| late::failed_late(report))
+}
+
 #[test]
 fn a_clean_run_on_the_controller_cycle_ends_at_rest_with_the_servo_off() {
-    let model = rv6sl().expect("model");
-    let fake = fake(&model, |_| {});
-    let report = run_with(
-        model,
-        &fake,
-        options().duration(Duration::from_secs(2)),
-        Duration::MAX,
-        |_| {},
-    );
+    let Some((report, fake)) = on_time("a clean run", || {
+        let model = rv6sl().expect("model");
+        let fake = fake(&model, |_| {});
+        let report = run_with(
+            model,
+            &fake,
+            options().duration(Duration::from_secs(2)),
+            Duration::MAX,
+            |_| {},
+        );
+        (report, fake)
+    }) else {
+        return;
+    };
     assert_eq!(report.end, Some(RunEnd::CycleLimit), "{report}");
     assert_eq!(report.exit_code(), 0, "{report}");
     // The arm lags its command by the servo's two cycles: a tracking error, within the bound.
@@ -158,6 +175,11 @@ fn a_joint_the_controller_clamps_ends_the_run() {
     );
     assert!(fake.status().limit_hits >= 1);
     assert_eq!(report.exit_code(), 1);
+    // The JSON's `end` names the joint as the model does (not `#0`).
+    let json = report.to_json();
+    let end = json["end"].as_str().expect("an end");
+    assert!(end.contains("joint joint0 "), "{end}");
+    assert_eq!(json["fault_joint"], "joint0", "{json}");
     assert_switched_off(&fake, &report, true);
 }
 
@@ -277,15 +299,22 @@ fn half_the_replies_lost_ends_the_run_early() {
 
 #[test]
 fn a_refused_stop_fails_the_run_and_says_why() {
-    let model = rv6sl().expect("model");
-    let fake = fake(&model, |_| {});
-    let report = run_with(
-        model,
-        &fake,
-        options().duration(Duration::from_millis(500)),
-        Duration::from_millis(100),
-        |f| f.set_r3_rejection(Some("STOP")),
-    );
+    // The rejection comes after the start (whose first R3 command is a STOP); a run that
+    // failed before it from the machine's lateness never met it and is run again.
+    let Some((report, _fake)) = on_time("a refused stop", || {
+        let model = rv6sl().expect("model");
+        let fake = fake(&model, |_| {});
+        let report = run_with(
+            model,
+            &fake,
+            options().duration(Duration::from_millis(500)),
+            Duration::from_millis(100),
+            |f| f.set_r3_rejection(Some("STOP")),
+        );
+        (report, fake)
+    }) else {
+        return;
+    };
     assert!(!report.shutdown.stopped, "{report}");
     assert_eq!(report.exit_code(), 1);
     let json = report.to_json();

@@ -266,6 +266,12 @@ fn every_output_is_versioned_and_documented_key_by_key() {
         ),
         (
             "rl run",
+            strings(&["run", "--follow", "-", "--json"]),
+            Some("position 0.1 0 0 0 0 0\nstop\n"),
+            no_rt.clone(),
+        ),
+        (
+            "rl run",
             strings(&["run", "--duration", "1s", "--json"]),
             None,
             no_rt,

@@ -8,6 +8,8 @@ use std::process::{Command, Stdio};
 
 use serde_json::Value;
 
+mod cli;
+
 fn rl_otg(args: &[&str], input: &str) -> (i32, Vec<Value>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
         .arg("otg")
@@ -111,13 +113,7 @@ fn edge_case_fixtures_agree_through_the_cli() {
 #[test]
 fn live_comparison_with_ruckig() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = root.join("target/ruckig-venv/bin/python");
-    let ok = python.exists()
-        && Command::new(&python)
-            .args(["-c", "import ruckig"])
-            .status()
-            .is_ok_and(|s| s.success());
-    if !ok {
+    if cli::ruckig_python().is_none() {
         println!(
             "SKIPPED: live_comparison_with_ruckig: no ruckig in target/ruckig-venv (scripts/test installs it)"
         );

@@ -141,8 +141,8 @@ fn steady_state_control_cycle_with_the_viewer_attached_allocates_nothing() {
 /// stepped — allocates nothing, while another thread sends targets.
 #[test]
 fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() {
+    use rl::controller::Target;
     use rl::controller::law::{BrakeReason, Command, Context, ControlLaw, LawStatus, Start};
-    use rl::controller::{MotionLimits, Supervision, Target, input};
 
     /// Steps toward the newest target by at most `step` per cycle.
     struct Toward {
@@ -183,38 +183,17 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
 
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
-    let model = rv6sl().expect("embedded model").model;
-    let dof = model.dof();
-    let fake = common::immediate_fake(dof);
-    let (robot, start) = common::started_h7_standing(&fake, dof);
-    let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
-    let (tx, rx) = input::channel::<16, 8, [f64; 3]>(&model, 64);
-    let mut law = Toward {
+    let fake = common::immediate_fake(6);
+    let law = Toward {
         step: 1e-4,
         at: [0.0; 8],
     };
-    law.start(&Start {
-        position: &start,
-        model: &model,
-        limits: &limits,
-        period_s: common::PERIOD.as_secs_f64(),
-        device_period_s: common::PERIOD.as_secs_f64(),
-    })
-    .expect("law starts");
-    let mut control = Box::new(
-        Controller::with_law(
-            robot,
-            model,
-            law,
-            &start,
-            &limits,
-            common::PERIOD,
-            &Supervision::default(),
-        )
-        .expect("controller"),
-    );
-    control.attach_inputs(rx);
-    control.input_timeout(std::time::Duration::from_secs(60));
+    let common::LawOnH7 {
+        mut control,
+        tx,
+        start,
+        ..
+    } = common::law_on_h7(&fake, law, 64);
     let mut goal = start.clone();
     goal[0] += 0.2;
     tx.send_position(&goal).expect("target");
@@ -326,6 +305,121 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     );
     assert_eq!(control.failed_steps(), 0);
     assert!(control.tracking().max_error() > 0.0, "the arm moved");
+    let mut robot = control.into_robot();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}
+
+/// `rl run --follow`'s law: targets taken from the input channel every few cycles, each a
+/// recalculation of the online trajectory generator from the state commanded last, and then
+/// the stop along its braking profile — allocation-free from the first cycle to rest.
+#[test]
+fn following_streamed_targets_and_braking_allocates_nothing() {
+    assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
+
+    let dof = rv6sl().expect("embedded model").model.dof();
+    let fake = common::immediate_fake(dof);
+    let common::LawOnH7 {
+        mut control,
+        tx,
+        start,
+        ..
+    } = common::law_on_h7(&fake, rl::controller::TargetFollower::<8>::new(), 64);
+    let home = start.clone();
+    let target = move |i: u32| {
+        let mut g = home.clone();
+        g[0] += 0.05 * f64::from(i % 5);
+        g[1] -= 0.03 * f64::from(i % 3);
+        g
+    };
+    tx.send_position(&target(1)).expect("target");
+    for _ in 0..50 {
+        assert!(!control.cycle().finished);
+    }
+    // A target every four cycles from another thread (sending is the sender's work, not the
+    // loop's), each sent before the cycle that takes it.
+    use std::sync::atomic::{AtomicU32, Ordering};
+    let sent = std::sync::Arc::new(AtomicU32::new(0));
+    let sent_by = sent.clone();
+    let sender = std::thread::spawn(move || {
+        for i in 0..100u32 {
+            let _ = tx.send_position(&target(i + 2));
+            sent_by.store(i + 1, Ordering::Release);
+            std::thread::sleep(std::time::Duration::from_micros(300));
+        }
+    });
+    let mut finished = false;
+    let counted = allocations(|| {
+        for k in 0..400u32 {
+            if k % 4 == 0 {
+                while sent.load(Ordering::Acquire) < k / 4 + 1 {
+                    std::thread::yield_now();
+                }
+            }
+            finished |= control.cycle().finished;
+        }
+        control.request_halt();
+        for _ in 0..2000 {
+            if control.cycle().finished {
+                finished = true;
+                break;
+            }
+        }
+    });
+    sender.join().expect("sender");
+    assert!(finished, "the stop brought the arm to rest");
+    assert_eq!(
+        counted, 0,
+        "allocations in 400 cycles following targets and the stop"
+    );
+    assert_eq!(control.end(), Some(rl::controller::RunEnd::Stopped));
+    assert!(
+        control.law().counts().targets >= 90,
+        "{:?}",
+        control.law().counts()
+    );
+    assert_eq!(control.failed_steps(), 0);
+    let mut robot = control.into_robot();
+    robot.stop().expect("stop");
+    robot.close().expect("close");
+}
+
+/// The safety chain's check in every cycle (pins read, watchdog toggled, brake written, one
+/// virtual call) allocates nothing.
+#[test]
+fn the_safety_chains_check_in_the_cycle_allocates_nothing() {
+    use rl::drivers::safety::{Level, NoPin, SafetyChain, SafetyConfig};
+
+    assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
+    let dof = rv6sl().expect("embedded model").model.dof();
+    let fake = common::immediate_fake(dof);
+    let mut control = Box::new(common::demo_controller(&fake));
+    // Pins that read low: a chain closed at low.
+    let mut config = SafetyConfig::default();
+    config.estop.closed_level = Level::Low;
+    control.attach_safety(Box::new(
+        SafetyChain::new(config, NoPin, NoPin).with_brake(NoPin),
+    ));
+    control
+        .arm_safety()
+        .expect("armed: the e-stop reads closed");
+    for _ in 0..50 {
+        assert!(!control.cycle().finished);
+    }
+    let mut finished = false;
+    let counted = allocations(|| {
+        for _ in 0..400 {
+            finished |= control.cycle().finished;
+        }
+    });
+    assert!(!finished);
+    assert_eq!(
+        counted, 0,
+        "allocations in 400 cycles with the safety chain"
+    );
+    assert!(control.fault().is_none(), "{:?}", control.fault());
+    let chain = control.detach_safety().expect("the chain");
+    assert!(chain.counters().cycles >= 450, "{:?}", chain.counters());
     let mut robot = control.into_robot();
     robot.stop().expect("stop");
     robot.close().expect("close");

@@ -574,8 +574,11 @@ fn a_robot_away_from_the_start_is_refused_before_servo_on() {
     // The fake stands 0.2 rad away from the start on joint 1.
     let mut away = start.clone();
     away[0] += 0.2;
-    let fake = FakeH7::spawn(FakeH7Config::for_model(&loaded.model, &away).expect("config"))
-        .expect("fake");
+    let fake = FakeH7::spawn(FakeH7Config {
+        on_thread_start: Some(rl::devices::fake_thread_realtime),
+        ..FakeH7Config::for_model(&loaded.model, &away).expect("config")
+    })
+    .expect("fake");
     let h7 =
         MitsubishiH7::new(MitsubishiH7Config::at(fake.udp_addr(), fake.r3_addr())).expect("device");
     let options = RunOptions {

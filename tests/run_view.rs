@@ -122,10 +122,12 @@ fn a_run_shows_its_motion_and_tracking_error_live() {
     let max_per_joint = floats(&report["tracking_error_rad"]["max_per_joint"]);
     assert_eq!(max_per_joint.len(), 6);
 
+    // A live state carries q, and q_cmd unless its cycle's measurement was a held one (a lost
+    // reply: the report does not count that cycle's tracking error, and the view shows none).
     let live: Vec<(Vec<f64>, Vec<f64>)> = states
         .iter()
         .map(|s| &s["models"][0])
-        .filter(|m| m["source"] == "live")
+        .filter(|m| m["source"] == "live" && !m["q_cmd"].is_null())
         .map(|m| {
             let (q, c) = (floats(&m["q"]), floats(&m["q_cmd"]));
             assert_eq!(
@@ -136,6 +138,16 @@ fn a_run_shows_its_motion_and_tracking_error_live() {
             (q, c)
         })
         .collect();
+    let uncommanded = states
+        .iter()
+        .map(|s| &s["models"][0])
+        .filter(|m| m["source"] == "live" && m["q_cmd"].is_null())
+        .count();
+    assert!(
+        uncommanded as u64 <= report["lost_packets"].as_u64().unwrap_or(0),
+        "{uncommanded} live states without a command, {} replies lost",
+        report["lost_packets"]
+    );
     assert!(
         live.len() >= 20,
         "{} live states of {} in a 2 s run",

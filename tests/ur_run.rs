@@ -10,52 +10,19 @@ use std::process::Command;
 
 use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig, runtime_state};
 
+mod late;
+
 const HOST: Ipv4Addr = Ipv4Addr::new(127, 0, 0, 95);
-
-fn realtime() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-ur")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(79)
-        .best_effort(true)
-        .apply_to_current();
-}
-
-/// A run that failed on timing (the report's `likely_cause`) while the loop or the fake
-/// measured itself late (`lateness.culprit`): the machine's doing, not the driver's — the
-/// reason, to run again. Any other failure fails here.
-fn machine_late(report: &serde_json::Value) -> Option<String> {
-    let cause = report["likely_cause"].as_str()?;
-    let culprit = report["lateness"]["culprit"].as_str().unwrap_or("");
-    matches!(culprit, "loop" | "peer" | "loop_and_peer").then(|| {
-        format!(
-            "{}: {cause}",
-            report["failure"].as_str().unwrap_or("failed")
-        )
-    })
-}
 
 #[test]
 fn rl_run_drives_the_fake_ur() {
     // A run the machine made late (a CI run: the loop waited 11 ms for its CPU and missed 6
     // deadlines in a row) runs again, at most three times, then SKIPPED with the reasons.
-    let mut late = Vec::new();
-    for attempt in 1..=3 {
-        match one_run() {
-            None => return,
-            Some(why) => {
-                println!("attempt {attempt}: the machine was late: {why}");
-                late.push(why);
-            }
-        }
-    }
-    println!(
-        "SKIPPED: rl_run_drives_the_fake_ur: the machine was late in three runs: {}",
-        late.join("; ")
-    );
+    late::while_late("rl_run_drives_the_fake_ur", one_run, |why| why.clone());
 }
 
 /// One run against a fresh fake; `Some(why)` when the machine was late (see
-/// [`machine_late`]), `None` when it passed (or was SKIPPED).
+/// [`late::json_late`]), `None` when it passed (or was SKIPPED).
 fn one_run() -> Option<String> {
     let home = rl::controller::rv6sl()
         .expect("embedded model")
@@ -71,7 +38,7 @@ fn one_run() -> Option<String> {
         dashboard_port: Some(29_999),
         script_ports: vec![30_002],
         initial_q,
-        on_thread_start: Some(realtime),
+        on_thread_start: Some(rl::devices::fake_thread_realtime),
         ..FakeUrConfig::loopback()
     }) {
         Ok(f) => f,
@@ -93,7 +60,7 @@ fn one_run() -> Option<String> {
     let report: serde_json::Value = serde_json::from_str(stdout.trim())
         .unwrap_or_else(|e| panic!("no JSON report ({e}): {stdout} {stderr}"));
     println!("{report:#}");
-    if let Some(why) = machine_late(&report) {
+    if let Some(why) = late::json_late(&report) {
         return Some(why);
     }
     assert!(out.status.success(), "{stderr}");

@@ -319,3 +319,48 @@ fn bad_input_is_a_typed_error_naming_the_axis() {
     assert!(generator.update(&too_fast).is_err());
     assert_eq!(generator.trajectory().duration(), before);
 }
+
+/// A goal the generator cannot reach leaves the motion under way as it was: the cycles after
+/// the refused update are, bit for bit, those of a generator that never saw it. The refused
+/// goal fails late in the calculation (its position limits: arriving at the edge moving back
+/// in needs a turn beyond it), after the synchronised profiles were written, and a refused
+/// stop the same way.
+#[test]
+fn a_refused_goal_leaves_the_motion_under_way() {
+    let mut l = Limits::<3>::uniform(1.0, 2.0, 10.0);
+    l.min_position = [-1.0; 3];
+    l.max_position = [1.0; 3];
+    let start = State::at_rest([0.0; 3]);
+    let goal = Input::new(start, State::at_rest([0.5, -0.3, 0.2]), l);
+    let mut refused = goal;
+    refused.target.position[0] = 1.0 - 1e-3;
+    refused.target.velocity[0] = -0.9;
+    let mut a = Otg::new(Duration::from_secs_f64(DT), start);
+    let mut b = Otg::new(Duration::from_secs_f64(DT), start);
+    for _ in 0..100 {
+        assert_eq!(a.update(&goal).unwrap(), b.update(&goal).unwrap());
+    }
+    let err = a.update(&refused).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            OtgError::PositionLimitsUnreachable { axis: 0 }
+                | OtgError::CannotStopBeforePositionLimit { axis: 0 }
+        ),
+        "{err:?}"
+    );
+    let mut bad_limits = l;
+    bad_limits.max_jerk[1] = -1.0;
+    assert!(b.brake(&bad_limits, Synchronization::None).is_err());
+    loop {
+        let (x, y) = (a.update(&goal).unwrap(), b.update(&goal).unwrap());
+        assert_eq!(x, y);
+        assert!(!x.recalculated);
+        if x.finished {
+            for (p, goal) in x.sample.position.iter().zip([0.5, -0.3, 0.2]) {
+                assert!((p - goal).abs() < 1e-12, "{p} for {goal}");
+            }
+            break;
+        }
+    }
+}

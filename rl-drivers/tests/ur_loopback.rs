@@ -11,7 +11,8 @@ use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig, runtime_state, safet
 use rl_drivers::ur::{Dashboard, UniversalRobot, UrConfig};
 use rl_drivers::{
     CartesianPositionSensor, CyclicDevice, Device, DeviceError, DigitalOutputWriter, ErrorKind,
-    JointPositionActuator, JointPositionSensor, LinkStatisticsSensor, State,
+    JointPositionActuator, JointPositionSensor, JointVelocityActuator, JointVelocitySensor,
+    LinkStatisticsSensor, State,
 };
 
 fn fake(running: bool) -> FakeUr {
@@ -127,6 +128,81 @@ fn the_program_follows_a_joint_motion_and_ends_on_stop() {
     assert_eq!(s.program, None);
     assert_eq!(s.output_int[24], 0, "the program ran to its end");
     assert_eq!(s.input_int[24], 0);
+    r.close().unwrap();
+    assert_eq!(f.status().protocol_errors, 0);
+}
+
+/// Joint speeds through `speedj` (the program's velocity mode): the arm ramps to the commanded
+/// speed at `UrConfig::speed_acceleration`, holds it, stops when the speeds go to zero, and
+/// travels what the commanded speeds integrate to; positions take over again without a jump.
+#[test]
+fn the_program_follows_joint_speeds_and_goes_back_to_positions() {
+    let f = fake(true);
+    let mut r = started(&f);
+    let mut q0 = [0.0; 6];
+    r.joint_position(&mut q0).unwrap();
+    // Not finite: refused, and nothing changes.
+    let e = r.set_joint_velocity(&[f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    assert!(
+        matches!(e, Err(rl_drivers::Error::InvalidArgument { .. })),
+        "{e:?}"
+    );
+    // 0.3 rad/s on joint 0 for 500 steps (1 s at 2 ms), then 0 for 250: at 1.4 rad/s² the
+    // ramps take 0.21 s each, and the ramp down makes up what the ramp up lost, so joint 0
+    // travels 0.3 rad.
+    let mut speed = [0.0; 6];
+    speed[0] = 0.3;
+    let mut errors = 0;
+    let mut held = Vec::new();
+    for k in 0..750 {
+        let qd = if k < 500 { speed } else { [0.0; 6] };
+        r.set_joint_velocity(&qd).unwrap();
+        if r.step().is_err() {
+            errors += 1;
+        }
+        if (200..500).contains(&k) {
+            let mut v = [0.0; 6];
+            r.joint_velocity(&mut v).unwrap();
+            held.push(v[0]);
+        }
+    }
+    assert!(errors < 25, "{errors} of 750 steps failed");
+    let s = f.status();
+    assert!(s.speedj_calls > 650, "{s:?}");
+    assert_eq!(s.protective_stops, 0);
+    // After the ramp the arm moves at the commanded speed (the fake's drive lag is a
+    // first-order filter: at a constant speed it lags in position only).
+    let mean = held.iter().sum::<f64>() / held.len() as f64;
+    assert!((mean - 0.3).abs() < 0.01, "mean speed {mean} rad/s");
+    let mut q = [0.0; 6];
+    r.joint_position(&mut q).unwrap();
+    // Steps that waited for a late package do not change the fake's clock: the commanded
+    // speed ran for 500 of its cycles, give or take the failed steps.
+    let travelled = q[0] - q0[0];
+    let slack = 0.3 * 0.002 * (f64::from(errors) + 2.0);
+    assert!(
+        (travelled - 0.3).abs() <= slack + 1e-3,
+        "joint 0 travelled {travelled} rad, not 0.3 (±{slack})"
+    );
+    for k in 1..6 {
+        assert!((q[k] - q0[k]).abs() < 1e-9, "joint {k} moved: {q:?}");
+    }
+    // Back to positions, where the arm stands: it holds.
+    r.set_joint_position(&q).unwrap();
+    let servoj = f.status().servoj_calls;
+    for _ in 0..100 {
+        let _ = r.step();
+    }
+    let mut still = [0.0; 6];
+    r.joint_position(&mut still).unwrap();
+    assert!(
+        (still[0] - q[0]).abs() < 1e-3,
+        "{still:?} after holding {q:?}"
+    );
+    assert!(f.status().servoj_calls > servoj + 80);
+    r.stop().unwrap();
+    assert!(eventually(&f, |s| s.runtime_state == runtime_state::STOPPED));
+    assert_eq!(f.status().output_int[24], 0, "the program ran to its end");
     r.close().unwrap();
     assert_eq!(f.status().protocol_errors, 0);
 }

@@ -8,9 +8,10 @@
 //! --device` names them, through the library's device table ([`rl::devices`], the one `rl run`
 //! uses), so a driver added there is reachable from Python too.
 //!
-//! Extension point: streamed targets (an online trajectory generator fed from outside the
-//! loop, being built now in rl-core and the controller) become a method here that writes into
-//! the run's lock-free mailbox.
+//! With `follow=True` the run follows targets sent from Python (`send_position`,
+//! `send_velocity`) instead of a planned tour: the controller's `TargetFollower`, rl-core's
+//! online trajectory generator in the loop, as `rl run --follow` runs it. A target goes through
+//! the run's lock-free mailbox, checked against the joints' limits on the way in.
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -20,8 +21,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rl::controller::{
-    ControlRun as Run, CycleRecord, JointRobot, Progress, RunError, RunOptions, RunReport,
-    Supervision,
+    ControlLaw, ControlRun as Run, CycleRecord, DEFAULT_INPUT_TIMEOUT, InputSender, JointRobot,
+    Progress, RunError, RunOptions, RunReport, Supervision, TargetFollower,
 };
 use rl_core::loader::{LoadOptions, LoadedModel};
 use rl_rt::{StopFlag, StopLevel};
@@ -66,9 +67,33 @@ trait Running: Send {
     fn plan_duration_s(&self) -> f64;
     fn scheduling(&self) -> String;
     fn warnings(&self) -> Vec<String>;
+    /// A sender of targets to the loop, apart from the run (a send never waits for a poll).
+    fn sender(&self) -> Box<dyn Send_>;
 }
 
-impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
+/// Sends targets into a run's mailbox: a position (with the velocity to pass it at), or a
+/// velocity.
+trait Send_: Send {
+    fn send(&self, position: Option<&[f64]>, velocity: Option<&[f64]>) -> Result<(), String>;
+}
+
+impl<const N: usize, X: Copy + Send + 'static> Send_ for InputSender<N, X> {
+    fn send(&self, position: Option<&[f64]>, velocity: Option<&[f64]>) -> Result<(), String> {
+        match (position, velocity) {
+            (Some(p), Some(v)) => self.send_position_velocity(p, v),
+            (Some(p), None) => self.send_position(p),
+            (None, Some(v)) => self.send_velocity(v),
+            (None, None) => return Ok(()),
+        }
+        .map_err(|e| e.to_string())
+    }
+}
+
+impl<const N: usize, L> Running for Run<Box<dyn JointRobot + Send>, N, N, L>
+where
+    L: ControlLaw<N, N> + 'static,
+    L::Input: Send,
+{
     fn poll(&mut self, wait: Duration) -> Option<Progress> {
         Run::poll(self, wait)
     }
@@ -96,6 +121,10 @@ impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
     fn warnings(&self) -> Vec<String> {
         Run::warnings(self).to_vec()
     }
+
+    fn sender(&self) -> Box<dyn Send_> {
+        Box::new(self.inputs())
+    }
 }
 
 /// A supervised controller run (what `rl run` does): the device is opened, the model checked
@@ -122,6 +151,11 @@ impl<const N: usize> Running for Run<Box<dyn JointRobot + Send>, N, N> {
 ///     supervision: the per-cycle checks that end a run on a fault.
 ///     tracking_bound: the largest tracking error, rad (or m): one value or one per joint.
 ///     telemetry: keep one record per cycle for `telemetry()`.
+///     follow: follow the targets sent with `send_position` and `send_velocity` (rl-core's
+///         online trajectory generator in the loop, as `rl run --follow`) instead of a tour;
+///         the arm holds where it stands until the first.
+///     input_timeout: with `follow`, the longest wait for the next target, s (default 2):
+///         then the arm is brought to rest and the run fails.
 ///
 /// Raises RunError when the run does not start (nothing moved).
 #[pyclass(frozen, module = "rlrs")]
@@ -135,6 +169,38 @@ pub struct ControlRun {
     scheduling: String,
     warnings: Vec<String>,
     report: Mutex<Option<Py<PyAny>>>,
+    /// Targets into the loop (`follow=True`; dropped with the run's end).
+    targets: Mutex<Option<Box<dyn Send_>>>,
+    follow: bool,
+    dof: usize,
+}
+
+impl ControlRun {
+    /// `x` as one value per joint.
+    fn joint_vector(&self, x: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+        let input = Input::new(x, name)?;
+        if input.shape() != [self.dof] {
+            return Err(PyValueError::new_err(format!(
+                "{name}: shape {}, expected ({},)",
+                shape_text(input.shape()),
+                self.dof
+            )));
+        }
+        Ok(input.slice().to_vec())
+    }
+
+    fn send(&self, py: Python<'_>, p: Option<&[f64]>, v: Option<&[f64]>) -> PyResult<()> {
+        if !self.follow {
+            return Err(PyValueError::new_err(
+                "this run follows its tour: start it with follow=True to send it targets",
+            ));
+        }
+        let targets = crate::gil::lock(py, &self.targets);
+        let Some(targets) = targets.as_ref() else {
+            return Err(crate::error::RunError::new_err("the run has ended"));
+        };
+        targets.send(p, v).map_err(PyValueError::new_err)
+    }
 }
 
 /// The model of a run, loaded at capacity `N` (16 or 64).
@@ -180,12 +246,13 @@ fn run_model(model: Option<&Bound<'_, PyAny>>) -> PyResult<(RunModel, String)> {
     }
 }
 
-/// Starts the run at capacity `N`.
+/// Starts the run at capacity `N`: the planned tour, or (`follow`) the target follower.
 fn start<const N: usize>(
     spec: &DeviceSpec,
     loaded: LoadedModel<N>,
     period: Option<Duration>,
     mut options: RunOptions,
+    follow: bool,
 ) -> PyResult<(Box<dyn Running>, Option<InProcessFake>)> {
     let opened = spec
         .build(
@@ -207,17 +274,25 @@ fn start<const N: usize>(
         .supervision
         .allow_device_lag(opened.lag, period.map_or(cycle, |p| p.max(cycle)));
     let robot: Box<dyn JointRobot + Send> = opened.robot;
-    let run = Run::<_, N, N>::start(robot, loaded, options).map_err(|e| match e {
+    let refused = |e: RunError| match e {
         RunError::Options(why) => PyValueError::new_err(why),
         e => crate::error::RunError::new_err(e.to_string()),
-    })?;
-    Ok((Box::new(run), opened.fake))
+    };
+    let run: Box<dyn Running> = if follow {
+        Box::new(
+            Run::<_, N, N, _>::start_law(robot, loaded, options, TargetFollower::<N>::new())
+                .map_err(refused)?,
+        )
+    } else {
+        Box::new(Run::<_, N, N>::start(robot, loaded, options).map_err(refused)?)
+    };
+    Ok((run, opened.fake))
 }
 
 #[pymethods]
 impl ControlRun {
     #[new]
-    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=rl::controller::runtime::DEFAULT_SPEED, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true))]
+    #[pyo3(signature = (device="fake-h7", model=None, duration=None, speed=rl::controller::runtime::DEFAULT_SPEED, waypoints=None, rate=None, priority=80, cpus=Vec::new(), lock_memory=false, supervision=true, tracking_bound=None, telemetry=true, follow=false, input_timeout=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -233,7 +308,28 @@ impl ControlRun {
         supervision: bool,
         tracking_bound: Option<&Bound<'_, PyAny>>,
         telemetry: bool,
+        follow: bool,
+        input_timeout: Option<f64>,
     ) -> PyResult<Self> {
+        if !follow && input_timeout.is_some() {
+            return Err(PyValueError::new_err(
+                "input_timeout: only a run that follows targets (follow=True) waits for them",
+            ));
+        }
+        if follow && waypoints.is_some() {
+            return Err(PyValueError::new_err(
+                "waypoints: a run that follows targets (follow=True) has no tour",
+            ));
+        }
+        let input_timeout = match input_timeout {
+            None => follow.then_some(DEFAULT_INPUT_TIMEOUT),
+            Some(s) if s.is_finite() && s > 0.0 => Some(Duration::from_secs_f64(s)),
+            Some(s) => {
+                return Err(PyValueError::new_err(format!(
+                    "input_timeout={s}: give a positive number of seconds"
+                )));
+            }
+        };
         let spec = DeviceSpec::parse(device).map_err(|e| PyValueError::new_err(e.to_string()))?;
         let period = rate
             .map(|hz| spec.period_for_rate(hz))
@@ -315,14 +411,17 @@ impl ControlRun {
             telemetry,
             stop: stop.clone(),
             model_name,
+            input_timeout,
             ..RunOptions::default()
         };
         let started = py.detach(|| match loaded {
-            RunModel::Small(l) => start::<16>(&spec, *l, period, options),
-            RunModel::Large(l) => start::<64>(&spec, *l, period, options),
+            RunModel::Small(l) => start::<16>(&spec, *l, period, options, follow),
+            RunModel::Large(l) => start::<64>(&spec, *l, period, options, follow),
         });
         let (run, fake) = started?;
+        let targets = follow.then(|| run.sender());
         Ok(Self {
+            targets: Mutex::new(targets),
             joints: run.joints(),
             plan_duration_s: run.plan_duration_s(),
             scheduling: run.scheduling(),
@@ -335,7 +434,40 @@ impl ControlRun {
             fake: Mutex::new(fake),
             stop,
             report: Mutex::new(None),
+            follow,
+            dof,
         })
+    }
+
+    /// Sends a position target (follow=True): the arm goes there along the time-optimal
+    /// jerk-limited motion from the state commanded last, and arrives at rest or, with
+    /// `velocity`, passing it at that velocity. Raises ValueError for a target the joints'
+    /// limits refuse (naming the joint) and for a run that follows a tour.
+    #[pyo3(signature = (position, velocity=None))]
+    fn send_position(
+        &self,
+        py: Python<'_>,
+        position: &Bound<'_, PyAny>,
+        velocity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let p = self.joint_vector(position, "position")?;
+        let v = velocity
+            .map(|v| self.joint_vector(v, "velocity"))
+            .transpose()?;
+        self.send(py, Some(&p), v.as_deref())
+    }
+
+    /// Sends a velocity target (follow=True): the arm reaches that joint velocity and keeps it
+    /// (until a new target, a stop, or a position limit ahead, where it brakes).
+    fn send_velocity(&self, py: Python<'_>, velocity: &Bound<'_, PyAny>) -> PyResult<()> {
+        let v = self.joint_vector(velocity, "velocity")?;
+        self.send(py, None, Some(&v))
+    }
+
+    /// Whether the run follows targets sent from Python (`follow=True`).
+    #[getter]
+    fn follows(&self) -> bool {
+        self.follow
     }
 
     /// The joints driven, in order.
@@ -406,6 +538,7 @@ impl ControlRun {
         if let Some(r) = cached.as_ref() {
             return Ok(r.bind(py).clone());
         }
+        crate::gil::lock(py, &self.targets).take();
         let run = crate::gil::lock(py, &self.run).take();
         let Some(run) = run else {
             return Err(PyValueError::new_err("the run has no report"));

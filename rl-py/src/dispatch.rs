@@ -18,6 +18,7 @@ use std::sync::Mutex;
 use rl_core::algo::ik::{IkError, IkGoal, IkOptions, IkSolution, IkSolver, SplitMix64};
 use rl_core::loader::{self, LoadError, LoadErrorKind, LoadOptions, LoadedModel};
 use rl_core::model::ModelError;
+use rl_core::model::{DerivativeData, MatrixView};
 use rl_core::spatial::PlueckerTransform;
 use rl_core::{Data, algo};
 
@@ -134,6 +135,15 @@ pub enum Algo {
     FramePose(usize),
     /// One frame's world Jacobian `[linear; angular]` at its origin: input q; out 6 × nv.
     Jacobian(usize),
+    /// `∂τ/∂q`, `∂τ/∂q̇` and `M` of RNEA (Pinocchio's `computeRNEADerivatives`): inputs q, v,
+    /// a; out 3 × nv × nv.
+    RneaDerivatives,
+    /// `∂q̈/∂q`, `∂q̈/∂q̇` and `M⁻¹` of ABA (Pinocchio's `computeABADerivatives`): inputs q, v,
+    /// τ; out 3 × nv × nv.
+    AbaDerivatives,
+    /// `∂g/∂q` of the generalised gravity (Pinocchio's
+    /// `computeGeneralizedGravityDerivatives`): input q; out nv × nv.
+    GravityDerivatives,
 }
 
 /// A failure of one state of a batch: its row and the algorithm's message.
@@ -160,7 +170,8 @@ pub trait Kin: Send + Sync {
         let nv = self.nv();
         match algo {
             Algo::Rnea | Algo::Aba | Algo::Gravity | Algo::Nle | Algo::Coriolis => nv,
-            Algo::Crba => nv * nv,
+            Algo::Crba | Algo::GravityDerivatives => nv * nv,
+            Algo::RneaDerivatives | Algo::AbaDerivatives => 3 * nv * nv,
             Algo::Frames => 16 * self.tool_names().len(),
             Algo::FramePose(_) => 16,
             Algo::Jacobian(_) => 6 * nv,
@@ -204,10 +215,34 @@ pub trait Kin: Send + Sync {
     ) -> Result<IkSolution, IkError>;
 }
 
+/// What the algorithms of one thread write: rl-core's `Data`, and the derivatives' workspace,
+/// made on first use (3 × N² values and more: 1.5 MB at the largest capacity).
+pub struct Workspace<const N: usize> {
+    data: Box<Data<N>>,
+    deriv: Option<Box<DerivativeData<N>>>,
+}
+
+impl<const N: usize> Workspace<N> {
+    fn new() -> Self {
+        Self {
+            data: Box::new(Data::new()),
+            deriv: None,
+        }
+    }
+}
+
+/// The leading `nv × nv` block of `m`, row after row, into `out`.
+fn copy_matrix<const N: usize>(m: MatrixView<'_, N>, out: &mut [f64]) {
+    let nv = m.dim();
+    for (row, cells) in m.rows().zip(out.chunks_exact_mut(nv.max(1))) {
+        cells.copy_from_slice(row);
+    }
+}
+
 /// A model of capacity `N` with its workspace.
 pub struct Loaded<const N: usize> {
     loaded: Box<LoadedModel<N>>,
-    data: Mutex<Box<Data<N>>>,
+    data: Mutex<Workspace<N>>,
     /// Whether `q` holds quaternions (spherical and free joints), checked for unit norm.
     quaternions: bool,
 }
@@ -219,7 +254,7 @@ impl<const N: usize> Loaded<N> {
             (0..m.body_count()).any(|b| m.mimic(b).is_none() && m.joint_nq(b) > m.joint_nv(b));
         Self {
             loaded: Box::new(loaded),
-            data: Mutex::new(Box::new(Data::new())),
+            data: Mutex::new(Workspace::new()),
             quaternions,
         }
     }
@@ -228,12 +263,14 @@ impl<const N: usize> Loaded<N> {
     fn one(
         &self,
         algo: Algo,
-        data: &mut Data<N>,
+        ws: &mut Workspace<N>,
         ins: [&[f64]; 3],
         out: &mut [f64],
     ) -> Result<(), rl_core::Error> {
         let m = &self.loaded.model;
         let [q, v, a] = ins;
+        let Workspace { data, deriv } = ws;
+        let data = &mut **data;
         match algo {
             Algo::Rnea => out.copy_from_slice(algo::rnea(m, data, q, v, a)?),
             Algo::Aba => out.copy_from_slice(algo::aba(m, data, q, v, a)?),
@@ -265,6 +302,29 @@ impl<const N: usize> Loaded<N> {
                     cells.copy_from_slice(&row[..nv]);
                 }
             }
+            Algo::RneaDerivatives => {
+                let deriv = deriv.get_or_insert_with(|| Box::new(DerivativeData::new()));
+                let r = algo::rnea_derivatives(m, data, deriv, q, v, a)?;
+                let nn = m.dof() * m.dof();
+                for (k, view) in [r.dtau_dq, r.dtau_dv, r.mass_matrix]
+                    .into_iter()
+                    .enumerate()
+                {
+                    copy_matrix(view, &mut out[k * nn..(k + 1) * nn]);
+                }
+            }
+            Algo::AbaDerivatives => {
+                let deriv = deriv.get_or_insert_with(|| Box::new(DerivativeData::new()));
+                let r = algo::aba_derivatives(m, data, deriv, q, v, a)?;
+                let nn = m.dof() * m.dof();
+                for (k, view) in [r.ddq_dq, r.ddq_dv, r.minv].into_iter().enumerate() {
+                    copy_matrix(view, &mut out[k * nn..(k + 1) * nn]);
+                }
+            }
+            Algo::GravityDerivatives => {
+                let deriv = deriv.get_or_insert_with(|| Box::new(DerivativeData::new()));
+                copy_matrix(algo::static_torque_derivatives(m, data, deriv, q)?, out);
+            }
         }
         Ok(())
     }
@@ -287,7 +347,7 @@ impl<const N: usize> Loaded<N> {
     fn rows(
         &self,
         algo: Algo,
-        data: &mut Data<N>,
+        ws: &mut Workspace<N>,
         inputs: &[&[f64]],
         out: &mut [f64],
         rows: usize,
@@ -321,7 +381,7 @@ impl<const N: usize> Loaded<N> {
                 }
             }
             let cell = &mut out[row * width..(row + 1) * width];
-            self.one(algo, data, ins, cell).map_err(|e| RowError {
+            self.one(algo, ws, ins, cell).map_err(|e| RowError {
                 row,
                 message: self.message(e),
             })?;
@@ -343,8 +403,7 @@ impl<const N: usize> Loaded<N> {
     ) -> Result<(), RowError> {
         let threads = threads().min(rows / MIN_ROWS_PER_THREAD).max(1);
         if threads == 1 {
-            let mut data = Box::new(Data::<N>::new());
-            return self.rows(algo, &mut data, inputs, out, rows);
+            return self.rows(algo, &mut Workspace::new(), inputs, out, rows);
         }
         let (nq, nv, width) = (self.nq(), self.nv(), self.width(algo));
         let per = rows.div_ceil(threads);
@@ -363,25 +422,30 @@ impl<const N: usize> Loaded<N> {
                             &x[first * w..(first + count) * w]
                         })
                         .collect();
-                    scope.spawn(move || {
-                        let mut data = Box::new(Data::<N>::new());
-                        self.rows(algo, &mut data, &ins, cells, count)
-                            .map_err(|e| RowError {
-                                row: e.row + first,
-                                message: e.message,
-                            })
-                    })
+                    std::thread::Builder::new()
+                        .stack_size(WORKER_STACK)
+                        .spawn_scoped(scope, move || {
+                            self.rows(algo, &mut Workspace::new(), &ins, cells, count)
+                                .map_err(|e| RowError {
+                                    row: e.row + first,
+                                    message: e.message,
+                                })
+                        })
                 })
                 .collect();
             handles
                 .into_iter()
-                .map(|h| {
-                    h.join().unwrap_or_else(|_| {
+                .map(|h| match h {
+                    Ok(h) => h.join().unwrap_or_else(|_| {
                         Err(RowError {
                             row: 0,
                             message: "a worker thread panicked".into(),
                         })
-                    })
+                    }),
+                    Err(e) => Err(RowError {
+                        row: 0,
+                        message: format!("a worker thread could not start: {e}"),
+                    }),
                 })
                 .collect()
         });
@@ -389,6 +453,10 @@ impl<const N: usize> Loaded<N> {
         results.into_iter().collect()
     }
 }
+
+/// A worker's stack: room for a workspace built on the stack before it is boxed (rl-core's
+/// `DerivativeData` is 3.2 MB at the largest capacity; a thread's default is 2 MB).
+const WORKER_STACK: usize = 16 << 20;
 
 /// Fewer rows than this per thread are not worth a thread (spawning one costs about as much
 /// as a few dozen states of RNEA on an arm).

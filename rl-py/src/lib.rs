@@ -7,6 +7,8 @@
 //! - `src/dispatch.rs`: a model in the capacity that holds it, behind one trait;
 //! - `src/model.rs`: `rlrs.load` and `rlrs.Model` (kinematics, dynamics, IK; batched);
 //! - `src/traj.rs`: `rlrs.JerkLimited`, jerk-limited profiles on arrays of times;
+//! - `src/otg.rs`: `rlrs.otg` and `rlrs.Otg`: the online trajectory generator, offline on arrays of
+//!   times and one control cycle per call;
 //! - `src/scene.rs`: `rlrs.Scene`: collision and distance queries (rl-sg);
 //! - `src/plan.rs`: `rlrs.Planner`, `rlrs.plan`: rl-plan on MoveIt problems, certified paths;
 //! - `src/control.rs`: `rlrs.ControlRun`: the supervised controller of `rl run` (the tool's device
@@ -22,6 +24,7 @@ mod dispatch;
 mod error;
 mod gil;
 mod model;
+mod otg;
 mod plan;
 mod scene;
 mod traj;
@@ -53,6 +56,9 @@ fn _rlrs(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(threads, m)?)?;
     m.add_class::<model::Model>()?;
     m.add_class::<traj::JerkLimited>()?;
+    m.add_class::<otg::OtgTrajectoryPy>()?;
+    m.add_class::<otg::OtgPy>()?;
+    m.add_function(wrap_pyfunction!(otg::otg_calculate, m)?)?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<control::ControlRun>()?;
     m.add_class::<plan::Planner>()?;

@@ -276,6 +276,15 @@ impl Model {
     }
 }
 
+/// The three matrices of a derivative call, `(x[0], x[1], x[2])` or `(x[:, 0], …)` for a
+/// batch: views into one array.
+fn three<'py>(x: &Bound<'py, PyAny>, batched: bool) -> PyResult<Bound<'py, PyTuple>> {
+    let parts = (0..3)
+        .map(|i| take(x, i, batched))
+        .collect::<PyResult<Vec<_>>>()?;
+    PyTuple::new(x.py(), parts)
+}
+
 /// `x[..., i]` along the first axis after the batch: `x[i]` or `x[:, i]`.
 fn take<'py>(x: &Bound<'py, PyAny>, i: usize, batched: bool) -> PyResult<Bound<'py, PyAny>> {
     if batched {
@@ -591,6 +600,61 @@ impl Model {
         v: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         self.nle(py, q, v)
+    }
+
+    /// The analytical derivatives of inverse dynamics (Pinocchio's
+    /// `computeRNEADerivatives`): `(dtau_dq, dtau_dv, M)`, each (nv, nv), or (n, nv, nv) for a
+    /// batch; `M` with both triangles. `dtau_dq` is in the tangent space (Pinocchio's
+    /// convention for free-flyer and spherical joints: a variation `q ⊕ δ` of the
+    /// configuration).
+    fn rnea_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        v: &Bound<'py, PyAny>,
+        a: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let nv = self.kin.nv();
+        let all = self.run(
+            py,
+            Algo::RneaDerivatives,
+            &[(q, "q"), (v, "v"), (a, "a")],
+            &[3, nv, nv],
+        )?;
+        three(&all, all.getattr("ndim")?.extract::<usize>()? == 4)
+    }
+
+    /// The analytical derivatives of forward dynamics (Pinocchio's `computeABADerivatives`):
+    /// `(ddq_dq, ddq_dv, Minv)`, each (nv, nv), or (n, nv, nv) for a batch; `Minv = M⁻¹`
+    /// (`∂q̈/∂τ`) with both triangles; `ddq_dq` in the tangent space (see
+    /// `rnea_derivatives`). Raises ModelError where the mass matrix is singular.
+    fn aba_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        v: &Bound<'py, PyAny>,
+        tau: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let nv = self.kin.nv();
+        let all = self.run(
+            py,
+            Algo::AbaDerivatives,
+            &[(q, "q"), (v, "v"), (tau, "tau")],
+            &[3, nv, nv],
+        )?;
+        three(&all, all.getattr("ndim")?.extract::<usize>()? == 4)
+    }
+
+    /// `∂g/∂q` of the generalised gravity (Pinocchio's
+    /// `computeGeneralizedGravityDerivatives`, the static torque without external forces):
+    /// (nv, nv), or (n, nv, nv) for a batch; in the tangent space.
+    fn gravity_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let nv = self.kin.nv();
+        self.run(py, Algo::GravityDerivatives, &[(q, "q")], &[nv, nv])
     }
 
     /// Coriolis and centrifugal torques `C(q, v) v`.

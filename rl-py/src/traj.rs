@@ -18,7 +18,7 @@ use crate::array::{Input, Output, scalar, shape_text};
 use crate::error;
 
 /// Position, velocity, acceleration and jerk arrays.
-type Samples<'py> = (
+pub(crate) type Samples<'py> = (
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
@@ -51,15 +51,7 @@ impl<const D: usize> Jerk for Padded<D> {
     }
 
     fn sample(&self, times: &[f64], axes: usize, out: [&mut [f64]; 4]) {
-        let [p, v, a, j] = out;
-        for (k, &t) in times.iter().enumerate() {
-            let s = self.profile.sample(t);
-            let row = k * axes..(k + 1) * axes;
-            p[row.clone()].copy_from_slice(&s.position[..axes]);
-            v[row.clone()].copy_from_slice(&s.velocity[..axes]);
-            a[row.clone()].copy_from_slice(&s.acceleration[..axes]);
-            j[row].copy_from_slice(&s.jerk[..axes]);
-        }
+        sample_rows(|t| self.profile.sample(t), times, axes, out);
     }
 
     fn axis_durations(&self, axes: usize) -> Vec<f64> {
@@ -69,6 +61,66 @@ impl<const D: usize> Jerk for Padded<D> {
     fn phase_ends(&self, axis: usize) -> Option<[f64; 7]> {
         self.profile.phase_ends(axis)
     }
+}
+
+/// `at` at each of `times` into `out` = [position, velocity, acceleration, jerk], each
+/// `times.len() × axes`, row after row.
+pub(crate) fn sample_rows<const N: usize>(
+    at: impl Fn(f64) -> rl_core::traj::Sample<N>,
+    times: &[f64],
+    axes: usize,
+    out: [&mut [f64]; 4],
+) {
+    let [p, v, a, j] = out;
+    for (k, &t) in times.iter().enumerate() {
+        let s = at(t);
+        let row = k * axes..(k + 1) * axes;
+        p[row.clone()].copy_from_slice(&s.position[..axes]);
+        v[row.clone()].copy_from_slice(&s.velocity[..axes]);
+        a[row.clone()].copy_from_slice(&s.acceleration[..axes]);
+        j[row].copy_from_slice(&s.jerk[..axes]);
+    }
+}
+
+/// Samples `t` (a time, or an (n,) array read in place) of a trajectory of `axes` axes with
+/// `sample` (the GIL released): four (axes,) or (n, axes) arrays.
+pub(crate) fn sample_times<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    axes: usize,
+    sample: impl FnOnce(&[f64], [&mut [f64]; 4]) + Send,
+) -> PyResult<Samples<'py>> {
+    let one;
+    let times = match scalar(t) {
+        Some(x) => {
+            one = crate::array::vector(py, &[x]);
+            Input::new(&one, "t")?
+        }
+        None => Input::new(t, "t")?,
+    };
+    let shape: Vec<usize> = match times.shape() {
+        _ if scalar(t).is_some() => vec![axes],
+        [n] => vec![*n, axes],
+        s => {
+            return Err(PyValueError::new_err(format!(
+                "t: shape {}, expected a time or (n,) times",
+                shape_text(s)
+            )));
+        }
+    };
+    let mut out: [Output<'py, f64>; 4] = std::array::from_fn(|_| Output::zeros(py, &shape));
+    let [p, v, a, j] = &mut out;
+    let slices = [
+        p.as_mut_slice(),
+        v.as_mut_slice(),
+        a.as_mut_slice(),
+        j.as_mut_slice(),
+    ];
+    let ts = times.shared()?;
+    let ts_slice = crate::array::shared_slice(&ts);
+    py.detach(|| sample(ts_slice, slices));
+    let [p, v, a, j] = out;
+    Ok((p.into_any(), v.into_any(), a.into_any(), j.into_any()))
 }
 
 /// Builds the profile in capacity `D` from per-axis values (padded).
@@ -206,38 +258,8 @@ impl JerkLimited {
     /// clamped to it): a tuple of four (axes,) arrays for one time, of (len(t), axes) arrays
     /// for an array of times.
     fn sample<'py>(&self, py: Python<'py>, t: &Bound<'py, PyAny>) -> PyResult<Samples<'py>> {
-        let one;
-        let times = match scalar(t) {
-            Some(x) => {
-                one = crate::array::vector(py, &[x]);
-                Input::new(&one, "t")?
-            }
-            None => Input::new(t, "t")?,
-        };
-        let shape: Vec<usize> = match times.shape() {
-            _ if scalar(t).is_some() => vec![self.axes],
-            [n] => vec![*n, self.axes],
-            s => {
-                return Err(PyValueError::new_err(format!(
-                    "t: shape {}, expected a time or (n,) times",
-                    shape_text(s)
-                )));
-            }
-        };
-        let mut out: [Output<'py, f64>; 4] = std::array::from_fn(|_| Output::zeros(py, &shape));
-        let [p, v, a, j] = &mut out;
-        let slices = [
-            p.as_mut_slice(),
-            v.as_mut_slice(),
-            a.as_mut_slice(),
-            j.as_mut_slice(),
-        ];
-        let ts = times.shared()?;
-        let ts_slice = crate::array::shared_slice(&ts);
         let (inner, axes) = (&*self.inner, self.axes);
-        py.detach(|| inner.sample(ts_slice, axes, slices));
-        let [p, v, a, j] = out;
-        Ok((p.into_any(), v.into_any(), a.into_any(), j.into_any()))
+        sample_times(py, t, axes, |times, out| inner.sample(times, axes, out))
     }
 
     /// Position at `t`: (axes,) for one time, (len(t), axes) for an array of times.

@@ -1,7 +1,8 @@
 """Kinematics and dynamics equal to Pinocchio's (PyPI `pin` 4.1) to 1e-9, on robots of
 example-robot-data, through the Python API: the same URDF loaded by both, the same random
-states, every frame's pose and Jacobian, RNEA, ABA, CRBA, gravity, nonlinear effects, Coriolis;
-and batched calls equal to the single ones."""
+states, every frame's pose and Jacobian, RNEA, ABA, CRBA, gravity, nonlinear effects, Coriolis,
+the analytical derivatives of RNEA, ABA and gravity (also against central differences); and
+batched calls equal to the single ones."""
 
 import os
 
@@ -124,3 +125,75 @@ def test_batches_equal_single_calls(robot_data):
         assert batch[f].shape == (50, 4, 4)
         assert np.array_equal(batch[f][4], one[f])
     assert np.array_equal(m.fk(Q, "HR_FOOT")[4], one["HR_FOOT"])
+
+
+DERIVATIVE_ROBOTS = [r for r in ROBOTS if r[0] in ("ur5", "panda_arm", "kinova", "solo12", "talos_reduced")]
+
+
+@pytest.mark.parametrize("name,urdf,floating,mimic,lock", DERIVATIVE_ROBOTS,
+                         ids=[r[0] for r in DERIVATIVE_ROBOTS])
+def test_derivatives_equal_to_pinocchio(robot_data, name, urdf, floating, mimic, lock):
+    """∂τ/∂q, ∂τ/∂q̇, M (computeRNEADerivatives), ∂q̈/∂q, ∂q̈/∂q̇, M⁻¹ (computeABADerivatives)
+    and ∂g/∂q (computeGeneralizedGravityDerivatives) to 1e-9, in Pinocchio's tangent space
+    (free-flyer bases included), on the same random states; a batch equal to single calls."""
+    path = os.path.join(robot_data, urdf)
+    m = rlrs.load(path, floating_base=floating, joint_order="pinocchio",
+                  mimic="independent", locked_joints={j: 0.0 for j in lock})
+    pm = pinocchio_model(path, floating, mimic, lock, m.gravity_vector)
+    pd = pm.createData()
+    rng = np.random.default_rng(11)
+    Q, V, A = [], [], []
+    for k in range(5):
+        what = f"{name} state {k}"
+        qp = pin_q(pm, rng)
+        q = m.q_from_pinocchio(qp)
+        v = rng.uniform(-1, 1, m.nv)
+        a = rng.uniform(-1, 1, m.nv)
+        Q.append(q), V.append(v), A.append(a)
+        theirs = [np.array(x) for x in pin.computeRNEADerivatives(pm, pd, qp, v, a)]
+        theirs[2] = np.triu(theirs[2]) + np.triu(theirs[2], 1).T
+        for label, ours, t in zip(("dtau_dq", "dtau_dv", "M"), m.rnea_derivatives(q, v, a), theirs):
+            close(ours, t, TOL, f"{what}: rnea_derivatives {label}")
+        tau = m.rnea(q, v, a)
+        theirs = [np.array(x) for x in pin.computeABADerivatives(pm, pd, qp, v, tau)]
+        theirs[2] = np.triu(theirs[2]) + np.triu(theirs[2], 1).T
+        for label, ours, t in zip(("ddq_dq", "ddq_dv", "Minv"), m.aba_derivatives(q, v, tau), theirs):
+            close(ours, t, TOL, f"{what}: aba_derivatives {label}")
+        dg = np.array(pin.computeGeneralizedGravityDerivatives(pm, pd, qp))
+        close(m.gravity_derivatives(q), dg, TOL, f"{what}: gravity_derivatives")
+    Q, V, A = np.array(Q), np.array(V), np.array(A)
+    batch = m.rnea_derivatives(Q, V, A)
+    assert all(x.shape == (5, m.nv, m.nv) for x in batch)
+    for i in range(5):
+        one = m.rnea_derivatives(Q[i], V[i], A[i])
+        assert all(np.array_equal(b[i], o) for b, o in zip(batch, one))
+    T = m.rnea(Q, V, A)
+    batch = m.aba_derivatives(Q, V, T)
+    assert all(np.array_equal(b[2], o) for b, o in zip(batch, m.aba_derivatives(Q[2], V[2], T[2])))
+    assert np.array_equal(m.gravity_derivatives(Q)[4], m.gravity_derivatives(Q[4]))
+
+
+def test_derivatives_agree_with_central_differences(robot_data):
+    """Independent of Pinocchio: ∂τ/∂q and ∂τ/∂q̇ against central differences of rnea, and
+    ∂q̈/∂q̇ against those of aba (the UR5, 1e-6)."""
+    m = rlrs.load(os.path.join(robot_data, "robots/ur_description/urdf/ur5_robot.urdf"))
+    rng = np.random.default_rng(5)
+    q = m.random_configuration(1, seed=3)[0]
+    v, a = rng.uniform(-1, 1, (2, m.nv))
+    dq, dv, _ = m.rnea_derivatives(q, v, a)
+    h = 1e-6
+    for j in range(m.nv):
+        e = np.zeros(m.nv)
+        e[j] = h
+        col_q = (m.rnea(m.integrate(q, e), v, a) - m.rnea(m.integrate(q, -e), v, a)) / (2 * h)
+        col_v = (m.rnea(q, v + e, a) - m.rnea(q, v - e, a)) / (2 * h)
+        close(dq[:, j], col_q, 1e-6, f"dtau_dq column {j}")
+        close(dv[:, j], col_v, 1e-6, f"dtau_dv column {j}")
+    tau = m.rnea(q, v, a)
+    _, ddv, minv = m.aba_derivatives(q, v, tau)
+    for j in range(m.nv):
+        e = np.zeros(m.nv)
+        e[j] = h
+        close(ddv[:, j], (m.aba(q, v + e, tau) - m.aba(q, v - e, tau)) / (2 * h), 1e-6,
+              f"ddq_dv column {j}")
+    close(minv, np.linalg.inv(m.crba(q)), 1e-9, "Minv is M⁻¹")

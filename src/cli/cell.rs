@@ -293,6 +293,42 @@ fn watch(args: WatchArgs) -> CliResult {
 pub struct RunCell<const J: usize> {
     // The drain sink and the progress loop both hold it; only `forward` needs it mutably.
     cell: std::cell::RefCell<rl_cell::Cell<J>>,
+    targets: std::sync::Arc<std::sync::OnceLock<rl::controller::InputSender<J, ()>>>,
+}
+
+/// The cell's inbound for a run: targets to the run's input channel (`--follow zenoh`),
+/// obstacles refused.
+#[cfg(feature = "zenoh")]
+struct ToRun<const J: usize> {
+    targets: std::sync::Arc<std::sync::OnceLock<rl::controller::InputSender<J, ()>>>,
+    follows: bool,
+}
+
+#[cfg(feature = "zenoh")]
+impl<const J: usize> rl_cell::Inbound<J> for ToRun<J> {
+    fn target(&mut self, target: &rl_cell::Target<J>, _: &rl_cell::Arrival) -> Result<(), String> {
+        if !self.follows {
+            return Err(
+                "this run takes no streamed targets: it follows its planned motion (start it \
+                 with --follow zenoh)"
+                    .into(),
+            );
+        }
+        let Some(sender) = self.targets.get() else {
+            return Err("the run has not started yet".into());
+        };
+        let target = match *target {
+            rl_cell::Target::Position { position, velocity } => {
+                rl::controller::Target::Position { position, velocity }
+            }
+            rl_cell::Target::Velocity { velocity } => rl::controller::Target::Velocity { velocity },
+        };
+        sender.send_target(target).map_err(|e| e.to_string())
+    }
+
+    fn obstacle(&mut self, _: &rl_cell::Obstacle, _: &rl_cell::Arrival) -> Result<(), String> {
+        Err("this run's law takes no obstacles".into())
+    }
 }
 
 #[cfg(not(feature = "zenoh"))]
@@ -307,6 +343,7 @@ impl<const J: usize> RunCell<J> {
         model: &rl_core::Model<B>,
         period: Duration,
         stop: &rl_rt::StopFlag,
+        follows: bool,
     ) -> Result<Option<Self>, CliError> {
         use rl::controller::plan::joint_name;
         if !args.wanted() {
@@ -335,11 +372,13 @@ impl<const J: usize> RunCell<J> {
             wait_for_subscriber: args.wait,
             ..rl_cell::CellConfig::default()
         };
-        // Streamed targets and obstacles wait for the controller's input channel (issue 26):
-        // until then this run refuses them, counted, with the reason.
-        let inbound = Box::new(rl_cell::Refuse(
-            "this run takes no streamed targets or obstacles: it follows its planned motion",
-        ));
+        // Streamed targets go to the run's input channel once it runs, with `--follow zenoh`;
+        // otherwise they are refused, counted, with the reason. No law here takes obstacles.
+        let targets = std::sync::Arc::new(std::sync::OnceLock::new());
+        let inbound = Box::new(ToRun {
+            targets: targets.clone(),
+            follows,
+        });
         let cell = rl_cell::Cell::open(config, joints, inbound, stop.clone())
             .map_err(|e| CliError::usage(format!("--zenoh: {e}")))?;
         if let Some(wait) = args.wait {
@@ -362,7 +401,13 @@ impl<const J: usize> RunCell<J> {
         );
         Ok(Some(Self {
             cell: std::cell::RefCell::new(cell),
+            targets,
         }))
+    }
+
+    /// From now on, the cell's targets go to `sender` (the run's input channel).
+    pub fn take_targets(&self, sender: rl::controller::InputSender<J, ()>) {
+        let _ = self.targets.set(sender);
     }
 
     /// Passes one cycle's record on (wait-free).
@@ -408,9 +453,12 @@ impl<const J: usize> RunCell<J> {
         _: &rl_core::Model<B>,
         _: Duration,
         _: &rl_rt::StopFlag,
+        _: bool,
     ) -> Result<Option<Self>, CliError> {
         Ok(None)
     }
+    /// Nothing.
+    pub fn take_targets(&self, _: rl::controller::InputSender<J, ()>) {}
     /// Nothing.
     pub fn forward(&self, _: &rl::controller::CycleRecord<J>) {}
     /// Nothing.

@@ -388,7 +388,9 @@ fn run_h7(args: &H7Args, stop: &AtomicBool) -> CliResult {
             config.initial_rad[k] = q.clamp(config.lower_rad[k], config.upper_rad[k]);
         }
     }
-    fake_threads_realtime("fake-h7");
+    // Real controllers and drives answer on their own CPUs: the fake's threads inherit this
+    // thread's real-time priority (where the process may have one).
+    rl::devices::fake_thread_realtime();
     let mut fake = FakeH7::spawn(config).map_err(|e| {
         CliError::failed(format!("fake H7 on {} / {}: {e}", args.bind, args.r3_bind))
     })?;
@@ -587,7 +589,9 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
     config.tpdo_delay = args.tpdo_delay;
     config.pcap = args.pcap.clone();
     config.candump = args.candump.clone();
-    fake_threads_realtime("fake-cia402");
+    // Real controllers and drives answer on their own CPUs: the fake's threads inherit this
+    // thread's real-time priority (where the process may have one).
+    rl::devices::fake_thread_realtime();
     let mut fake = FakeCia402::serve(config, &address)
         .map_err(|e| CliError::failed(format!("fake CiA 402 drives on {}: {e}", args.bus)))?;
     let shown = match (&address, fake.local_addr()) {
@@ -633,25 +637,6 @@ fn run_canopen(args: &CanopenArgs, stop: &AtomicBool) -> CliResult {
     printed?;
     outln!("fake CiA 402 drives stopped")?;
     Ok(ExitCode::SUCCESS)
-}
-
-fn fake_segment_thread() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-ecat")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(85)
-        .best_effort(true)
-        .apply_to_current();
-}
-
-/// Real drives and controllers answer on their own CPUs, unhindered by the machine's other
-/// programs: where the process may (root), the fake's threads run SCHED_FIFO at 79, one below
-/// `rl run`'s loop (they inherit the policy of the thread that starts them); else as they are.
-fn fake_threads_realtime(name: &str) {
-    let _ = rl_rt::RtThreadBuilder::new(name)
-        .policy(rl_rt::Policy::Fifo)
-        .priority(79)
-        .best_effort(true)
-        .apply_to_current();
 }
 
 fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
@@ -702,7 +687,7 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     }
     // Hardware answers without being delayed by other programs: the segment's thread runs at a
     // real-time priority when the process may (root), like the controller's.
-    config.on_thread_start = Some(fake_segment_thread);
+    config.on_thread_start = Some(rl::devices::fake_process_thread_realtime);
     let fake = FakeSegment::spawn(config).map_err(|e| {
         let mut msg = format!("fake EtherCAT segment on {}: {e}", args.interface);
         if rl_drivers::transport::packet::is_permission_error(&e) {
@@ -752,14 +737,6 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
     Ok(ExitCode::SUCCESS)
 }
 
-fn fake_franka_thread() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-franka")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(85)
-        .best_effort(true)
-        .apply_to_current();
-}
-
 fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig};
     let mut config = FakeFrankaConfig::loopback();
@@ -772,7 +749,7 @@ fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
         config.dynamics = !args.kinematic;
     }
     // The robot's cycle runs at a real-time priority where the process may (root).
-    config.on_thread_start = Some(fake_franka_thread);
+    config.on_thread_start = Some(rl::devices::fake_process_thread_realtime);
     let fake = FakeFranka::spawn(config).map_err(|e| {
         CliError::failed(format!("fake Franka on {}:{}: {e}", args.bind, args.port))
     })?;

@@ -30,13 +30,16 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::Args;
+use rl::controller::DEFAULT_INPUT_TIMEOUT;
 use rl::controller::plan::joint_name;
 use rl::controller::planned::{PathExecution, PlannedMotion, PlannedMotionError, plan_motion_with};
 use rl::controller::runtime::DEFAULT_SPEED;
+use rl::controller::stream::{self, TargetSource};
 use rl::controller::{
-    ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions, Supervision,
-    TelemetryFile,
+    ControlLaw, ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions,
+    Supervision, TargetFollower, TelemetryFile, ViewHook,
 };
+use rl::drivers::safety::StopCategory;
 use rl_core::Model;
 use rl_core::loader::{LoadOptions, LoadedModel};
 use rl_plan::PlanOptions;
@@ -199,9 +202,122 @@ pub struct RunArgs {
     /// With --view: keep serving the page after the report, until Ctrl-C.
     #[arg(long, requires = "view")]
     pub view_hold: bool,
+    /// Follow streamed targets instead of a tour: `-` (standard input), `udp:PORT` (on
+    /// loopback), `udp:HOST:PORT`, or `zenoh` (the cell's `joint_trajectory` topic; needs
+    /// --zenoh or --zenoh-listen). One target per line: `position q1 … qn [velocity v1 … vn]`,
+    /// `velocity v1 … vn` or `stop` (rl::controller::stream documents the format). Each target
+    /// is reached along a time-optimal jerk-limited motion from where the arm is going; every
+    /// stop brakes along the time-optimal jerk-limited profile. The end of standard input
+    /// brings the arm to rest and ends the run.
+    #[arg(long, value_name = "SOURCE", value_parser = parse_follow, help_heading = "Streamed targets")]
+    pub follow: Option<Follow>,
+    /// With --follow: when no target came for this long, bring the arm to rest and end the
+    /// run (a failure) [default: 2s].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "follow", help_heading = "Streamed targets")]
+    pub input_timeout: Option<Duration>,
+    /// The emergency-stop input, a GPIO line CHIP:OFFSET (e.g. gpiochip0:17), normally closed:
+    /// it reads high while the chain is closed; low (pressed, or a broken wire) stops the arm.
+    /// The run does not start with it open; a stop latches: closing it again restarts nothing.
+    #[arg(long, value_name = "CHIP:OFFSET", help_heading = "Safety chain (GPIO)")]
+    pub estop: Option<GpioLineArg>,
+    /// The enable (dead-man) input: high while held; released stops the arm.
+    #[arg(
+        long,
+        value_name = "CHIP:OFFSET",
+        requires = "estop",
+        help_heading = "Safety chain (GPIO)"
+    )]
+    pub enable: Option<GpioLineArg>,
+    /// The watchdog output, toggled every cycle (a charge pump for an external relay that drops
+    /// when the loop stops or stalls).
+    #[arg(
+        long,
+        value_name = "CHIP:OFFSET",
+        requires = "estop",
+        help_heading = "Safety chain (GPIO)"
+    )]
+    pub watchdog: Option<GpioLineArg>,
+    /// The brake or contactor output: high (energised) only while the chain allows motion.
+    #[arg(
+        long,
+        value_name = "CHIP:OFFSET",
+        requires = "estop",
+        help_heading = "Safety chain (GPIO)"
+    )]
+    pub brake: Option<GpioLineArg>,
+    /// Stop category on an open chain: 0 (remove power at once) or 1 (bring the arm to rest
+    /// along its path, then remove power) [default: 0].
+    #[arg(long, value_name = "0|1", value_parser = parse_category, requires = "estop", help_heading = "Safety chain (GPIO)")]
+    pub stop_category: Option<StopCategory>,
     /// Join a cell over Zenoh (src/cli/cell.rs).
     #[command(flatten)]
     pub zenoh: super::cell::ZenohArgs,
+}
+
+/// A GPIO line flag's value.
+#[cfg(feature = "gpio")]
+pub type GpioLineArg = rl::controller::safety::gpio::GpioLine;
+/// A GPIO line flag's value (this build has no GPIO support: refused when given).
+#[cfg(not(feature = "gpio"))]
+pub type GpioLineArg = String;
+
+/// `--stop-category`'s value.
+fn parse_category(text: &str) -> Result<StopCategory, String> {
+    match text {
+        "0" => Ok(StopCategory::Zero),
+        "1" => Ok(StopCategory::One),
+        _ => Err(format!(
+            "'{text}': give 0 (at once) or 1 (brought to rest first)"
+        )),
+    }
+}
+
+/// The safety chain the flags describe, its lines requested (before anything starts).
+#[cfg(feature = "gpio")]
+fn safety_chain(args: &RunArgs) -> Result<Option<rl::controller::safety::SafetyHandle>, CliError> {
+    use rl::controller::safety::gpio::GpioChain;
+    let Some(estop) = &args.estop else {
+        return Ok(None);
+    };
+    let mut chain = GpioChain::new(estop.clone());
+    chain.enable = args.enable.clone();
+    chain.watchdog = args.watchdog.clone();
+    chain.brake = args.brake.clone();
+    chain.category = args.stop_category.unwrap_or_default();
+    chain
+        .open()
+        .map(Some)
+        .map_err(|e| CliError::failed(format!("--estop: {e} (nothing was started)")))
+}
+
+/// Without GPIO support: the flags are refused.
+#[cfg(not(feature = "gpio"))]
+fn safety_chain(args: &RunArgs) -> Result<Option<rl::controller::safety::SafetyHandle>, CliError> {
+    match args.estop {
+        Some(_) => Err(CliError::usage(
+            "--estop: this build has no GPIO support (feature gpio)",
+        )),
+        None => Ok(None),
+    }
+}
+
+/// Where `--follow` takes its targets from.
+#[derive(Clone, Debug)]
+pub enum Follow {
+    /// Text lines from standard input or a UDP socket.
+    Lines(TargetSource),
+    /// The cell's streamed targets (Zenoh).
+    Cell,
+}
+
+/// `--follow`'s value.
+fn parse_follow(text: &str) -> Result<Follow, String> {
+    if text == "zenoh" {
+        return Ok(Follow::Cell);
+    }
+    text.parse()
+        .map(Follow::Lines)
+        .map_err(|e| format!("{e}; or `zenoh` for the cell's targets"))
 }
 
 /// The planning problem of `--plan`, checked before anything starts.
@@ -338,6 +454,18 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
         check_writable(path).map_err(|e| CliError::usage(format!("--plot: {e}")))?;
     }
     args.zenoh.check()?;
+    if args.follow.is_some() {
+        refuse_given(
+            &["waypoints", "plan"],
+            "with --follow: the run follows streamed targets, not a tour or a planned path",
+        )?;
+    }
+    if matches!(args.follow, Some(Follow::Cell)) && !args.zenoh.wanted() {
+        return Err(CliError::usage(
+            "--follow zenoh takes the cell's targets: add --zenoh ENDPOINT or --zenoh-listen \
+             ENDPOINT",
+        ));
+    }
     Ok(Setup {
         device,
         period,
@@ -634,6 +762,8 @@ fn drive<const B: usize, const J: usize>(
     if let Some(n) = args.stop_after_lost {
         supervision.max_consecutive_lost = n;
     }
+    // The safety chain's lines first: a line that cannot be requested starts nothing.
+    let safety = safety_chain(args)?;
     let opened = setup.device.build(
         &loaded,
         setup.period,
@@ -644,7 +774,13 @@ fn drive<const B: usize, const J: usize>(
     let cycle = opened.robot.update_period();
     supervision.allow_device_lag(opened.lag, setup.period.map_or(cycle, |p| p.max(cycle)));
     let period = setup.period.unwrap_or_else(|| opened.robot.update_period());
-    let mut cell = super::cell::RunCell::<J>::open(&args.zenoh, model, period, &stop)?;
+    let cell = super::cell::RunCell::<J>::open(
+        &args.zenoh,
+        model,
+        period,
+        &stop,
+        matches!(args.follow, Some(Follow::Cell)),
+    )?;
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {
             [one] => vec![*one; joints.len()],
@@ -669,6 +805,7 @@ fn drive<const B: usize, const J: usize>(
         stop: stop.clone(),
         model_name,
         device_name: opened.name,
+        safety,
         ..RunOptions::default()
     };
     if let Some(s) = args.speed {
@@ -683,19 +820,102 @@ fn drive<const B: usize, const J: usize>(
     let view = view::start(args)?;
     options.view = view.clone();
     let robot: Box<dyn JointRobot + Send> = opened.robot;
-    let mut run = match ControlRun::<_, B, J>::start_with(robot, loaded, options, motion) {
-        Ok(run) => run,
-        Err(e) => {
-            return Err(match e {
-                RunError::Cancelled => {
-                    eprintln!("rl run: {e}");
-                    return Ok(ExitCode::from(130));
-                }
-                RunError::Options(why) => CliError::usage(why),
-                e => CliError::failed(setup.device.explain(&e)),
-            });
+    let refused = |e: RunError| match e {
+        RunError::Cancelled => {
+            eprintln!("rl run: {e}");
+            Ok(ExitCode::from(130))
         }
+        RunError::Options(why) => Err(CliError::usage(why)),
+        e => Err(CliError::failed(setup.device.explain(&e))),
     };
+    if let Some(follow) = &args.follow {
+        if options.input_timeout.is_none() {
+            options.input_timeout = Some(args.input_timeout.unwrap_or(DEFAULT_INPUT_TIMEOUT));
+        }
+        let run = match ControlRun::<_, B, J, _>::start_law(
+            robot,
+            loaded,
+            options,
+            TargetFollower::<J>::new(),
+        ) {
+            Ok(run) => run,
+            Err(e) => return refused(e),
+        };
+        let stream = match follow {
+            Follow::Lines(source) => {
+                match stream::spawn(source, joints.len(), run.inputs(), stop.clone()) {
+                    Ok(handle) => {
+                        if let Some(addr) = handle.local_addr() {
+                            eprintln!("rl run: following targets sent to udp:{addr}");
+                        }
+                        Some(handle)
+                    }
+                    Err(e) => {
+                        // The run is started: bring it to rest and report why.
+                        stop.request(StopLevel::Now);
+                        eprintln!("rl run: --follow {source}: {e}");
+                        None
+                    }
+                }
+            }
+            Follow::Cell => {
+                if let Some(c) = &cell {
+                    c.take_targets(run.inputs());
+                }
+                None
+            }
+        };
+        let after = After {
+            cell,
+            view,
+            fake,
+            plan_note,
+            plan_json,
+            stream,
+        };
+        return supervise(args, setup, run, after, &stop);
+    }
+    let run = match ControlRun::<_, B, J>::start_with(robot, loaded, options, motion) {
+        Ok(run) => run,
+        Err(e) => return refused(e),
+    };
+    let after = After {
+        cell,
+        view,
+        fake,
+        plan_note,
+        plan_json,
+        stream: None,
+    };
+    supervise(args, setup, run, after, &stop)
+}
+
+/// What a run carries besides the run itself until its report is printed.
+struct After<const J: usize> {
+    cell: Option<super::cell::RunCell<J>>,
+    view: Option<ViewHook>,
+    fake: Option<device::InProcessFake>,
+    plan_note: Option<String>,
+    plan_json: Option<serde_json::Value>,
+    stream: Option<stream::StreamHandle>,
+}
+
+/// Writes telemetry and progress while `run` goes, then completes and prints its report.
+fn supervise<const B: usize, const J: usize, L: ControlLaw<B, J> + 'static>(
+    args: &RunArgs,
+    mut setup: Setup,
+    mut run: ControlRun<Box<dyn JointRobot + Send>, B, J, L>,
+    after: After<J>,
+    stop: &StopFlag,
+) -> CliResult {
+    let After {
+        mut cell,
+        view,
+        fake,
+        plan_note,
+        plan_json,
+        stream,
+    } = after;
     for warning in run.warnings() {
         eprintln!("rl run: warning: {warning}");
     }
@@ -758,6 +978,15 @@ fn drive<const B: usize, const J: usize>(
     if let Some(note) = plan_note {
         report.notes.insert(0, note);
     }
+    // The end of standard input or a `stop` line ends a followed run as asked: that stop is
+    // the run's normal end, not an interruption.
+    let mut ended_by_stream = false;
+    let stream_json = stream.map(|handle| {
+        let seen = handle.finish();
+        report.notes.extend(seen.lines_for_report());
+        ended_by_stream = seen.ended_by_eof || seen.stops > 0;
+        seen.to_json()
+    });
     let fake_json = fake.as_ref().map(|fake| {
         let seen = fake.after_run(report.shutdown.stopped);
         report.notes.push(seen.note);
@@ -787,6 +1016,9 @@ fn drive<const B: usize, const J: usize>(
         if let (Some(obj), Some(cell)) = (json.as_object_mut(), cell_json) {
             obj.insert("zenoh".into(), cell);
         }
+        if let (Some(obj), Some(follow)) = (json.as_object_mut(), stream_json) {
+            obj.insert("follow".into(), follow);
+        }
         rl::json::tag("run", 1, &mut json);
         outln!("{json}")
     } else {
@@ -794,8 +1026,16 @@ fn drive<const B: usize, const J: usize>(
     };
     // A closed standard output ends quietly with the run's own status.
     printed.or_else(|e| if e.is_closed_output() { Ok(()) } else { Err(e) })?;
-    view::hold(view, args.view_hold, &stop);
-    Ok(ExitCode::from(report.exit_code() as u8))
+    view::hold(view, args.view_hold, stop);
+    let code = if ended_by_stream
+        && report.end == Some(rl::controller::RunEnd::Stopped)
+        && report.failure.is_none()
+    {
+        0
+    } else {
+        report.exit_code()
+    };
+    Ok(ExitCode::from(code as u8))
 }
 
 /// Draws the plot next to `path` and moves it into place once drawn.

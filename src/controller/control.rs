@@ -5,6 +5,7 @@ use core::fmt;
 use std::time::Duration;
 
 use rl_core::{Data, Model};
+use rl_drivers::safety::{StopReason, Verdict};
 use rl_drivers::{Error as DeviceError, LinkStatistics, State};
 use rl_rt::MonoTime;
 
@@ -13,6 +14,7 @@ use super::input::{InputReceiver, InputReport, Inputs};
 use super::law::{BrakeReason, Command, CommandMode, Context, ControlLaw, LawStatus, Measured};
 use super::plan::{MotionLimits, Plan, PlanError, check_model};
 use super::robot::JointRobot;
+use super::safety::SafetyBox;
 use super::supervise::{Bounds, Fault, Observation, Supervision, Supervisor};
 use super::telemetry::{CycleRecord, RunState};
 use super::tracking::{Tracking, Violation};
@@ -75,6 +77,20 @@ impl fmt::Display for RunEnd {
                 write!(f, "fault, stopped at once: {fault}")
             }
             Self::Fault(fault) => write!(f, "fault, brought to rest: {fault}"),
+        }
+    }
+}
+
+impl RunEnd {
+    /// As its `Display`, with the joints of a fault named from `joints` (the `Display` numbers
+    /// them, `#4`).
+    pub fn describe(&self, joints: &[String]) -> String {
+        match self {
+            Self::Fault(fault) if fault.stops_at_once() => {
+                format!("fault, stopped at once: {}", fault.describe(joints))
+            }
+            Self::Fault(fault) => format!("fault, brought to rest: {}", fault.describe(joints)),
+            other => other.to_string(),
         }
     }
 }
@@ -176,6 +192,7 @@ pub struct Controller<
     receiver: Option<InputReceiver<J, L::Input>>,
     inputs: Inputs<J, L::Input>,
     input_timeout_ns: Option<u64>,
+    safety: Option<SafetyBox>,
     end: Option<RunEnd>,
 }
 
@@ -337,6 +354,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             receiver: None,
             inputs: Inputs::default(),
             input_timeout_ns: None,
+            safety: None,
             end: None,
         })
     }
@@ -351,6 +369,32 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
     /// from the first cycle until the first input).
     pub fn input_timeout(&mut self, timeout: Duration) {
         self.input_timeout_ns = Some(timeout.as_nanos().min(u128::from(u64::MAX)) as u64);
+    }
+
+    /// Checks `chain` every cycle, before the law runs (see [`super::safety`]); arm it with
+    /// [`arm_safety`](Self::arm_safety) before the device starts.
+    pub fn attach_safety(&mut self, chain: SafetyBox) {
+        self.safety = Some(chain);
+    }
+
+    /// Arms the attached safety chain (drives off, `period` apart): `Err` when it does not read
+    /// closed with the enable held; nothing may start then. Without a chain: `Ok`.
+    pub fn arm_safety(&mut self) -> Result<(), StopReason> {
+        let period = Duration::from_secs_f64(self.period_s);
+        match &mut self.safety {
+            Some(chain) => chain.arm(period, &mut std::thread::sleep),
+            None => Ok(()),
+        }
+    }
+
+    /// After the device was stopped: tells the chain the drives are off (a brake output still
+    /// energised for a category-1 stop drops), holds its watchdog and hands it back.
+    pub fn detach_safety(&mut self) -> Option<SafetyBox> {
+        let mut chain = self.safety.take()?;
+        let _ = chain.cycle(false);
+        chain.stop_watchdog();
+        let _ = chain.cycle(false);
+        Some(chain)
     }
 
     /// Ends the run at once if the law has not come to rest `max` after braking began.
@@ -400,6 +444,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         }
         if self.end.is_none() {
             self.supervise(timing);
+            self.check_safety();
             self.take_inputs();
             self.check_ending();
         }
@@ -473,6 +518,16 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             .robot
             .joint_torque_sensor()
             .is_some_and(|s| s.joint_torque(&mut f.torque[..dof]).is_ok());
+    }
+
+    /// The safety chain's cycle (the watchdog toggles); a stop it finds is the run's fault.
+    fn check_safety(&mut self) {
+        let Some(chain) = &mut self.safety else {
+            return;
+        };
+        if let Verdict::Stop { category, reason } = chain.cycle(true) {
+            self.on_fault(Fault::Safety { category, reason });
+        }
     }
 
     /// Hands what other threads sent to the law, and brakes when inputs went stale.

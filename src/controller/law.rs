@@ -315,4 +315,20 @@ pub trait ControlLaw<const B: usize, const J: usize>: Send {
     fn duration_s(&self) -> Option<f64> {
         None
     }
+
+    /// What the law has to say in the run's report, after the run (off the real-time thread):
+    /// lines for its notes and an object for its JSON's `law` key. `None` (the default):
+    /// nothing.
+    fn summary(&self) -> Option<LawSummary> {
+        None
+    }
+}
+
+/// What a law says in the run's report ([`ControlLaw::summary`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LawSummary {
+    /// Lines for the report's notes.
+    pub lines: Vec<String>,
+    /// An object for the JSON report's `law` key.
+    pub json: serde_json::Value,
 }

@@ -71,7 +71,10 @@ pub mod planned;
 pub mod report;
 mod robot;
 pub mod runtime;
+pub mod safety;
+pub mod stream;
 pub mod supervise;
+mod target_follower;
 pub mod telemetry;
 pub mod tracking;
 #[cfg(feature = "view")]
@@ -83,7 +86,8 @@ pub use follower::TrajectoryFollower;
 pub use input::{InputError, InputSender, Target};
 pub use lateness::{HostActivity, Lateness, OtherRtThread, PeerLateness};
 pub use law::{
-    BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, Measured, Start,
+    BrakeReason, Command, CommandMode, Context, ControlLaw, LawError, LawStatus, LawSummary,
+    Measured, Start,
 };
 pub use plan::{
     FollowTrajectory, Motion, MotionLimits, Plan, PlanBudget, PlanError, PlanTrajectory,
@@ -93,6 +97,7 @@ pub use report::RunReport;
 pub use robot::JointRobot;
 pub use runtime::{ControlRun, Progress, RunError, RunOptions};
 pub use supervise::{Fault, Supervision};
+pub use target_follower::{DEFAULT_INPUT_TIMEOUT, FollowCounts, TargetFollower};
 pub use telemetry::{CycleRecord, RunState, TelemetryFile};
 pub use tracking::Tracking;
 #[cfg(feature = "view")]

@@ -98,6 +98,11 @@ pub struct RunReport {
     /// What became of the inputs sent to the law (`None` when none were sent and no input
     /// timeout was set).
     pub inputs: Option<InputReport>,
+    /// What the law reported at the end ([`ControlLaw::summary`](super::ControlLaw::summary)),
+    /// e.g. the targets a [`TargetFollower`](super::TargetFollower) followed.
+    pub law: Option<serde_json::Value>,
+    /// What the safety chain saw (`None`: the run had none).
+    pub safety: Option<super::safety::SafetyReport>,
     /// How the device was stopped.
     pub shutdown: Shutdown,
     /// Telemetry rows written (by the caller).
@@ -156,6 +161,8 @@ impl RunReport {
             assumed_speed: None,
             torque_clamped: 0,
             inputs: None,
+            law: None,
+            safety: None,
             shutdown: Shutdown::default(),
             telemetry_rows: None,
             telemetry_dropped: None,
@@ -188,6 +195,14 @@ impl RunReport {
     pub fn likely_cause(&self) -> Option<String> {
         (self.failure.is_some() && lateness::is_timing_failure(self.end))
             .then(|| self.lateness().likely_cause())
+    }
+
+    /// Whether the run failed on timing (replies lost, deadlines missed, cycles overrun, the
+    /// link timed out) while somebody was measured late — the loop, the device's side, or the
+    /// delivery of its replies: the machine's doing rather than the device's or the code's.
+    /// (Tests run such a run again; a timing failure with nobody late stays a failure.)
+    pub fn failed_from_lateness(&self) -> bool {
+        self.likely_cause().is_some() && self.lateness().culprit() != lateness::Culprit::Nobody
     }
 
     /// The process exit code: 1 failed, 130 interrupted by a stop request, 0 done.
@@ -266,6 +281,8 @@ impl RunReport {
                 "stale": i.stale,
                 "stale_age_s": i.stale_age_s,
             })),
+            "law": self.law,
+            "safety": self.safety.map(|s| s.to_json()),
             "supervised": self.supervised,
             "fault": fault.map(|f| f.describe(&self.joints)),
             "fault_cycle": self.fault_at.map(|a| a.cycle),
@@ -288,7 +305,7 @@ impl RunReport {
             "trajectory": self.trajectory_description,
             "trajectory_time_s": self.trajectory_time_s,
             "wall_time_s": self.wall_time_s,
-            "end": self.end.map(|e| e.to_string()),
+            "end": self.end.map(|e| e.describe(&self.joints)),
             "interrupted": self.end.is_some_and(|e| e.is_interrupted()),
             "device_stopped": self.shutdown.stopped,
             "device_stop": self.shutdown.description,
@@ -537,6 +554,9 @@ impl fmt::Display for RunReport {
             let _ = write!(out, "; it had faulted: {fault}");
         }
         out.push('\n');
+        if let Some(safety) = &self.safety {
+            let _ = writeln!(out, "{}", safety.line());
+        }
         for note in &self.notes {
             let _ = writeln!(out, "{note}");
         }

@@ -118,6 +118,9 @@ pub struct RunOptions {
     /// commanded positions through its lock-free mailbox (feature `view`).
     #[cfg(feature = "view")]
     pub view: Option<super::view::ViewHook>,
+    /// The controller's safety chain (e-stop, enable, brake, watchdog pins), armed before the
+    /// device starts and checked every cycle ([`super::safety`]); `None`: none.
+    pub safety: Option<super::safety::SafetyHandle>,
 }
 
 impl Default for RunOptions {
@@ -142,6 +145,7 @@ impl Default for RunOptions {
             max_braking: DEFAULT_MAX_BRAKING,
             #[cfg(feature = "view")]
             view: None,
+            safety: None,
         }
     }
 }
@@ -224,6 +228,9 @@ pub enum RunError {
     Thread(ThreadError),
     /// The loop could not be set up (period out of range).
     Loop(String),
+    /// The safety chain does not allow motion (an e-stop open, the enable released, a pin
+    /// that cannot be read or written, or the chain in use by another run): nothing started.
+    Safety(String),
 }
 
 impl RunError {
@@ -270,6 +277,7 @@ impl fmt::Display for RunError {
             RunError::Cancelled => f.write_str("stopped on request before the motion started"),
             RunError::Thread(e) => write!(f, "cannot start the control thread: {e}"),
             RunError::Loop(e) => write!(f, "control loop: {e}"),
+            RunError::Safety(e) => write!(f, "safety chain: {e}; nothing was started"),
         }
     }
 }
@@ -326,6 +334,8 @@ struct RunInfo {
     host_before: Option<rl_rt::HostTimes>,
     /// Other programs' real-time threads when the loop started.
     rt_before: Vec<rl_rt::preflight::rt_threads::RtThread>,
+    /// Where the safety chain goes back after the run.
+    safety: Option<super::safety::SafetyHandle>,
 }
 
 /// A running controller: a real-time thread stepping a [`Controller`](super::Controller) with the law `L` (by
@@ -432,6 +442,7 @@ where
                 started: Instant::now(),
                 host_before,
                 rt_before,
+                safety: options.safety.clone(),
             },
         })
     }

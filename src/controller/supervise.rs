@@ -37,6 +37,7 @@
 
 use core::fmt;
 
+use rl_drivers::safety::{StopCategory, StopReason};
 use rl_drivers::{DeviceError, Error as DeviceErrorValue, ErrorKind, LinkStatistics};
 
 /// What the supervisor checks and its bounds. [`Supervision::default`] is on, with the bounds
@@ -226,6 +227,14 @@ pub enum Fault {
         /// Its reason.
         error: DeviceErrorValue,
     },
+    /// The safety chain stopped the run (an e-stop opened, the enable was released, a pin
+    /// failed): in category 0 at once, in category 1 brought to rest first.
+    Safety {
+        /// How.
+        category: StopCategory,
+        /// Why, with the pin.
+        reason: StopReason,
+    },
 }
 
 impl Fault {
@@ -234,7 +243,13 @@ impl Fault {
     pub fn stops_at_once(&self) -> bool {
         matches!(
             self,
-            Fault::LinkLost { .. } | Fault::ConsecutiveLost { .. } | Fault::Device { .. }
+            Fault::LinkLost { .. }
+                | Fault::ConsecutiveLost { .. }
+                | Fault::Device { .. }
+                | Fault::Safety {
+                    category: StopCategory::Zero,
+                    ..
+                }
         )
     }
 
@@ -341,6 +356,14 @@ impl fmt::Display for Fault {
                 "{count} cycles in a row overran their period (at most {bound} allowed)"
             ),
             Fault::Device { error } => write!(f, "the device faulted: {error}"),
+            Fault::Safety { category, reason } => write!(
+                f,
+                "safety chain: {reason} (stop category {})",
+                match category {
+                    StopCategory::Zero => "0, at once",
+                    StopCategory::One => "1, brought to rest",
+                }
+            ),
             other => f.write_str(&other.describe(&[])),
         }
     }
@@ -622,11 +645,20 @@ impl<const J: usize> Supervisor<J> {
                 });
             }
         }
-        // Frozen: identical replies while the command kept moving.
+        // Frozen: identical replies while the command kept moving. Replies count from the
+        // cycle the command had moved more than the resolution since the reply last changed:
+        // a standing arm's identical replies before a motion starts do not count (a device
+        // that answers a cycle or two later than the command would fault on every smooth
+        // start from rest).
         if all_identical {
-            self.identical += 1;
+            let mut moved = false;
             for k in 0..dof {
                 self.command_moved[k] += (o.commanded[k] - self.previous_command[k]).abs();
+                let res = o.resolution.get(k).copied().unwrap_or(0.0);
+                moved |= self.command_moved[k] > 4.0 * res.max(1e-9);
+            }
+            if moved {
+                self.identical += 1;
             }
         } else {
             self.identical = 0;
@@ -637,15 +669,9 @@ impl<const J: usize> Supervisor<J> {
         self.have_previous = true;
         self.cycles_since_fresh = 0;
         if self.identical + 1 >= self.frozen_cycles {
-            let moved = (0..dof).any(|k| {
-                let res = o.resolution.get(k).copied().unwrap_or(0.0);
-                self.command_moved[k] > 4.0 * res.max(1e-9)
+            return Some(Fault::Frozen {
+                cycles: self.identical + 1,
             });
-            if moved {
-                return Some(Fault::Frozen {
-                    cycles: self.identical + 1,
-                });
-            }
         }
         None
     }
@@ -851,6 +877,29 @@ mod tests {
         for _ in 0..50 {
             assert_eq!(s.observe(&obs(&[0.1, 0.2], &[0.1, 0.2], link)), None);
         }
+        // A smooth start after a long rest, the replies two cycles behind the command: the
+        // replies from before the motion do not count.
+        let command = |i: u32| 0.1 + 1e-6 * f64::from(i.saturating_sub(50)).powi(3);
+        for i in 50u32..80 {
+            let reply = command(i.saturating_sub(2));
+            assert_eq!(
+                s.observe(&obs(&[reply, 0.2], &[command(i), 0.2], link)),
+                None,
+                "cycle {i}"
+            );
+        }
+        // Once moving, replies that stop changing still fault after ten.
+        let mut found = None;
+        for i in 80u32..100 {
+            if let Some(f) = s.observe(&obs(&[command(77), 0.2], &[command(i), 0.2], link)) {
+                found = Some((i, f));
+                break;
+            }
+        }
+        assert!(
+            matches!(found, Some((_, Fault::Frozen { cycles: 10 }))),
+            "{found:?}"
+        );
     }
 
     #[test]

@@ -118,15 +118,21 @@ pub struct ViewPublisher {
 
 impl ViewPublisher {
     /// Hands one cycle's measured and commanded positions to the viewer. Wait-free,
-    /// allocation-free; never blocks the loop.
+    /// allocation-free; never blocks the loop. A cycle the run's tracking statistics do not
+    /// count (its measurement held from an earlier reply after a lost one, or a cycle after
+    /// the first fault) shows the arm without a command: `q_cmd − q` of a stale measurement is
+    /// not a tracking error, and the page would show one the report does not have.
     #[inline]
     pub fn show<const J: usize>(&mut self, record: &CycleRecord<J>) {
         let dof = self.dof.min(J);
-        match self.publisher.publish_commanded(
-            self.model,
-            &record.measured[..dof],
-            &record.commanded[..dof],
-        ) {
+        let measured = &record.measured[..dof];
+        let shown = if record.counted {
+            self.publisher
+                .publish_commanded(self.model, measured, &record.commanded[..dof])
+        } else {
+            self.publisher.publish(self.model, measured)
+        };
+        match shown {
             Ok(()) => self.published += 1,
             Err(_) => self.refused += 1,
         }

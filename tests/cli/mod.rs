@@ -89,3 +89,31 @@ pub fn watch_stderr(child: &mut Child, needle: &'static str) -> (Receiver<()>, J
     });
     (rx, reader)
 }
+
+/// The commanded positions (`cmd_*` columns) of a telemetry CSV's last row (seven decimals).
+pub fn last_commanded(csv: &std::path::Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(csv).expect("telemetry");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let last: Vec<&str> = lines.last().expect("rows").split(',').collect();
+    header
+        .iter()
+        .zip(&last)
+        .filter(|(h, _)| h.starts_with("cmd_"))
+        .map(|(_, v)| v.parse().expect("number"))
+        .collect()
+}
+
+/// The Python of target/ruckig-venv (scripts/test makes it) if it imports `ruckig`.
+pub fn ruckig_python() -> Option<std::path::PathBuf> {
+    let python =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/ruckig-venv/bin/python");
+    let ok = python.exists()
+        && Command::new(&python)
+            .args(["-c", "import ruckig"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+    ok.then_some(python)
+}

@@ -138,3 +138,61 @@ pub fn demo_controller(fake: &FakeH7) -> Controller<MitsubishiH7> {
         Plan::new(&model, &start, &default_waypoints(&model, &start), &limits).expect("plan");
     Controller::new(robot, model, plan, PERIOD).expect("controller")
 }
+
+/// A controller stepped by hand with `law` on a started H7 against `fake` (the RV-6SL standing
+/// where it is), limits at 0.25 of the model's speeds, the law started, the inputs attached (a
+/// queue of `capacity`, a 60 s input timeout): what the tests of laws that take inputs share.
+pub fn law_on_h7<L: rl::controller::ControlLaw<16, 8>>(
+    fake: &FakeH7,
+    mut law: L,
+    capacity: usize,
+) -> LawOnH7<L> {
+    use rl::controller::law::Start;
+    use rl::controller::{Supervision, input};
+
+    let model = rv6sl().expect("embedded model").model;
+    let dof = model.dof();
+    let (robot, start) = started_h7_standing(fake, dof);
+    let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
+    let (tx, rx) = input::channel::<16, 8, L::Input>(&model, capacity);
+    law.start(&Start {
+        position: &start,
+        model: &model,
+        limits: &limits,
+        period_s: PERIOD.as_secs_f64(),
+        device_period_s: PERIOD.as_secs_f64(),
+    })
+    .expect("law starts");
+    let mut control = Box::new(
+        Controller::with_law(
+            robot,
+            model,
+            law,
+            &start,
+            &limits,
+            PERIOD,
+            &Supervision::default(),
+        )
+        .expect("controller"),
+    );
+    control.attach_inputs(rx);
+    control.input_timeout(Duration::from_secs(60));
+    LawOnH7 {
+        control,
+        tx,
+        start,
+        limits,
+    }
+}
+
+/// What [`law_on_h7`] makes.
+pub struct LawOnH7<L: rl::controller::ControlLaw<16, 8>> {
+    /// The controller, stepped by hand.
+    pub control: Box<Controller<MitsubishiH7, 16, 8, L>>,
+    /// Its inputs' sender.
+    pub tx: rl::controller::InputSender<8, L::Input>,
+    /// Where the arm stands.
+    pub start: Vec<f64>,
+    /// The limits it runs with.
+    pub limits: MotionLimits<8>,
+}

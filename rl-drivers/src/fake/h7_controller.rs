@@ -8,9 +8,11 @@
 //! - **One answer per controller cycle.** Real-time packets are queued as they arrive; at each
 //!   cycle tick the oldest one is handled and answered. A client that sends faster than the
 //!   cycle sees its replies fall behind, as it would on a real controller. The cycle starts
-//!   [`Pacing::ControllerCycle`]`::offset` after the first packet of a session and again after
-//!   the client has been silent for a cycle (a real controller's cycle runs on regardless, at
-//!   a phase of its own; set the offset near the period to put a client on the cycle's edge).
+//!   [`Pacing::ControllerCycle`]`::offset` after the first packet of a session reached the
+//!   socket (the kernel's receive timestamp, so a fake thread that woke late does not shift
+//!   the phase) and again after the client has been silent for a cycle (a real controller's
+//!   cycle runs on regardless, at a phase of its own; set the offset near the period to put a
+//!   client on the cycle's edge).
 //!   The fake measures how late each tick's reply went out against the tick's scheduled time
 //!   ([`FakeH7Status::max_tick_lateness`], [`FakeH7Status::late_ticks`]): sharing the CPUs
 //!   with other real-time work can hold it up, which a real controller never is.
@@ -62,7 +64,7 @@ use crate::proto::h7::{
     PoseData,
 };
 use crate::proto::r3::{self, DState, JointReport, ProgramInfo, Request, run_bits};
-use crate::transport::Readiness;
+use crate::transport::{Readiness, timestamp};
 
 const POLL: Duration = Duration::from_millis(20);
 /// The controller's cycle.
@@ -186,7 +188,7 @@ impl PartialEq for ForwardKinematics {
 
 /// Configuration of the fake controller; joint limits are plain data so they can come from a
 /// loaded robot model.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct FakeH7Config {
     /// UDP address for real-time packets (port 0: any free port).
     pub udp_bind: SocketAddr,
@@ -223,6 +225,12 @@ pub struct FakeH7Config {
     pub kinematics: Option<ForwardKinematics>,
     /// End R3 replies with a carriage return (as a controller configured for an end code).
     pub r3_terminator: bool,
+    /// Called first on the thread that runs the controller's cycle: a real controller answers
+    /// on its own CPU, unhindered by the client's machine, so a test or a demo gives the
+    /// fake's thread a real-time priority here (rl-drivers sets no scheduler policy itself;
+    /// rl-rt does that). Without one the cycle thread's phase follows whenever the machine
+    /// lets it read the session's first packet.
+    pub on_thread_start: Option<fn()>,
 }
 
 impl FakeH7Config {
@@ -246,6 +254,7 @@ impl FakeH7Config {
             pacing: Pacing::default(),
             kinematics: None,
             r3_terminator: true,
+            on_thread_start: None,
         }
     }
 
@@ -484,6 +493,7 @@ impl FakeH7 {
             ..FakeH7Status::default()
         };
         status.actual_rad = config.initial_rad;
+        let config_hook = config.on_thread_start;
         status.commanded_rad = config.initial_rad;
         status.command_rad = config.initial_rad;
         let shared = Arc::new(Mutex::new(Shared {
@@ -511,10 +521,16 @@ impl FakeH7 {
         let mut threads = Vec::new();
         let (s, st) = (shared.clone(), stop.clone());
         let other = foreign.try_clone()?;
+        let hook = config_hook;
         threads.push(
             std::thread::Builder::new()
                 .name("fake-h7-udp".into())
-                .spawn(move || Cycle::new(udp, other, s, st).run())?,
+                .spawn(move || {
+                    if let Some(f) = hook {
+                        f();
+                    }
+                    Cycle::new(udp, other, s, st).run()
+                })?,
         );
         if let Some(listener) = listener {
             listener.set_nonblocking(true)?;
@@ -681,6 +697,9 @@ impl Cycle {
         if self.udp.set_nonblocking(true).is_err() {
             return;
         }
+        // The kernel's receive time of each packet: a session's cycle starts from its first
+        // packet's arrival, not from whenever this thread got to read it.
+        let _ = timestamp::enable(self.udp.as_fd());
         while !self.stop.load(Ordering::Relaxed) {
             let now = Instant::now();
             self.send_due(now);
@@ -696,8 +715,15 @@ impl Cycle {
                 && crate::transport::wait(self.udp.as_fd(), Readiness::Readable, wake)
                     .unwrap_or(false)
             {
-                while let Ok((n, from)) = self.udp.recv_from(&mut buf) {
-                    self.receive(&buf[..n], from, pacing);
+                while let Ok((n, from, at)) = timestamp::recv(self.udp.as_fd(), &mut buf) {
+                    let Some(from) = from else { continue };
+                    // The arrival on the monotonic clock (the read's time without a stamp).
+                    let now = Instant::now();
+                    let arrived = at.map_or(now, |at| {
+                        now.checked_sub(timestamp::since_epoch().saturating_sub(at))
+                            .unwrap_or(now)
+                    });
+                    self.receive(&buf[..n], from, arrived, pacing);
                 }
             }
             if let Some(tick) = self.next_tick
@@ -708,7 +734,7 @@ impl Cycle {
         }
     }
 
-    fn receive(&mut self, bytes: &[u8], from: SocketAddr, pacing: Pacing) {
+    fn receive(&mut self, bytes: &[u8], from: SocketAddr, arrived: Instant, pacing: Pacing) {
         let mut s = lock(&self.shared);
         s.status.packets += 1;
         s.status.client = Some(from);
@@ -739,7 +765,7 @@ impl Cycle {
                 }
                 self.queue.push_back((packet, from));
                 if self.next_tick.is_none() {
-                    self.next_tick = Some(Instant::now() + offset);
+                    self.next_tick = Some(arrived + offset);
                 }
             }
         }
@@ -960,16 +986,22 @@ impl Shared {
     }
 
     /// The command value moves to the target, at most as far as the speed limits allow in
-    /// `cycles` cycles (a clamped joint counts once per cycle it is clamped).
+    /// `cycles` cycles (a clamped joint counts once per cycle it is clamped). A target within
+    /// reach is taken as it is, bit for bit, as the controller takes a command it does not
+    /// clamp (`last + (target − last)` is not `target` in floating point: near 0 it differs
+    /// by more than the `f32` resolution the client checks the echo against).
     fn follow_target(&mut self, cycles: u32) {
         for i in 0..self.config.dof {
             let last = self.status.command_rad[i];
             let max_step = self.config.max_speed_rad_s[i] * CYCLE.as_secs_f64() * f64::from(cycles);
-            let step = self.target_rad[i] - last;
-            if step.abs() > max_step {
+            let target = self.target_rad[i];
+            let step = target - last;
+            self.status.command_rad[i] = if step.abs() > max_step {
                 self.status.speed_clamps += 1;
-            }
-            self.status.command_rad[i] = last + step.clamp(-max_step, max_step);
+                last + step.clamp(-max_step, max_step)
+            } else {
+                target
+            };
         }
     }
 

@@ -185,6 +185,8 @@ pub struct FakeUrStatus {
     pub program: Option<String>,
     /// `servoj` calls.
     pub servoj_calls: u64,
+    /// `speedj` calls.
+    pub speedj_calls: u64,
     /// Watchdogs that fired.
     pub watchdog_triggers: u64,
     /// Protective stops.
@@ -1413,6 +1415,7 @@ impl Host for Controller {
                 let qd = joints(a(0, "qd"), "speedj")?;
                 let acc = number(a(1, "a"), 1.4, "speedj a")?;
                 let t = number(a(2, "t"), 0.002, "speedj t")?;
+                self.status.speedj_calls += 1;
                 self.arm.speed(qd, acc);
                 Called::Cycles(cycles(t))
             }

@@ -33,11 +33,11 @@ use glam::{DMat3, DVec3};
 
 use super::dashboard::{self, Dashboard};
 use super::link::{LinkError, Package, RtdeLink};
-use super::program::FollowerProgram;
+use super::program::{FollowerProgram, MODE_POSITION, MODE_VELOCITY};
 use crate::capability::{
     CartesianPositionSensor, Delivery, DigitalInputReader, DigitalOutputWriter, JointDevice,
-    JointPositionActuator, JointPositionSensor, JointVelocitySensor, LinkStatistics,
-    LinkStatisticsSensor, Pose,
+    JointPositionActuator, JointPositionSensor, JointVelocityActuator, JointVelocitySensor,
+    LinkStatistics, LinkStatisticsSensor, Pose,
 };
 use crate::device::{Description, Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::rtde::types::Writer;
@@ -111,6 +111,10 @@ pub struct UrConfig {
     pub gain: f64,
     /// The program's watchdog: it stops when the command register is not written this often.
     pub watchdog_hz: f64,
+    /// `speedj`'s acceleration while joint speeds are commanded
+    /// ([`JointVelocityActuator`]), rad/s² of the leading joint: the controller ramps to each
+    /// new speed at it (1.4, URScript's default joint acceleration).
+    pub speed_acceleration: f64,
     /// Power on and release the brakes at `start` (through the dashboard).
     pub power_on: bool,
     /// Largest wait of `open`, `start` and `stop` for the controller.
@@ -133,6 +137,7 @@ impl UrConfig {
             lookahead_time: 0.1,
             gain: 300.0,
             watchdog_hz: 10.0,
+            speed_acceleration: 1.4,
             power_on: false,
             timeout: Duration::from_secs(3),
             state_wait: Duration::from_millis(4),
@@ -202,8 +207,10 @@ pub struct UrCounters {
 /// The driver's buffered command.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Command {
+    /// Joint positions or speeds, as `mode` says.
     q: [f64; DOF],
-    run: bool,
+    /// The command register: 0 (the program ends), [`MODE_POSITION`] or [`MODE_VELOCITY`].
+    mode: i32,
     outputs: u16,
     outputs_mask: u16,
     outputs_dirty: bool,
@@ -307,7 +314,7 @@ impl UniversalRobot {
             have_state: false,
             command: Command {
                 q: [0.0; DOF],
-                run: false,
+                mode: 0,
                 outputs: 0,
                 outputs_mask: 0,
                 outputs_dirty: false,
@@ -357,6 +364,7 @@ impl UniversalRobot {
             lookahead_time: self.config.lookahead_time,
             gain: self.config.gain,
             watchdog_hz: self.config.watchdog_hz,
+            speed_acceleration: self.config.speed_acceleration,
         }
     }
 
@@ -473,7 +481,7 @@ impl UniversalRobot {
         let mut payload = [0u8; 4 + 8 * DOF];
         {
             let mut w = Writer::new(&mut payload);
-            let _ = w.i32(i32::from(self.command.run));
+            let _ = w.i32(self.command.mode);
             for q in self.command.q {
                 let _ = w.f64(q);
             }
@@ -701,7 +709,7 @@ impl Driver for UniversalRobot {
         self.check_state(op)?;
         // Hold where the arm stands, then hand it to the program.
         self.command.q = self.state.q;
-        self.command.run = true;
+        self.command.mode = MODE_POSITION;
         let deadline = Instant::now() + self.config.timeout;
         self.send_inputs(op, deadline)?;
         self.send_program(op)?;
@@ -724,7 +732,7 @@ impl Driver for UniversalRobot {
     fn stop_sequence(&mut self) -> Result<(), Error> {
         let op = Operation::Stop;
         self.following = false;
-        self.command.run = false;
+        self.command.mode = 0;
         let mut first = crate::device::FirstError::default();
         let ended = match self.wait_for(op, true, |s| s.runtime_state != 2 || s.handshake == 0) {
             Ok(e) => e,
@@ -900,17 +908,38 @@ impl JointVelocitySensor for UniversalRobot {
 }
 
 impl JointPositionActuator for UniversalRobot {
+    /// Joint positions for `servoj` from the next step on (the program follows positions).
     fn set_joint_position(&mut self, q: &[f64]) -> Result<(), Error> {
+        self.set_command(MODE_POSITION, "UR joints (finite)", q)
+    }
+}
+
+impl JointVelocityActuator for UniversalRobot {
+    /// Joint speeds in rad/s for `speedj` from the next step on (the program follows speeds,
+    /// ramping to each at [`UrConfig::speed_acceleration`]); a later
+    /// [`set_joint_position`](JointPositionActuator::set_joint_position) goes back to
+    /// positions, which should then be where the arm is.
+    fn set_joint_velocity(&mut self, qd: &[f64]) -> Result<(), Error> {
+        self.set_command(MODE_VELOCITY, "UR joint speeds (finite)", qd)
+    }
+}
+
+impl UniversalRobot {
+    /// The command for the next steps: `values` in `mode` while the program runs.
+    fn set_command(&mut self, mode: i32, what: &'static str, values: &[f64]) -> Result<(), Error> {
         self.lifecycle.check(Operation::Set)?;
-        Error::check_len("UR joints", DOF, q.len())?;
-        if q.iter().any(|x| !x.is_finite()) {
+        Error::check_len(what, DOF, values.len())?;
+        if values.iter().any(|x| !x.is_finite()) {
             return Err(Error::InvalidArgument {
-                what: "UR joints (finite)",
+                what,
                 expected: DOF,
-                got: q.iter().filter(|x| x.is_finite()).count(),
+                got: values.iter().filter(|x| x.is_finite()).count(),
             });
         }
-        self.command.q.copy_from_slice(q);
+        self.command.q.copy_from_slice(values);
+        if self.following {
+            self.command.mode = mode;
+        }
         Ok(())
     }
 }

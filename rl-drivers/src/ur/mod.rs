@@ -28,4 +28,4 @@ pub use device::{
     DOF, UniversalRobot, UrConfig, UrCounters, UrState, robot_mode, robot_mode_name,
     safety_stop_name,
 };
-pub use program::FollowerProgram;
+pub use program::{FollowerProgram, MODE_POSITION, MODE_VELOCITY};

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 pub mod netns;
+pub mod stall;
 
 use rl_drivers::cia402::AxisUnits;
 

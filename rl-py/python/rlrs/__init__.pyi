@@ -108,6 +108,13 @@ class Model:
     def nle(self, q: ArrayLike, v: ArrayLike) -> Array: ...
     def nonlinear_effects(self, q: ArrayLike, v: ArrayLike) -> Array: ...
     def coriolis(self, q: ArrayLike, v: ArrayLike) -> Array: ...
+    def rnea_derivatives(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike
+    ) -> Tuple[Array, Array, Array]: ...
+    def aba_derivatives(
+        self, q: ArrayLike, v: ArrayLike, tau: ArrayLike
+    ) -> Tuple[Array, Array, Array]: ...
+    def gravity_derivatives(self, q: ArrayLike) -> Array: ...
     def ik(
         self,
         frame: str,
@@ -140,6 +147,94 @@ class JerkLimited:
     def phase_ends(self, axis: int) -> Array: ...
     def sample(self, t: Union[float, ArrayLike]) -> Tuple[Array, Array, Array, Array]: ...
     def __call__(self, t: Union[float, ArrayLike]) -> Array: ...
+
+Limit = Union[float, ArrayLike]
+Sync = Literal["time", "time_if_necessary", "phase", "none"]
+
+def otg(
+    current_position: ArrayLike,
+    target_position: Limit,
+    max_velocity: Limit,
+    max_acceleration: Limit,
+    max_jerk: Limit,
+    *,
+    current_velocity: Optional[Limit] = None,
+    current_acceleration: Optional[Limit] = None,
+    target_velocity: Optional[Limit] = None,
+    target_acceleration: Optional[Limit] = None,
+    min_velocity: Optional[Limit] = None,
+    min_acceleration: Optional[Limit] = None,
+    min_position: Optional[Limit] = None,
+    max_position: Optional[Limit] = None,
+    interface: Literal["position", "velocity"] = "position",
+    synchronization: Sync = "time",
+    minimum_duration: Optional[float] = None,
+    waypoints: Optional[ArrayLike] = None,
+) -> OtgTrajectory:
+    """The time-optimal jerk-limited trajectory from the current to the target state
+    (rl-core's online trajectory generator; Ruckig's durations)."""
+
+class OtgTrajectory:
+    """A trajectory of `otg`: duration, each axis' own shortest duration, samples."""
+
+    @property
+    def duration(self) -> float: ...
+    @property
+    def axes(self) -> int: ...
+    @property
+    def min_durations(self) -> Optional[Array]: ...
+    @property
+    def sections(self) -> Array: ...
+    def sample(self, t: Union[float, ArrayLike]) -> Tuple[Array, Array, Array, Array]: ...
+    def __call__(self, t: Union[float, ArrayLike]) -> Array: ...
+
+class Otg:
+    """The online trajectory generator of a control loop: one call per cycle."""
+
+    def __init__(
+        self,
+        cycle: float,
+        position: ArrayLike,
+        velocity: Optional[Limit] = None,
+        acceleration: Optional[Limit] = None,
+    ) -> None: ...
+    def update(
+        self,
+        target_position: Limit,
+        max_velocity: Limit,
+        max_acceleration: Limit,
+        max_jerk: Limit,
+        *,
+        target_velocity: Optional[Limit] = None,
+        target_acceleration: Optional[Limit] = None,
+        min_velocity: Optional[Limit] = None,
+        min_acceleration: Optional[Limit] = None,
+        min_position: Optional[Limit] = None,
+        max_position: Optional[Limit] = None,
+        interface: Literal["position", "velocity"] = "position",
+        synchronization: Sync = "time",
+        minimum_duration: Optional[float] = None,
+        waypoints: Optional[ArrayLike] = None,
+    ) -> Tuple[Array, Array, Array, bool]: ...
+    def step(self) -> Tuple[Array, Array, Array, bool]: ...
+    def brake(
+        self,
+        max_velocity: Limit,
+        max_acceleration: Limit,
+        max_jerk: Limit,
+        *,
+        min_velocity: Optional[Limit] = None,
+        min_acceleration: Optional[Limit] = None,
+        synchronization: Sync = "phase",
+    ) -> None: ...
+    @property
+    def state(self) -> Tuple[Array, Array, Array]: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def axes(self) -> int: ...
 
 class Scene:
     """A robot among obstacles: collision and distance queries (rl-sg)."""
@@ -243,7 +338,15 @@ class ControlRun:
         supervision: bool = True,
         tracking_bound: Union[None, float, ArrayLike] = None,
         telemetry: bool = True,
+        follow: bool = False,
+        input_timeout: Optional[float] = None,
     ) -> None: ...
+    @property
+    def follows(self) -> bool: ...
+    def send_position(
+        self, position: ArrayLike, velocity: Optional[ArrayLike] = None
+    ) -> None: ...
+    def send_velocity(self, velocity: ArrayLike) -> None: ...
     @property
     def joints(self) -> list[str]: ...
     @property

@@ -62,7 +62,7 @@ pub fn run_ft(args: &FtArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::netft_sensor::{FakeNetFt, FakeNetFtConfig};
     use rl_drivers::proto::netft::Calibration;
     let config = FakeNetFtConfig {
-        on_thread_start: Some(fake_device_thread),
+        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
         bind: args.bind.ip(),
         rdt_port: args.bind.port(),
         tcp_port: Some(args.tcp_port),
@@ -190,7 +190,7 @@ pub fn run_gripper(args: &GripperArgs, stop: &AtomicBool) -> CliResult {
         )));
     }
     let config = FakeGripperConfig {
-        on_thread_start: Some(fake_device_thread),
+        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
         model,
         unit: args.unit,
         serial: args.serial.is_some(),
@@ -284,16 +284,6 @@ pub struct UrArgs {
     pub duration: Option<std::time::Duration>,
 }
 
-/// The fakes' threads run SCHED_FIFO 85 where the process may (as the other stand-alone fakes,
-/// just below `rl run`'s loop): a device does not share its CPU with the host's programs.
-fn fake_device_thread() {
-    let _ = rl_rt::RtThreadBuilder::new("fake-device")
-        .policy(rl_rt::Policy::Fifo)
-        .priority(85)
-        .best_effort(true)
-        .apply_to_current();
-}
-
 /// Runs `rl fake-robot ur`.
 pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
     use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig, UrKinematics};
@@ -313,7 +303,7 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
         script_ports: args.script_ports.clone(),
         kinematics,
         running: !args.power_off,
-        on_thread_start: Some(fake_device_thread),
+        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
         ..FakeUrConfig::loopback()
     };
     if let Some(path) = &args.model {

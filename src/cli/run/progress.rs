@@ -26,10 +26,15 @@ impl ProgressDisplay {
     /// Shows `p` if it is time to.
     pub fn update(&mut self, p: &Progress, elapsed: Duration) {
         self.line.update_at(elapsed, || {
+            // A law without a duration (streamed targets): the time alone.
+            let of = if self.plan_s > 0.0 {
+                format!("/{:.2}", self.plan_s)
+            } else {
+                String::new()
+            };
             format!(
-                "t {:5.2}/{:.2} s  cycle {:6}  tracking error max {:7.3} mrad  worst latency {:7.1} µs  lost {}{}",
+                "t {:5.2}{of} s  cycle {:6}  tracking error max {:7.3} mrad  worst latency {:7.1} µs  lost {}{}",
                 p.time_s,
-                self.plan_s,
                 p.cycle,
                 p.error_max_rad * 1e3,
                 p.worst_latency_ns as f64 / 1e3,

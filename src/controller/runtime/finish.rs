@@ -12,12 +12,13 @@ use crate::controller::law::ControlLaw;
 use crate::controller::plan::UNKNOWN_SPEED;
 use crate::controller::report::{RunReport, Shutdown};
 use crate::controller::robot::JointRobot;
+use crate::controller::safety::SafetyReport;
 
 /// The report of a run whose thread ended with `joined`; `dropped`: telemetry records the
 /// queue could not take.
 pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>>(
     joined: thread::Result<Option<LoopOutcome<R, B, J, L>>>,
-    info: RunInfo,
+    mut info: RunInfo,
     dropped: Option<u64>,
 ) -> RunReport {
     let outcome = match joined {
@@ -42,7 +43,7 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
     } = outcome;
     // What else ran: the host's times over the run, other programs' real-time threads seen
     // at its start or its end.
-    let mut rt = info.rt_before.clone();
+    let mut rt = std::mem::take(&mut info.rt_before);
     rt.extend(rl_rt::preflight::rt_threads::other_rt_threads());
     let host = HostActivity {
         loop_run_delay: run_delay,
@@ -53,6 +54,15 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         other_rt: HostActivity::other_programs(&rt),
     };
     let shutdown = shut_down(controller.robot_mut());
+    // The drives are off: the chain's brake output drops, its watchdog holds; it goes back to
+    // its handle for the next run.
+    let safety = controller.detach_safety().map(|chain| {
+        let seen = SafetyReport::of(chain.as_ref());
+        if let Some(handle) = &info.safety {
+            handle.put_back(chain);
+        }
+        seen
+    });
     let end = controller.end();
     let mut failure = loop_error.map(|e| format!("control loop: {e}"));
     match end {
@@ -64,6 +74,12 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         }
         _ => {}
     }
+    if let Some(s) = safety.filter(|s| s.brake_energised) {
+        failure.get_or_insert(format!(
+            "the safety chain's brake output stayed energised after the run ({:?})",
+            s.state
+        ));
+    }
     if !shutdown.stopped {
         failure.get_or_insert(format!(
             "the device did not stop cleanly: {}",
@@ -73,6 +89,7 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
     let tracking = controller.tracking();
     let bounds = controller.supervisor().bounds();
     let dof = info.joints.len();
+    let summary = controller.law().summary();
     let assumed = (!info.assumed_speed.is_empty()).then_some((UNKNOWN_SPEED, info.assumed_speed));
     RunReport {
         model: info.model,
@@ -106,10 +123,12 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         assumed_speed: assumed,
         torque_clamped: controller.torque_clamped(),
         inputs: controller.input_report().filter(|r| r.is_used()),
+        law: summary.as_ref().map(|s| s.json.clone()),
+        safety,
         shutdown,
         telemetry_rows: None,
         telemetry_dropped: dropped,
-        notes: Vec::new(),
+        notes: summary.map(|s| s.lines).unwrap_or_default(),
         peer_lateness: None,
         host,
         failure,

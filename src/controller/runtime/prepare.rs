@@ -228,6 +228,18 @@ impl<R: JointRobot, const B: usize, const J: usize> Prepared<R, B, J> {
         if let Some(timeout) = options.input_timeout {
             controller.input_timeout(timeout);
         }
+        if let Some(handle) = &options.safety {
+            match handle.take() {
+                Some(chain) => controller.attach_safety(chain),
+                None => {
+                    let mut robot = controller.into_robot();
+                    let _ = robot.close();
+                    return Err(RunError::Safety(
+                        "the chain is in use by another run".into(),
+                    ));
+                }
+            }
+        }
         controller.max_braking(options.max_braking);
         let setup = LoopSetup {
             builder: self.builder,

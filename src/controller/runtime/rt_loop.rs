@@ -23,6 +23,7 @@ use crate::controller::control::{Controller, CycleTiming};
 use crate::controller::input::InputReceiver;
 use crate::controller::law::ControlLaw;
 use crate::controller::robot::JointRobot;
+use crate::controller::safety::SafetyHandle;
 use crate::controller::telemetry::CycleRecord;
 
 /// Exchanges tried before the first reply counts as missing.
@@ -82,6 +83,7 @@ where
         telemetry: tx,
         progress: progress_tx,
         stop: options.stop.clone(),
+        safety: options.safety.clone(),
         #[cfg(feature = "view")]
         view: setup.view,
         period_ns: setup.period.as_nanos().min(u128::from(u64::MAX)) as u64,
@@ -155,6 +157,8 @@ struct LoopBody<R, const B: usize, const J: usize, L: ControlLaw<B, J>> {
     telemetry: Option<QueueSender<CycleRecord<J>>>,
     progress: MailboxWriter<Progress>,
     stop: StopFlag,
+    /// Where the safety chain goes back if the device does not start.
+    safety: Option<SafetyHandle>,
     #[cfg(feature = "view")]
     view: Option<crate::controller::view::ViewPublisher>,
     period_ns: u64,
@@ -174,7 +178,11 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
         let switched_on = if self.stop.is_stop_requested() {
             Err(RunError::Cancelled)
         } else {
-            start_device(&mut self.controller, start, joints)
+            // The safety chain first: motion never starts with it open.
+            self.controller
+                .arm_safety()
+                .map_err(|reason| RunError::Safety(reason.to_string()))
+                .and_then(|()| start_device(&mut self.controller, start, joints))
         };
         // For a device on its own cycle, the first reply came at one of its ticks.
         let first_tick = MonoTime::now();
@@ -182,6 +190,9 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> LoopBod
             let robot = self.controller.robot_mut();
             let _ = robot.stop();
             let _ = robot.close();
+            if let (Some(handle), Some(chain)) = (&self.safety, self.controller.detach_safety()) {
+                handle.put_back(chain);
+            }
             let _ = started.send(Err(e));
             return None;
         }
@@ -367,17 +378,23 @@ fn first_exchange<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B
     let dof = start.len();
     let tolerance: Vec<f64> = controller.supervisor().bounds().tracking[..dof].to_vec();
     // A device on its own cycle may let the first request wait past a reply timeout while its
-    // cycle settles: a few tries, each after the device has had time to answer the last one,
-    // before giving up.
+    // cycle settles: a few tries, one period apart as the loop's cycles would be, before
+    // giving up.
+    let period = controller.robot().update_period();
     let mut tries = 0;
     loop {
         tries += 1;
+        let began = std::time::Instant::now();
         match controller.first_exchange() {
             Ok(()) => break,
             Err(e) if tries < FIRST_EXCHANGE_TRIES && e.kind() == ErrorKind::Timeout => {
-                // Let a device that answers on its own cycle work off the request before the
-                // next one, so no second request waits in its queue.
-                std::thread::sleep(2 * controller.robot().update_period());
+                // The next try a period after this one began: a device that answers on its
+                // own cycle has had its tick to answer this one, and a drive that watches the
+                // master's cycle (a CiA 402 drive faults after two SYNC periods without one)
+                // sees no gap. A pause of two periods here faulted such a drive.
+                std::thread::sleep(
+                    (began + period).saturating_duration_since(std::time::Instant::now()),
+                );
             }
             Err(error) => {
                 return Err(RunError::Device {

@@ -9,7 +9,9 @@
 //! the time-optimal jerk-limited stop from the current state (every stop request of a
 //! supervised run uses it), and [`braking`] answers the same question without changing state.
 //!
-//! Nothing here allocates; a generator of 7 axes is about 7 KB.
+//! Nothing here allocates. A generator keeps two trajectories: the one it follows and the one a
+//! recalculation writes, which takes over only when it succeeds — a goal that cannot be reached
+//! leaves the motion under way untouched. Of 7 axes it is about 13 KB.
 
 use core::time::Duration;
 
@@ -38,7 +40,9 @@ pub struct Otg<const N: usize> {
     cycle: f64,
     /// The goal of the current trajectory; `current` is the state it started from.
     goal: Input<N>,
-    trajectory: OtgTrajectory<N>,
+    /// The trajectory followed (`trajectories[active]`) and the one recalculated into.
+    trajectories: [OtgTrajectory<N>; 2],
+    active: usize,
     time: f64,
     cursor: [usize; N],
     state: State<N>,
@@ -79,7 +83,8 @@ impl<const N: usize> Otg<N> {
         Self {
             cycle: cycle.as_secs_f64(),
             goal,
-            trajectory: hold,
+            trajectories: [hold, hold],
+            active: 0,
             time: 0.0,
             cursor: [0; N],
             state,
@@ -98,7 +103,19 @@ impl<const N: usize> Otg<N> {
 
     /// The trajectory being followed.
     pub fn trajectory(&self) -> &OtgTrajectory<N> {
-        &self.trajectory
+        &self.trajectories[self.active]
+    }
+
+    /// Calculates `request` into the spare trajectory and, when that succeeds, follows it from
+    /// its start; on an error the trajectory followed stays as it was.
+    fn take(&mut self, request: Input<N>) -> Result<(), OtgError> {
+        let spare = 1 - self.active;
+        calculate_into(&request, &mut self.trajectories[spare])?;
+        self.active = spare;
+        self.goal = request;
+        self.time = 0.0;
+        self.cursor = [0; N];
+        Ok(())
     }
 
     /// Time along the trajectory being followed.
@@ -111,7 +128,8 @@ impl<const N: usize> Otg<N> {
     pub fn reset(&mut self, state: State<N>) {
         self.state = state;
         self.goal.target.position = [f64::NAN; N];
-        self.trajectory = OtgTrajectory::hold(state.position, state.velocity, state.acceleration);
+        self.trajectories[self.active] =
+            OtgTrajectory::hold(state.position, state.velocity, state.acceleration);
         self.time = 0.0;
         self.cursor = [0; N];
     }
@@ -125,10 +143,7 @@ impl<const N: usize> Otg<N> {
         if !same_goal(goal, &self.goal) {
             let mut request = *goal;
             request.current = self.state;
-            calculate_into(&request, &mut self.trajectory)?;
-            self.goal = request;
-            self.time = 0.0;
-            self.cursor = [0; N];
+            self.take(request)?;
             recalculated = true;
         }
         let mut out = self.step();
@@ -140,7 +155,8 @@ impl<const N: usize> Otg<N> {
     #[inline]
     pub fn step(&mut self) -> Output<N> {
         self.time += self.cycle;
-        let sample = self.trajectory.at_time_from(self.time, &mut self.cursor);
+        let trajectory = &self.trajectories[self.active];
+        let sample = trajectory.at_time_from(self.time, &mut self.cursor);
         self.state = State {
             position: sample.position,
             velocity: sample.velocity,
@@ -149,30 +165,26 @@ impl<const N: usize> Otg<N> {
         Output {
             sample,
             time: self.time,
-            finished: self.time >= self.trajectory.duration(),
+            finished: self.time >= trajectory.duration(),
             recalculated: false,
         }
     }
 
     /// Replaces the goal by stopping: the time-optimal jerk-limited motion from the current state
     /// to rest (velocity and acceleration zero; see [`braking`]). The following [`Otg::step`]s
-    /// follow it; an [`Otg::update`] with a goal sets a new one.
+    /// follow it; an [`Otg::update`] with a goal sets a new one. On an error the trajectory
+    /// followed stays.
     pub fn brake(
         &mut self,
         limits: &Limits<N>,
         synchronization: Synchronization,
     ) -> Result<(), OtgError> {
-        let request = braking_input(&self.state, limits, synchronization);
-        calculate_into(&request, &mut self.trajectory)?;
-        self.goal = request;
-        self.time = 0.0;
-        self.cursor = [0; N];
-        Ok(())
+        self.take(braking_input(&self.state, limits, synchronization))
     }
 
     /// Whether the trajectory followed is complete (the goal reached).
     pub fn is_finished(&self) -> bool {
-        self.time >= self.trajectory.duration()
+        self.time >= self.trajectory().duration()
     }
 }
 

@@ -48,7 +48,7 @@
 //!   disagreements: near-zero limits and one high-limit blend); [`OtgTrajectory::limit_violation`] checks a trajectory exactly.
 //! - Deterministic: the same input gives the same bits (no randomness, bounded iteration counts,
 //!   `libm`); every failure is a typed [`OtgError`] naming the axis, never a NaN.
-//! - No allocation, no panic; a trajectory of 7 axes takes about 5.5 KB, a generator 7 KB, a
+//! - No allocation, no panic; a trajectory of 7 axes takes about 5.5 KB, a generator 13 KB, a
 //!   waypoint trajectory of 7 axes 50 KB. A 7-axis calculation from a moving start takes a few
 //!   microseconds, a control-loop step about 30 ns (`benches/otg.rs`).
 //!

@@ -426,6 +426,9 @@ impl Node {
         }
         if self.nmt != nmt::State::Operational {
             self.rpdo_buffer = [None; 4];
+            // SYNC monitoring starts again with the first SYNC in Operational: a master that
+            // comes back after a pause is not faulted for the SYNC it sent before it.
+            self.last_sync = None;
         }
     }
 

@@ -15,90 +15,18 @@
 //! [`proto::coach`]: crate::proto::coach
 
 use core::time::Duration;
-use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::time::Instant;
 
-use crate::capability::{
-    Delivery, JointDevice, JointPositionActuator, JointPositionSensor, JointTorqueActuator,
-    JointTorqueFeedForward, JointVelocityActuator, LinkStatistics, LinkStatisticsSensor, Pose,
-};
+use crate::capability::Pose;
 use crate::device::{Driver, Error, Lifecycle, Operation, State, impl_cyclic_device};
 use crate::proto::coach::{CoachError, LineBuffer, MAX_VALUES, Message, Values};
 use crate::transport::TcpLink;
 use rl_core::rotation::euler;
 
-/// The port RL's visualisers listen on.
-pub const DEFAULT_PORT: u16 = 11235;
-/// Bytes of commands one step can carry: position, velocity and torque lines of
-/// [`MAX_VALUES`] joints at 14 bytes a value (`-1.23457e+308 `) and the request.
-pub const OUTPUT_CAPACITY: usize = 16384;
-/// Bytes of received lines buffered for reassembly: two replies of [`MAX_VALUES`] joints.
-pub const INPUT_CAPACITY: usize = 8192;
+mod capabilities;
+mod config;
 
-/// How to reach the Coach server.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CoachConfig {
-    /// Server address (RL: localhost:11235).
-    pub server: SocketAddr,
-    /// Model index `i` in the lines.
-    pub model: u32,
-    /// Joints of the model (at most [`MAX_VALUES`]).
-    pub dof: usize,
-    /// The period the caller steps at.
-    pub update_period: Duration,
-    /// Bound on a step: draining, sending, and waiting for the `6 <i>` reply. Default: the
-    /// update period.
-    pub reply_timeout: Duration,
-    /// Failed steps in a row that fault the device.
-    pub max_consecutive_failures: u32,
-    /// Ask for joint positions each step (`6 <i>`); off for rlSimulator, which does not answer.
-    pub request_joints: bool,
-    /// Bound on connecting, and on the first joint reply at open (when `request_joints`).
-    pub connect_timeout: Duration,
-}
-
-impl CoachConfig {
-    /// Model 0 at 127.0.0.1:11235, 10 ms period, a reply bound of one period, 10 failed steps
-    /// in a row to fault, joints requested.
-    pub fn new(dof: usize) -> Self {
-        Self {
-            server: SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), DEFAULT_PORT),
-            model: 0,
-            dof,
-            update_period: Duration::from_millis(10),
-            reply_timeout: Duration::from_millis(10),
-            max_consecutive_failures: crate::device::DEFAULT_MAX_CONSECUTIVE_FAILURES,
-            request_joints: true,
-            connect_timeout: Duration::from_secs(2),
-        }
-    }
-}
-
-/// What the line exchange has seen.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct CoachCounters {
-    /// Steps that sent their lines.
-    pub sent: u64,
-    /// Joint replies used.
-    pub replies: u64,
-    /// Steps whose reply did not arrive in time.
-    pub timeouts: u64,
-    /// Replies to earlier requests found at the start of a step (after a timeout), dropped.
-    pub late: u64,
-    /// Lines that did not parse or did not fit the buffer (dropped up to their newline).
-    pub bad_lines: u64,
-    /// Well-formed lines that were not a reply for our model (such as rlSimulator's empty lines).
-    pub other_lines: u64,
-    /// Requests sent whose reply has not come yet.
-    pub outstanding: u32,
-    /// Requests taken as never answered: a step's wait saw a reply it took for an earlier
-    /// request and then nothing until its deadline, so the server had skipped requests (the
-    /// count of outstanding requests starts again from there). A reply that turns up after all
-    /// moves from here to `late` (and, from a server that is merely very slow, one stale
-    /// reply may be taken for a current one). Always
-    /// `sent == replies + late + outstanding + unanswered`.
-    pub unanswered: u64,
-}
+pub use config::*;
 
 /// Outstanding requests beyond which the server is taken to drop requests: the count starts
 /// again (a later reply is then taken as current).
@@ -470,101 +398,3 @@ impl Driver for Coach {
 }
 
 impl_cyclic_device!(Coach, lifecycle);
-
-impl LinkStatisticsSensor for Coach {
-    /// `rejected` counts well-formed lines that were not ours; `corrupt` lines that did not
-    /// parse, did not fit, or did not match the model.
-    fn link_statistics(&self) -> LinkStatistics {
-        let c = self.counters;
-        LinkStatistics {
-            sent: c.sent,
-            received: c.replies,
-            lost: c.timeouts,
-            late: c.late,
-            rejected: c.other_lines,
-            corrupt: c.bad_lines,
-            consecutive_failures: self.lifecycle.consecutive_failures(),
-            delivery: Delivery::default(),
-        }
-    }
-}
-
-impl JointTorqueFeedForward for Coach {
-    /// Shows the feed-forward torques in the visualiser (`5 <i> τ…`).
-    fn set_joint_torque_feed_forward(&mut self, tau: &[f64]) -> Result<(), Error> {
-        self.set_joint_torque(tau)
-    }
-}
-
-impl JointDevice for Coach {
-    fn dof(&self) -> usize {
-        self.config.dof
-    }
-
-    fn torque_feed_forward(&mut self) -> Option<&mut dyn JointTorqueFeedForward<Error = Error>> {
-        Some(self)
-    }
-
-    fn joint_velocity_actuator(&mut self) -> Option<&mut dyn JointVelocityActuator<Error = Error>> {
-        Some(self)
-    }
-
-    fn joint_torque_actuator(&mut self) -> Option<&mut dyn JointTorqueActuator<Error = Error>> {
-        Some(self)
-    }
-}
-
-impl JointPositionActuator for Coach {
-    fn set_joint_position(&mut self, q: &[f64]) -> Result<(), Error> {
-        let values = self.values(q)?;
-        self.push(&Message::JointPosition {
-            model: self.config.model,
-            values,
-        })
-    }
-}
-
-impl JointVelocityActuator for Coach {
-    fn set_joint_velocity(&mut self, qd: &[f64]) -> Result<(), Error> {
-        let values = self.values(qd)?;
-        self.push(&Message::JointVelocity {
-            model: self.config.model,
-            values,
-        })
-    }
-}
-
-impl JointTorqueActuator for Coach {
-    fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Error> {
-        let values = self.values(tau)?;
-        self.push(&Message::JointTorque {
-            model: self.config.model,
-            values,
-        })
-    }
-}
-
-impl JointPositionSensor for Coach {
-    fn joint_position(&self, q: &mut [f64]) -> Result<(), Error> {
-        self.lifecycle.check(Operation::Get)?;
-        Error::check_len("joint vector length", self.config.dof, q.len())?;
-        if !self.have_joints {
-            return Err(Error::protocol(
-                Operation::Get,
-                "Coach line",
-                &"no joint reply received yet",
-            ));
-        }
-        q.copy_from_slice(&self.joints[..self.config.dof]);
-        Ok(())
-    }
-
-    /// The server prints six significant digits: half a unit in the sixth digit.
-    fn joint_position_resolution(&self, q: f64) -> f64 {
-        if q == 0.0 || !q.is_finite() {
-            return 0.0;
-        }
-        let exponent = q.abs().log10().floor();
-        0.5 * 10f64.powf(exponent - 5.0)
-    }
-}
