@@ -210,15 +210,9 @@ fn one_run(python: &std::path::Path, attempt: u32) -> Option<String> {
     let z = &report["zenoh"]["outbound"];
     assert_eq!(z["dropped"], 0, "the bridge never held up the loop's side");
     assert_eq!(z["joint_states"], 2 * rows);
-    let seqs: Vec<i64> = std::fs::read_to_string(&seen)
-        .expect("seen")
-        .lines()
-        .filter_map(|l| {
-            serde_json::from_str::<serde_json::Value>(l)
-                .ok()?
-                .get("seq")?
-                .as_i64()
-        })
+    let seqs: Vec<i64> = support::recorded(&seen)
+        .iter()
+        .filter_map(|r| r.get("seq")?.as_i64())
         .collect();
     assert!(
         seqs.windows(2).all(|w| w[1] > w[0]),

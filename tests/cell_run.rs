@@ -58,11 +58,7 @@ fn subscriber(python: &Path, port: u16, key: &str, out: &Path) -> Child {
 }
 
 fn records(path: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(path)
-        .expect("recorded")
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect()
+    support::recorded(path)
 }
 
 #[test]

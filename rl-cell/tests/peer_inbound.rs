@@ -227,11 +227,7 @@ fn a_python_subscriber_sees_joint_states_and_the_cell_come_and_go() {
     assert_eq!(report.outbound.joint_states, 2 * n);
     let status = sub.wait().expect("subscriber ends");
     assert!(status.success());
-    let text = std::fs::read_to_string(&out_path).expect("recorded");
-    let records: Vec<serde_json::Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect();
+    let records = support::recorded(&out_path);
     let states: Vec<&serde_json::Value> =
         records.iter().filter(|r| r.get("seq").is_some()).collect();
     assert_eq!(states.len() as u64, n, "every sample, once");

@@ -58,7 +58,11 @@ def decode(key, now, att, payload):
         seq, ts, n = struct.unpack_from('<qqB', att)
         rec.update(seq=seq, ts=ts, gid=att[17:].hex(), gid_len=n)
     if typename:
-        m = store.deserialize_cdr(payload, typename)
+        try:
+            m = store.deserialize_cdr(payload, typename)
+        except Exception as e:  # recorded for the test to fail on, with the bytes
+            rec.update(error='%s: %s' % (type(e).__name__, e), payload_hex=payload.hex())
+            return rec
         if typename == 'sensor_msgs/msg/JointState':
             # The IEEE 754 bits too: JSON readers may round decimal text by an ulp.
             bits = lambda a: [int(b) for b in np.asarray(a, dtype='<f8').view('<u8')]
@@ -131,9 +135,24 @@ def subscribe(args):
         os._exit(0)
 
 
+def wait_for_peer(s, seconds=20.0):
+    """Waits until the session has a peer (the endpoint it connects to may start listening
+    after this script starts: a sample put before then goes nowhere); whether it has one."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if list(s.info.peers_zid()) or list(s.info.routers_zid()):
+            return True
+        time.sleep(0.05)
+    return False
+
+
 def publish(args):
     plan = json.load(open(args.plan))
     s = session(args)
+    if args.connect and not wait_for_peer(s):
+        print('peer.py: no peer at %s within 20 s; nothing published' % args.connect,
+              file=sys.stderr, flush=True)
+        os._exit(1)
     time.sleep(plan.get('settle_s', 1.0))
     pubs = {}
     for item in plan['samples']:

@@ -53,3 +53,24 @@ pub fn publish(python: &Path, endpoint: &str, plan: &Path) -> Output {
         .output()
         .expect("python runs")
 }
+
+/// What `peer.py subscribe` wrote to `path`: one JSON value per sample or liveliness token. A
+/// sample the peer could not decode (it records the decoder's error and the bytes) fails here,
+/// naming its key, the error and the bytes.
+pub fn recorded(path: &Path) -> Vec<serde_json::Value> {
+    let records: Vec<serde_json::Value> = std::fs::read_to_string(path)
+        .expect("recorded")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    for r in &records {
+        assert!(
+            r.get("error").is_none(),
+            "the peer could not decode a sample on {}: {} (bytes {})",
+            r["key"],
+            r["error"],
+            r["payload_hex"]
+        );
+    }
+    records
+}
