@@ -12,6 +12,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod cli;
+mod late;
 #[path = "../rl-cell/tests/support/mod.rs"]
 mod support;
 use cli::exit_by;
@@ -73,28 +74,46 @@ fn a_python_subscriber_records_what_the_telemetry_csv_holds() {
     let dir = temp("csv");
     let port = free_port();
     let seen = dir.join("seen.jsonl");
-    let mut sub = subscriber(
-        &python,
-        port,
-        "0/*/sensor_msgs::msg::dds_::JointState_/*",
-        &seen,
-    );
     let csv = dir.join("telemetry.csv");
-    let out = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args(["run", "--duration", "2s", "--json", "--zenoh"])
-        .arg(format!("tcp/127.0.0.1:{port}"))
-        .args(["--zenoh-wait", "10s", "--telemetry"])
-        .arg(&csv)
-        .output()
-        .expect("rl runs");
+    // A run the machine made late (lost replies while the loop or the fake measured itself
+    // late) goes again, at most three times (then SKIPPED).
+    let Some((out, report)) = late::while_late(
+        "the subscriber's run",
+        || {
+            let mut sub = subscriber(
+                &python,
+                port,
+                "0/*/sensor_msgs::msg::dds_::JointState_/*",
+                &seen,
+            );
+            let out = Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args(["run", "--duration", "2s", "--json", "--zenoh"])
+                .arg(format!("tcp/127.0.0.1:{port}"))
+                .args(["--zenoh-wait", "10s", "--telemetry"])
+                .arg(&csv)
+                .output()
+                .expect("rl runs");
+            let report: serde_json::Value =
+                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+                    panic!(
+                        "no JSON report ({e}): {}",
+                        String::from_utf8_lossy(&out.stderr)
+                    )
+                });
+            assert!(
+                exit_by(&mut sub, Instant::now() + Duration::from_secs(20))
+                    .is_some_and(|s| s.success())
+            );
+            (out, report)
+        },
+        |(_, report)| late::json_late(report),
+    ) else {
+        return;
+    };
     assert!(
         out.status.success(),
         "rl run failed:\n{}",
         String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
-    assert!(
-        exit_by(&mut sub, Instant::now() + Duration::from_secs(20)).is_some_and(|s| s.success())
     );
 
     let z = &report["zenoh"];
@@ -191,21 +210,6 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
     let _one = one_run_at_a_time();
     let dir = temp("stop");
     let port = free_port();
-    let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--duration",
-            "60s",
-            "--json",
-            "--zenoh-namespace",
-            "/arm1",
-            "--zenoh-listen",
-        ])
-        .arg(format!("tcp/127.0.0.1:{port}"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("rl runs");
     let target = serde_json::json!({"key": topic_key(0, "/arm1/joint_trajectory", &JOINT_TRAJECTORY),
         "type": "trajectory_msgs/msg/JointTrajectory", "sequence": 1,
         "msg": {"header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
@@ -217,25 +221,59 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
     let plan = serde_json::json!({"settle_s": 2.0, "samples": [target, stop]});
     let plan_path = dir.join("plan.json");
     std::fs::write(&plan_path, plan.to_string()).expect("plan");
-    let started = Instant::now();
-    let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
-    assert!(published.status.success());
-    let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
-    let out = run.wait_with_output().expect("output");
-    assert!(
-        ended.is_some(),
-        "the stop request did not end the run: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // A run the machine made late goes again, at most three times (then SKIPPED).
+    let Some((out, report, started)) = late::while_late(
+        "the stopped run",
+        || {
+            let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args([
+                    "run",
+                    "--duration",
+                    "60s",
+                    "--json",
+                    "--zenoh-namespace",
+                    "/arm1",
+                    "--zenoh-listen",
+                ])
+                .arg(format!("tcp/127.0.0.1:{port}"))
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("rl runs");
+            let started = Instant::now();
+            let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
+            assert!(published.status.success());
+            let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
+            let out = run.wait_with_output().expect("output");
+            assert!(
+                ended.is_some(),
+                "the stop request did not end the run: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let report: serde_json::Value =
+                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+                    panic!(
+                        "no JSON report ({e}): {}",
+                        String::from_utf8_lossy(&out.stderr)
+                    )
+                });
+            (out, report, started)
+        },
+        |(_, report, _)| late::json_late(report),
+    ) else {
+        return;
+    };
     assert!(started.elapsed() < Duration::from_secs(30));
+    assert_eq!(
+        report["end"], "stopped on request, brought to rest",
+        "{report}"
+    );
     assert_eq!(
         out.status.code(),
         Some(130),
         "stopped on request: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
-    assert_eq!(report["end"], "stopped on request, brought to rest");
     let targets = &report["zenoh"]["inbound"]["targets"];
     assert_eq!(targets["received"], 1);
     assert_eq!(targets["refused_by_reason"]["sink"], 1);
@@ -261,25 +299,6 @@ fn a_python_publisher_streams_targets_that_the_arm_follows() {
     let dir = temp("follow");
     let csv = dir.join("t.csv");
     let port = free_port();
-    let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--follow",
-            "zenoh",
-            "--input-timeout",
-            "10s",
-            "--json",
-            "--zenoh-namespace",
-            "/arm1",
-            "--zenoh-listen",
-        ])
-        .arg(format!("tcp/127.0.0.1:{port}"))
-        .arg("--telemetry")
-        .arg(&csv)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("rl runs");
     let goals = [
         [0.1, 0.0, 0.1, 0.0, 0.0, 0.0],
         [0.2, -0.1, 0.3, 0.0, 0.2, 0.0],
@@ -305,16 +324,51 @@ fn a_python_publisher_streams_targets_that_the_arm_follows() {
     let plan = serde_json::json!({"settle_s": 2.0, "samples": samples});
     let plan_path = dir.join("plan.json");
     std::fs::write(&plan_path, plan.to_string()).expect("plan");
-    let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
-    assert!(published.status.success());
-    let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
-    let out = run.wait_with_output().expect("output");
-    assert!(
-        ended.is_some(),
-        "the stop request did not end the run: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    // A run the machine made late goes again, at most three times (then SKIPPED).
+    let Some((_, report)) = late::while_late(
+        "the following run",
+        || {
+            let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args([
+                    "run",
+                    "--follow",
+                    "zenoh",
+                    "--input-timeout",
+                    "10s",
+                    "--json",
+                    "--zenoh-namespace",
+                    "/arm1",
+                    "--zenoh-listen",
+                ])
+                .arg(format!("tcp/127.0.0.1:{port}"))
+                .arg("--telemetry")
+                .arg(&csv)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("rl runs");
+            let published = support::publish(&python, &format!("tcp/127.0.0.1:{port}"), &plan_path);
+            assert!(published.status.success());
+            let ended = exit_by(&mut run, Instant::now() + Duration::from_secs(30));
+            let out = run.wait_with_output().expect("output");
+            assert!(
+                ended.is_some(),
+                "the stop request did not end the run: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let report: serde_json::Value =
+                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+                    panic!(
+                        "no JSON report ({e}): {}",
+                        String::from_utf8_lossy(&out.stderr)
+                    )
+                });
+            (out, report)
+        },
+        |(_, report)| late::json_late(report),
+    ) else {
+        return;
+    };
     let targets = &report["zenoh"]["inbound"]["targets"];
     assert_eq!(targets["received"], 3, "{targets}");
     assert_eq!(targets["refused"], 0, "{targets}");

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 mod late;
 
+use rl::controller::lateness::Culprit;
 use rl::controller::{
     ControlRun, CycleRecord, Fault, PlanError, RunEnd, RunError, RunOptions, RunReport,
     Supervision, rv6sl,
@@ -238,22 +239,48 @@ fn a_starved_fake_is_named_as_the_likely_cause_of_lost_replies() {
         body,
         placement,
     );
-    let starve = Arc::new(AtomicBool::new(false));
-    let held = starve.clone();
-    let fake = fake(&model, |c| {
-        // The pose feedback the driver asks for goes through here, in the fake's cycle.
-        c.kinematics = Some(rl::drivers::fake::h7_controller::ForwardKinematics::new(
-            move |q| {
-                if held.swap(false, Ordering::Relaxed) {
-                    std::thread::sleep(HELD);
-                }
-                fk.pose(q)
-            },
-        ));
-    });
-    let mut report = run_with(model, &fake, options(), Duration::from_millis(300), |_| {
-        starve.store(true, Ordering::Relaxed)
-    });
+    // The loop itself held up as long by the machine (a VM's host holds real-time threads for
+    // milliseconds) makes the cause "both": such a run goes again, at most three times.
+    let Some(report) = late::while_late(
+        "the starved fake",
+        || {
+            let starve = Arc::new(AtomicBool::new(false));
+            let held = starve.clone();
+            let fk = fk.clone();
+            let fake = fake(&model, |c| {
+                // The pose feedback the driver asks for goes through here, in the fake's cycle.
+                c.kinematics = Some(rl::drivers::fake::h7_controller::ForwardKinematics::new(
+                    move |q| {
+                        if held.swap(false, Ordering::Relaxed) {
+                            std::thread::sleep(HELD);
+                        }
+                        fk.pose(q)
+                    },
+                ));
+            });
+            let mut report = run_with(
+                model.clone(),
+                &fake,
+                options(),
+                Duration::from_millis(300),
+                |_| starve.store(true, Ordering::Relaxed),
+            );
+            // What `rl run` does with its in-process fake after the run.
+            let fake = rl::devices::InProcessFake::H7(fake);
+            let seen = fake.after_run(report.shutdown.stopped);
+            report.peer_lateness = seen.lateness;
+            report
+        },
+        |report| {
+            matches!(
+                report.lateness().culprit(),
+                Culprit::Loop | Culprit::LoopAndPeer
+            )
+            .then(|| report.lateness().summary())
+        },
+    ) else {
+        return;
+    };
     // Replies lost in a row: a short loss, a dead link, or the device's own bound on failed
     // steps (a timeout), whichever a loaded machine reaches first.
     assert!(
@@ -263,10 +290,6 @@ fn a_starved_fake_is_named_as_the_likely_cause_of_lost_replies() {
         ),
         "{report}"
     );
-    // What `rl run` does with its in-process fake after the run.
-    let fake = rl::devices::InProcessFake::H7(fake);
-    let seen = fake.after_run(report.shutdown.stopped);
-    report.peer_lateness = seen.lateness;
     let peer = report.peer_lateness.as_ref().expect("set above");
     assert!(peer.max >= HELD, "{peer:?}");
     assert!(peer.late.is_some_and(|n| n >= 1), "{peer:?}");

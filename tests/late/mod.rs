@@ -61,6 +61,19 @@ pub fn json_late(report: &Value) -> Option<String> {
     })
 }
 
+/// A text run report (`rl run` without `--json`) that failed on timing while the loop or the
+/// device's side was measured late: its `likely cause:` line. `None` when the report has no
+/// such line, or when it names nobody late or only the delivery of the replies (the device or
+/// the network: its checks fail it).
+pub fn text_late(report: &str) -> Option<String> {
+    let cause = report
+        .lines()
+        .find_map(|l| l.strip_prefix("likely cause: "))?;
+    let blames_machine = !cause.starts_with("nobody measured was late")
+        && !cause.starts_with("replies arrived late at the kernel");
+    blames_machine.then(|| cause.to_owned())
+}
+
 /// A run report that failed on timing while somebody was measured late
 /// (`RunReport::failed_from_lateness`): the reason.
 pub fn failed_late(report: &RunReport) -> Option<String> {
