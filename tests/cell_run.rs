@@ -58,6 +58,16 @@ fn subscriber(python: &Path, port: u16, key: &str, out: &Path) -> Child {
     child
 }
 
+/// The JSON report `rl run --json` wrote to its standard output; without one, its stderr.
+fn json_report(out: &std::process::Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "no JSON report ({e}): {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
 fn records(path: &Path) -> Vec<serde_json::Value> {
     support::recorded(path)
 }
@@ -93,13 +103,7 @@ fn a_python_subscriber_records_what_the_telemetry_csv_holds() {
                 .arg(&csv)
                 .output()
                 .expect("rl runs");
-            let report: serde_json::Value =
-                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-                    panic!(
-                        "no JSON report ({e}): {}",
-                        String::from_utf8_lossy(&out.stderr)
-                    )
-                });
+            let report = json_report(&out);
             assert!(
                 exit_by(&mut sub, Instant::now() + Duration::from_secs(20))
                     .is_some_and(|s| s.success())
@@ -250,13 +254,7 @@ fn a_python_publisher_stops_the_run_and_its_targets_are_refused_and_counted() {
                 "the stop request did not end the run: {}",
                 String::from_utf8_lossy(&out.stderr)
             );
-            let report: serde_json::Value =
-                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-                    panic!(
-                        "no JSON report ({e}): {}",
-                        String::from_utf8_lossy(&out.stderr)
-                    )
-                });
+            let report = json_report(&out);
             (out, report, started)
         },
         |(_, report, _)| late::json_late(report),
@@ -356,13 +354,7 @@ fn a_python_publisher_streams_targets_that_the_arm_follows() {
                 "the stop request did not end the run: {}",
                 String::from_utf8_lossy(&out.stderr)
             );
-            let report: serde_json::Value =
-                serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-                    panic!(
-                        "no JSON report ({e}): {}",
-                        String::from_utf8_lossy(&out.stderr)
-                    )
-                });
+            let report = json_report(&out);
             (out, report)
         },
         |(_, report)| late::json_late(report),
