@@ -15,6 +15,7 @@ use std::process::Command;
 use rl_drivers::fake::ecat_segment::description::{FAKE_DRIVE_PRODUCT, FAKE_VENDOR_ID};
 use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
 use support::netns::veth_or_skip;
+use support::stall::{Canary, STALL, unless_stalled};
 
 /// The pysoem version the checks were made with.
 pub const PYSOEM: &str = "pysoem==1.1.13";
@@ -67,57 +68,93 @@ fn pysoem_configures_our_fake_segment_and_exchanges_process_data() {
             return;
         }
     };
-    let mut c = FakeSegmentConfig::drives(&veth.b, 3);
-    c.on_thread_start = Some(support::realtime_fake);
-    let fake = veth.enter(|| FakeSegment::spawn(c)).expect("fake segment");
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/pysoem_check.py");
-    let out = veth
-        .command(py.to_str().unwrap())
-        .arg(&script)
-        .arg(&veth.a)
-        .args(["--dc", "--cycles", "600"])
-        .output()
-        .expect("run pysoem");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "pysoem failed: {stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from the script");
-    println!("pysoem: {r}");
-    assert_eq!(r["found"], 3);
-    for d in r["devices"].as_array().unwrap() {
-        assert_eq!(d["name"], "rl-rs CiA 402 axis");
-        assert_eq!(d["vendor"], FAKE_VENDOR_ID);
-        assert_eq!(d["product"], FAKE_DRIVE_PRODUCT);
-        assert_eq!(d["revision"], 1);
-    }
-    assert_eq!(r["dc"], true);
-    assert_eq!(
-        r["sizes"],
-        serde_json::json!([[16, 16], [16, 16], [16, 16]])
-    );
-    assert_eq!(r["expected_wkc"], 9);
-    assert_eq!(r["safeop"], true);
-    assert_eq!(r["op"], true);
-    assert_eq!(r["wkc_errors"], 0);
-    for (k, sw) in r["statusword"].as_array().unwrap().iter().enumerate() {
-        assert_eq!(
-            sw.as_u64().unwrap() & 0x6F,
-            0x27,
-            "drive {k} operation enabled"
-        );
-    }
-    for m in r["moved"].as_array().unwrap() {
+    unless_stalled("pysoem_configures_our_fake_segment", || {
+        let mut c = FakeSegmentConfig::drives(&veth.b, 3);
+        c.on_thread_start = Some(support::realtime_fake);
+        let fake = veth.enter(|| FakeSegment::spawn(c)).expect("fake segment");
+        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/pysoem_check.py");
+        let canary = Canary::start();
+        let out = veth
+            .command(py.to_str().unwrap())
+            .arg(&script)
+            .arg(&veth.a)
+            .args(["--dc", "--cycles", "600"])
+            .output()
+            .expect("run pysoem");
+        let stalled = canary.worst();
+        let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(
-            m.as_i64().unwrap() > 50_000,
-            "the axes followed SOEM's targets: {m}"
+            out.status.success(),
+            "pysoem failed: {stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
         );
-    }
-    let st = fake.status();
-    assert!(
-        st.iter().all(|s| s.dc_mode),
-        "SOEM's SYNC0 drove the axes: {st:?}"
-    );
+        let r: serde_json::Value =
+            serde_json::from_str(stdout.trim()).expect("JSON from the script");
+        println!("pysoem: {r}");
+        assert_eq!(r["found"], 3);
+        for d in r["devices"].as_array().unwrap() {
+            assert_eq!(d["name"], "rl-rs CiA 402 axis");
+            assert_eq!(d["vendor"], FAKE_VENDOR_ID);
+            assert_eq!(d["product"], FAKE_DRIVE_PRODUCT);
+            assert_eq!(d["revision"], 1);
+        }
+        assert_eq!(r["dc"], true);
+        assert_eq!(
+            r["sizes"],
+            serde_json::json!([[16, 16], [16, 16], [16, 16]])
+        );
+        assert_eq!(r["expected_wkc"], 9);
+        assert_eq!(r["safeop"], true);
+        assert_eq!(r["op"], true);
+        // A frame that came back with a count other than SOEM's expected one is the fake's
+        // fault whatever the machine did; a frame that did not come back within SOEM's 2 ms
+        // (a count of 0 or less) is the fake's fault unless the machine stalled.
+        let wrong = r["wkc_wrong"].as_array().unwrap();
+        let miscounted: Vec<_> = wrong
+            .iter()
+            .filter(|w| w["wkc"].as_i64() > Some(0))
+            .collect();
+        assert!(
+            miscounted.is_empty(),
+            "wrong working counters: {miscounted:?}"
+        );
+        // Under an emulator (RL_EMULATED, set by scripts/cross) the fake's code is translated
+        // as it first runs and its frames can miss SOEM's 2 ms: counted and reported, not
+        // bounded (as ecat_units does).
+        if let Ok(emulator) = std::env::var("RL_EMULATED") {
+            println!(
+                "under {emulator}: {} of 600 frames not back within 2 ms: {wrong:?}",
+                wrong.len()
+            );
+        } else if !wrong.is_empty() && stalled >= STALL {
+            return Err(format!(
+                "{} of 600 frames not back within 2 ms ({wrong:?}) while the machine stalled a \
+                 thread {stalled:?}",
+                wrong.len()
+            ));
+        }
+        assert_eq!(
+            r["wkc_errors"], 0,
+            "frames lost with no stall ({stalled:?}): {wrong:?}"
+        );
+        for (k, sw) in r["statusword"].as_array().unwrap().iter().enumerate() {
+            assert_eq!(
+                sw.as_u64().unwrap() & 0x6F,
+                0x27,
+                "drive {k} operation enabled"
+            );
+        }
+        for m in r["moved"].as_array().unwrap() {
+            assert!(
+                m.as_i64().unwrap() > 50_000,
+                "the axes followed SOEM's targets: {m}"
+            );
+        }
+        let st = fake.status();
+        assert!(
+            st.iter().all(|s| s.dc_mode),
+            "SOEM's SYNC0 drove the axes: {st:?}"
+        );
+        Ok(())
+    });
 }

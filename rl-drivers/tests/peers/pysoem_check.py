@@ -68,7 +68,7 @@ def main():
             return
         # CSP: walk each drive to operation enabled (shutdown, switch on, enable operation)
         # with the target at the actual position, then move it 0.1 revolution.
-        bad = 0
+        bad, wrong = 0, []
         start = [struct.unpack_from("<Hi", s.input, 0)[1] for s in m.slaves]
         next_t = time.monotonic()
         for k in range(cycles):
@@ -76,12 +76,19 @@ def main():
                 cw = 0x06 if k < 20 else 0x07 if k < 40 else 0x0F
                 target = start[i] + (k - 60) * 200 if k > 60 else start[i]
                 s.output = struct.pack("<HiiHhbx", cw, target, 0, 0, 0, 8)
+            t0 = time.perf_counter_ns()
             m.send_processdata()
-            if m.receive_processdata(2000) != m.expected_wkc:
+            w = m.receive_processdata(2000)
+            if w != m.expected_wkc:
                 bad += 1
+                # Which cycle, the count SOEM got (0 or less: no frame within the timeout) and
+                # how long the round trip took, for the test to tell a lost frame from a wrong
+                # count.
+                wrong.append({"cycle": k, "wkc": w, "us": (time.perf_counter_ns() - t0) // 1000})
             next_t += 0.001
             time.sleep(max(0.0, next_t - time.monotonic()))
         out["wkc_errors"] = bad
+        out["wkc_wrong"] = wrong
         out["cycles"] = cycles
         out["statusword"] = [struct.unpack_from("<H", s.input, 0)[0] for s in m.slaves]
         out["moved"] = [struct.unpack_from("<Hi", s.input, 0)[1] - start[i] for i, s in enumerate(m.slaves)]
