@@ -146,25 +146,7 @@ impl<EStop, Watchdog, Brake> SafetyChain<EStop, Watchdog, NoPin, Brake> {
         self,
         enable: Enable,
     ) -> SafetyChain<EStop, Watchdog, Enable, Brake> {
-        SafetyChain {
-            config: self.config,
-            estop: self.estop,
-            watchdog: self.watchdog,
-            enable: Some(enable),
-            brake: self.brake,
-            estop_debounce: self.estop_debounce,
-            enable_debounce: self.enable_debounce,
-            latched: self.latched,
-            last_stop: self.last_stop,
-            fault: self.fault,
-            stop_category: self.stop_category,
-            stop_age: self.stop_age,
-            brake_dropped: self.brake_dropped,
-            brake_energised: self.brake_energised,
-            watchdog_running: self.watchdog_running,
-            watchdog_next: self.watchdog_next,
-            counters: self.counters,
-        }
+        self.with_optional_pins(|_, brake| (Some(enable), brake))
     }
 }
 
@@ -175,12 +157,24 @@ impl<EStop, Watchdog, Enable> SafetyChain<EStop, Watchdog, Enable, NoPin> {
         self,
         brake: Brake,
     ) -> SafetyChain<EStop, Watchdog, Enable, Brake> {
+        self.with_optional_pins(|enable, _| (enable, Some(brake)))
+    }
+}
+
+impl<EStop, Watchdog, Enable, Brake> SafetyChain<EStop, Watchdog, Enable, Brake> {
+    /// The same chain, state and all, with its optional pins (enable, brake) replaced by what
+    /// `pins` makes of them: the one place the typestate builders move every field.
+    fn with_optional_pins<Enable2, Brake2>(
+        self,
+        pins: impl FnOnce(Option<Enable>, Option<Brake>) -> (Option<Enable2>, Option<Brake2>),
+    ) -> SafetyChain<EStop, Watchdog, Enable2, Brake2> {
+        let (enable, brake) = pins(self.enable, self.brake);
         SafetyChain {
             config: self.config,
             estop: self.estop,
             watchdog: self.watchdog,
-            enable: self.enable,
-            brake: Some(brake),
+            enable,
+            brake,
             estop_debounce: self.estop_debounce,
             enable_debounce: self.enable_debounce,
             latched: self.latched,
