@@ -3,6 +3,9 @@
 Usage (inside the benchmark venv, which has pin and numpy):
   gen_states.py URDF OUT_URDF OUT_STATES --states N --seed S [--floating-base] [--fix J1,J2]
 
+Also writes OUT_STATES with .tree.json (for flops.py) and .pinmodel.txt (the Pinocchio model,
+Model::saveToText, for pinocchio_bench.cpp) in place of .states.
+
 OUT_URDF is URDF with the joints of --fix turned into fixed joints (panda's fingers: the same
 model as Pinocchio's buildReducedModel at q = 0, see rl-core/tests/data/pinocchio/README.md) and
 every <mimic> tag removed (dynibo rejects them; after the fix none is on a moving joint). All
@@ -114,6 +117,9 @@ def main():
         tool_joint = model.frames[fid].parentJoint - 1
     with open(a.out_states[:-len(".states")] + ".tree.json", "w") as f:
         json.dump({"joints": tree, "tool_joint": tool_joint}, f)
+    # The model for pinocchio_bench.cpp in Pinocchio's text serialization: the URDF is parsed
+    # here, by the same Pinocchio release, so the C++ program needs no precompiled parser.
+    model.saveToText(a.out_states[:-len(".states")] + ".pinmodel.txt")
 
 
 if __name__ == "__main__":

@@ -4,11 +4,15 @@
 // times rl-core: per algorithm, enough repetitions over all states for ~2 ms per round, the
 // median of `rounds` rounds, in ns per call. Prints one JSON line with the same keys.
 //
-// Usage: pinocchio_bench URDF STATES FRAME [--floating-base] [--rounds N]
+// Usage: pinocchio_bench MODEL STATES FRAME [--floating-base] [--rounds N]
 //
-// Compiled header-only (no PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION), so the algorithms are
-// instantiated here with this program's flags (-O3 -DNDEBUG, the script's -march) rather than
-// taken precompiled from libpinocchio_default; libpinocchio_parsers only loads the URDF.
+// MODEL is the Pinocchio model of the benchmark's URDF in Pinocchio's own text serialization
+// (Model::saveToText), written by gen_states.py with the Python `pin` of the same release: the
+// URDF parser runs there, not here. Compiled header-only (no PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION),
+// so the algorithms and the model's loading are instantiated here with this program's flags
+// (-O3 -DNDEBUG, the script's -march) and no Model crosses into a library built with other
+// flags (with -march=native the precompiled URDF parser's Model crashed in ~ModelTpl, even at
+// Eigen's 16-byte alignment); only Boost.Serialization's archive classes come from a library.
 #include <pinocchio/algorithm/aba-derivatives.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
@@ -18,7 +22,7 @@
 #include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
-#include <pinocchio/parsers/urdf.hpp>
+#include <pinocchio/serialization.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -115,10 +119,10 @@ int main(int argc, char **argv) {
 #endif
   if (argc < 4) {
     std::fprintf(stderr,
-                 "usage: %s URDF STATES FRAME [--floating-base] [--rounds N]\n", argv[0]);
+                 "usage: %s MODEL STATES FRAME [--floating-base] [--rounds N]\n", argv[0]);
     return 2;
   }
-  const std::string urdf = argv[1], states_path = argv[2], frame = argv[3];
+  const std::string model_path = argv[1], states_path = argv[2], frame = argv[3];
   bool floating = false;
   int rounds = 15;
   for (int i = 4; i < argc; ++i) {
@@ -134,10 +138,13 @@ int main(int argc, char **argv) {
   }
   try {
     pin::Model model;
-    if (floating)
-      pin::urdf::buildModel(urdf, pin::JointModelFreeFlyer(), "root_joint", model);
-    else
-      pin::urdf::buildModel(urdf, model);
+    model.loadFromText(model_path);
+    // --floating-base says what the model must be: a free-flyer first joint or none.
+    const bool has_free_flyer =
+        model.njoints > 1 && model.joints[1].shortname() == "JointModelFreeFlyer";
+    if (has_free_flyer != floating)
+      throw std::runtime_error(model_path + (floating ? ": no free-flyer base, --floating-base given"
+                                                      : ": a free-flyer base, --floating-base not given"));
     model.gravity.linear(Eigen::Vector3d(0.0, 0.0, -9.80665));
     const States st = read_states(states_path);
     // The states are in Pinocchio's joint order: check it is this model's.
