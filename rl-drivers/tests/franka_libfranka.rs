@@ -7,7 +7,7 @@
 //! prints `SKIPPED: <reason>`.
 
 use std::net::{IpAddr, Ipv4Addr};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
@@ -90,11 +90,34 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
         Some(u) => (u, "the FR3's URDF (franky-sim)"),
         None => (fr3_shaped_urdf(), "an FR3-shaped arm (no franky-sim venv)"),
     };
+    // A session whose fake robot slipped its own 1 kHz tick (the machine held its SCHED_FIFO
+    // thread: under qemu-arm in a clean-clone CI, 9 slips of up to 5.2 ms, 45 states lost)
+    // loses commands, and libfranka's motions then end in discontinuity reflexes, as they
+    // would on the real robot: such a failed session goes again, at most three times, then
+    // SKIPPED with the numbers. A session that fails with the fake on time fails the test.
+    let mut slipped = Vec::new();
+    while slipped.len() < 3 {
+        match session(&python, urdf.clone(), which) {
+            Ok(()) => return,
+            Err(why) => {
+                println!("attempt {}: {why}", slipped.len() + 1);
+                slipped.push(why);
+            }
+        }
+    }
+    println!(
+        "SKIPPED libfranka against the fake: its tick slipped in three sessions: {}",
+        slipped.join("; ")
+    );
+}
+
+/// One libfranka session against a new fake; `Err` when it failed while the fake slipped.
+fn session(python: &Path, urdf: String, which: &str) -> Result<(), String> {
     let fake = spawn_on_own_address(urdf);
     let host = fake.addr().ip().to_string();
     let script = workspace().join("tests/franka_peers/libfranka_session.py");
     let start = Instant::now();
-    let out = Command::new(&python)
+    let out = Command::new(python)
         .arg(&script)
         .arg(&host)
         .output()
@@ -124,11 +147,29 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
         s.max_lateness_us,
         s.raised
     );
+    let report: Option<serde_json::Value> = serde_json::from_str(stdout.trim()).ok();
+    let steps_ok = report.as_ref().is_some_and(|r| {
+        [
+            "connect",
+            "joint_motion",
+            "torque_motion",
+            "error_and_recovery",
+        ]
+        .iter()
+        .all(|step| r["steps"][step]["ok"] == true)
+    });
+    let ok = out.status.success() && steps_ok && s.reflexes == 1;
+    if !ok && s.slips > 0 {
+        return Err(format!(
+            "failed with the fake's tick slipped {} times (at most {} µs late), {} states lost",
+            s.slips, s.max_lateness_us, s.lost
+        ));
+    }
     assert!(
         out.status.success(),
         "libfranka's session failed:\n{stdout}\n{stderr}"
     );
-    let report: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    let report = report.expect("one JSON line");
     for step in [
         "connect",
         "joint_motion",
@@ -141,4 +182,5 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
     assert_eq!(s.reflexes, 1, "{s:?}");
     assert!(s.recoveries >= 1, "{s:?}");
     assert!(s.motions >= 4, "{s:?}");
+    Ok(())
 }
