@@ -11,7 +11,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+mod support;
+
 use rl_drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
+use support::stall::unless_stalled;
 
 fn workspace() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -94,21 +97,11 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
     // thread: under qemu-arm in a clean-clone CI, 9 slips of up to 5.2 ms, 45 states lost)
     // loses commands, and libfranka's motions then end in discontinuity reflexes, as they
     // would on the real robot: such a failed session goes again, at most three times, then
-    // SKIPPED with the numbers. A session that fails with the fake on time fails the test.
-    let mut slipped = Vec::new();
-    while slipped.len() < 3 {
-        match session(&python, urdf.clone(), which) {
-            Ok(()) => return,
-            Err(why) => {
-                println!("attempt {}: {why}", slipped.len() + 1);
-                slipped.push(why);
-            }
-        }
-    }
-    println!(
-        "SKIPPED libfranka against the fake: its tick slipped in three sessions: {}",
-        slipped.join("; ")
-    );
+    // SKIPPED with the numbers (tests/support/stall.rs). A session that fails with the fake on
+    // time fails the test.
+    unless_stalled("libfranka against the fake", || {
+        session(&python, urdf.clone(), which)
+    });
 }
 
 /// One libfranka session against a new fake; `Err` when it failed while the fake slipped.
