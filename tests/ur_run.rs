@@ -37,6 +37,8 @@ fn one_run() -> Option<String> {
         rtde_port: 0,
         dashboard_port: Some(29_999),
         script_ports: vec![30_002],
+        realtime_port: None,
+        realtime_read_only_port: None,
         initial_q,
         on_thread_start: Some(rl::devices::fake_thread_realtime),
         ..FakeUrConfig::loopback()

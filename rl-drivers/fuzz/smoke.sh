@@ -18,11 +18,11 @@ export RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4
 host="$(rustc +nightly -vV | sed -n 's/^host: //p')"
 cargo +nightly build --release --bins --target "$host"
 mkdir -p artifacts
-for target in ${FUZZ_TARGETS:-decode_h7 decode_r3 decode_coach decode_can decode_candump decode_sdo parse_eds decode_ecat_frame decode_ecat_mailbox decode_ecat_sii decode_netft decode_modbus decode_rtde}; do
+for target in ${FUZZ_TARGETS:-decode_h7 decode_r3 decode_coach decode_can decode_candump decode_sdo parse_eds decode_ecat_frame decode_ecat_mailbox decode_ecat_sii decode_netft decode_modbus decode_rtde decode_ur_realtime}; do
   mkdir -p "corpus/$target"
   echo "==> fuzz $target for ${secs}s"
   status=0
-  "$CARGO_TARGET_DIR/$host/release/$target" -max_total_time="$secs" -max_len=1024 \
+  "$CARGO_TARGET_DIR/$host/release/$target" -max_total_time="$secs" -max_len=1300 \
     -artifact_prefix="artifacts/$target-" "corpus/$target" > "artifacts/$target.log" 2>&1 || status=$?
   grep -E "^Done" "artifacts/$target.log" || true
   if [ "$status" -ne 0 ]; then

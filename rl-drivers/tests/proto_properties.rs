@@ -266,3 +266,75 @@ proptest! {
         }
     }
 }
+
+mod ur_realtime {
+    use proptest::prelude::*;
+    use rl_drivers::proto::ur_realtime::{LENGTHS, MAX_LEN, RealtimeState, split};
+
+    fn state() -> impl Strategy<Value = RealtimeState> {
+        (
+            proptest::array::uniform6(-1e3f64..1e3),
+            proptest::array::uniform6(-1e3f64..1e3),
+            0u64..(1 << 18),
+            -1i32..9,
+            proptest::array::uniform6(235i32..256),
+            1i32..12,
+            0i32..6,
+        )
+            .prop_map(
+                |(q, f, inputs, robot, joints, safety, program)| RealtimeState {
+                    time: f[0].abs(),
+                    q_actual: q,
+                    q_target: q,
+                    tcp_force: f,
+                    digital_input_bits: inputs,
+                    digital_outputs: inputs ^ 0x3,
+                    robot_mode: robot,
+                    joint_modes: joints,
+                    safety_mode: safety,
+                    safety_status: safety,
+                    program_state: program,
+                    ..RealtimeState::default()
+                },
+            )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+        #[test]
+        fn ur_realtime_messages_round_trip(s in state(), k in 0..LENGTHS.len()) {
+            let len = LENGTHS[k];
+            let mut buf = [0u8; MAX_LEN];
+            prop_assert_eq!(s.encode(len, &mut buf), Ok(len));
+            let d = RealtimeState::decode(&buf[..len]).unwrap();
+            prop_assert_eq!(d.q_actual, s.q_actual);
+            prop_assert_eq!(d.tcp_force, s.tcp_force);
+            prop_assert_eq!(d.digital_input_bits, s.digital_input_bits);
+            prop_assert_eq!(d.joint_modes, s.joint_modes);
+            prop_assert_eq!(d.safety_mode, s.safety_mode);
+            if len >= 1060 {
+                prop_assert_eq!(d.digital_outputs, s.digital_outputs);
+                prop_assert_eq!(d.program_state, s.program_state);
+            }
+        }
+
+        #[test]
+        fn ur_realtime_decoding_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..1300)) {
+            let _ = split(&bytes);
+            let _ = RealtimeState::decode(&bytes);
+        }
+
+        #[test]
+        fn ur_realtime_mutated_messages_never_panic(s in state(), k in 0..LENGTHS.len(), at in 0..MAX_LEN, byte in any::<u8>()) {
+            let len = LENGTHS[k];
+            let mut buf = [0u8; MAX_LEN];
+            s.encode(len, &mut buf).unwrap();
+            buf[at % len] = byte;
+            // A mutated length field may name a shorter layout: then that is what decodes.
+            if let Ok(d) = RealtimeState::decode(&buf[..len]) {
+                prop_assert!(LENGTHS.contains(&d.length) && d.length <= len);
+            }
+        }
+    }
+}

@@ -7,10 +7,11 @@ use std::net::{IpAddr, Ipv4Addr};
 use std::time::Duration;
 
 use rl_drivers::fake::ur_controller::{FakeUr, FakeUrConfig};
-use rl_drivers::ur::{UniversalRobot, UrConfig};
+use rl_drivers::ur::{UniversalRobot, UrConfig, UrRealtime, UrRealtimeConfig};
 use rl_drivers::{
-    CartesianPositionSensor, CyclicDevice, Device, DigitalOutputWriter, JointPositionActuator,
-    JointPositionSensor, JointVelocitySensor, LinkStatisticsSensor,
+    CartesianPositionSensor, CyclicDevice, Device, DigitalInputReader, DigitalOutputWriter,
+    JointPositionActuator, JointPositionSensor, JointVelocitySensor, LinkStatisticsSensor,
+    SixAxisForceTorqueSensor,
 };
 use rl_testkit::CountingAllocator;
 
@@ -58,5 +59,46 @@ fn steps_allocate_nothing() {
     assert_eq!(n, 0, "allocations in 300 steps");
     let c = r.counters();
     assert!(c.lost >= 1 && c.skipped >= 5, "{c:?}");
+    r.stop().unwrap();
+}
+
+#[test]
+fn real_time_interface_steps_allocate_nothing() {
+    // The real-time interface's reader: messages, a frozen controller (lost steps, skipped
+    // messages), scripts queued and sent.
+    let fake = FakeUr::spawn(FakeUrConfig::loopback().free_ports()).unwrap();
+    let mut c = UrRealtimeConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST));
+    c.port = fake.realtime_addr().unwrap().port();
+    c.state_wait = Duration::from_millis(20);
+    let mut r = UrRealtime::new(c).unwrap();
+    r.open().unwrap();
+    r.start().unwrap();
+    for _ in 0..20 {
+        let _ = r.step();
+    }
+    let (n, _) = rl_testkit::allocations(|| {
+        for k in 0..300 {
+            if k == 100 {
+                fake.freeze(Duration::from_millis(30));
+            }
+            if k % 100 == 50 {
+                r.queue_script("textmsg(\"rl\")\n").unwrap();
+            }
+            let mut m = [0.0; 6];
+            r.joint_position(&mut m).unwrap();
+            r.joint_velocity(&mut m).unwrap();
+            let _ = r.step();
+            let _ = r.cartesian_position();
+            let _ = r.forces_torques();
+            let _ = r.digital_input(3);
+            let _ = r.link_statistics();
+        }
+    });
+    assert_eq!(n, 0, "allocations in 300 steps");
+    let c = r.counters();
+    assert!(
+        c.lost >= 1 && c.skipped >= 5 && c.scripts_sent == 3,
+        "{c:?}"
+    );
     r.stop().unwrap();
 }

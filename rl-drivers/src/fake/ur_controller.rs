@@ -1,7 +1,9 @@
 //! A fake Universal Robots controller (e-Series, PolyScope 5) on the wire: RTDE (TCP 30004),
-//! the dashboard server (29999), and the script ports (30002 and 30003: they take URScript),
-//! each port configurable; answering [`UniversalRobot`](crate::ur::UniversalRobot), PyPI
-//! `ur-rtde` 1.6.5 (its receive and IO interfaces) and anything else that speaks RTDE.
+//! the dashboard server (29999), the secondary interface's script port (30002: takes
+//! URScript) and the real-time interface (30003: streams the state, takes URScript; 30013:
+//! read only), each port configurable; answering [`UniversalRobot`](crate::ur::UniversalRobot),
+//! [`UrRealtime`](crate::ur::UrRealtime), PyPI `ur-rtde` 1.6.5 (its receive and IO
+//! interfaces), PyPI `urx` 0.11.0 (its real-time monitor) and anything else that speaks RTDE.
 //!
 //! It behaves like the controller where the RTDE guide, the dashboard server's and URScript's
 //! manuals say how (`rl-drivers/NOTES.md` lists what is not simulated):
@@ -17,6 +19,12 @@
 //!   Inputs take effect in the cycle they arrive: registers, digital outputs under their
 //!   masks, the speed slider, analog outputs. Anything malformed is counted as a protocol
 //!   error (the peer test asserts none).
+//! - **The real-time interface.** Every client of 30003 and 30013 gets the state each cycle
+//!   (500 Hz) as the real-time interface's message ([`crate::proto::ur_realtime`], 1220 bytes
+//!   as PolyScope 5.9 and later send, or the length configured). The cycle never waits for a
+//!   client: messages queue per client, and one that does not read loses what does not fit
+//!   its queue (counted, `realtime_skipped`). Bytes sent to the read-only port are dropped
+//!   (counted).
 //! - **Programs.** A script on 30002 or 30003 is compiled (a subset of URScript, see the
 //!   `script` module; outside it the program is refused as one that does not compile) and
 //!   runs when the robot is running (powered, brakes released) and not stopped for safety;
@@ -53,8 +61,13 @@ use crate::proto::rtde::{DataType, Message, split};
 pub const DASHBOARD_PORT: u16 = 29999;
 /// The secondary interface's port (takes URScript).
 pub const SECONDARY_PORT: u16 = 30002;
-/// The real-time interface's port (takes URScript).
-pub const REALTIME_PORT: u16 = 30003;
+/// The real-time interface's port (streams the state, takes URScript).
+pub const REALTIME_PORT: u16 = crate::proto::ur_realtime::PORT;
+/// The read-only real-time interface's port.
+pub const REALTIME_READ_ONLY_PORT: u16 = crate::proto::ur_realtime::READ_ONLY_PORT;
+/// Bytes a real-time client's queue holds (about 50 messages, 0.1 s) before messages are
+/// skipped for it.
+const REALTIME_QUEUE: usize = 64 * 1024;
 /// A cycle.
 pub const CYCLE: Duration = Duration::from_millis(2);
 
@@ -101,8 +114,16 @@ pub struct FakeUrConfig {
     pub rtde_port: u16,
     /// The dashboard's port (29999; 0: free; `None`: none).
     pub dashboard_port: Option<u16>,
-    /// The script ports (30002 and 30003; 0: free; `None`: none).
+    /// Ports that take URScript only (30002, the secondary interface; 0: free).
     pub script_ports: Vec<u16>,
+    /// The real-time interface's port (30003: streams the state, takes URScript; 0: free;
+    /// `None`: none).
+    pub realtime_port: Option<u16>,
+    /// The read-only real-time interface's port (30013; 0: free; `None`: none).
+    pub realtime_read_only_port: Option<u16>,
+    /// The real-time message's length (one of [`crate::proto::ur_realtime::LENGTHS`]:
+    /// 1220 as PolyScope 5.9 and later, 1116 as CB3's 3.10 and later …).
+    pub realtime_length: usize,
     /// The arm's kinematics and speed limits.
     pub kinematics: UrKinematics,
     /// A model's forward kinematics for the tool pose instead.
@@ -125,7 +146,10 @@ impl FakeUrConfig {
             bind: IpAddr::V4(Ipv4Addr::LOCALHOST),
             rtde_port: crate::proto::rtde::PORT,
             dashboard_port: Some(DASHBOARD_PORT),
-            script_ports: vec![SECONDARY_PORT, REALTIME_PORT],
+            script_ports: vec![SECONDARY_PORT],
+            realtime_port: Some(REALTIME_PORT),
+            realtime_read_only_port: Some(REALTIME_READ_ONLY_PORT),
+            realtime_length: crate::proto::ur_realtime::MAX_LEN,
             kinematics: UrKinematics::UR5E,
             model: None,
             initial_q: [0.0, -1.57, 1.57, -1.57, -1.57, 0.0],
@@ -141,6 +165,8 @@ impl FakeUrConfig {
         self.rtde_port = 0;
         self.dashboard_port = self.dashboard_port.map(|_| 0);
         self.script_ports = vec![0; self.script_ports.len()];
+        self.realtime_port = self.realtime_port.map(|_| 0);
+        self.realtime_read_only_port = self.realtime_read_only_port.map(|_| 0);
         self
     }
 }
@@ -163,6 +189,14 @@ pub struct FakeUrStatus {
     pub rtde_packages: u64,
     /// Output packages sent.
     pub outputs_sent: u64,
+    /// Real-time interface connections accepted (30003 and 30013).
+    pub realtime_clients: u64,
+    /// Real-time messages queued for sending.
+    pub realtime_sent: u64,
+    /// Real-time messages skipped for a client whose queue was full (it did not read).
+    pub realtime_skipped: u64,
+    /// Bytes sent to the read-only real-time port (dropped).
+    pub read_only_ignored: u64,
     /// Input packages applied.
     pub inputs_applied: u64,
     /// Malformed or refused RTDE packages (unknown types, bad lengths, unknown recipes).
@@ -222,6 +256,8 @@ struct Control {
     emergency_stop: bool,
     freeze: Option<Duration>,
     drop_rtde: bool,
+    tcp_force: Option<[f64; 6]>,
+    digital_inputs: Option<u64>,
 }
 
 struct Shared {
@@ -237,6 +273,8 @@ pub struct FakeUr {
     rtde: SocketAddr,
     dashboard: Option<SocketAddr>,
     scripts: Vec<SocketAddr>,
+    realtime: Option<SocketAddr>,
+    realtime_read_only: Option<SocketAddr>,
 }
 
 impl FakeUr {
@@ -263,12 +301,31 @@ impl FakeUr {
             .iter()
             .map(TcpListener::local_addr)
             .collect::<io::Result<Vec<_>>>()?;
+        if !crate::proto::ur_realtime::LENGTHS.contains(&config.realtime_length) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                crate::proto::ur_realtime::RealtimeError::UnknownLength(
+                    u32::try_from(config.realtime_length).unwrap_or(u32::MAX),
+                ),
+            ));
+        }
+        let realtime = config.realtime_port.map(listen).transpose()?;
+        let realtime_ro = config.realtime_read_only_port.map(listen).transpose()?;
+        let realtime_addr = realtime.as_ref().map(TcpListener::local_addr).transpose()?;
+        let realtime_ro_addr = realtime_ro
+            .as_ref()
+            .map(TcpListener::local_addr)
+            .transpose()?;
         let shared = Arc::new(Shared {
             stop: AtomicBool::new(false),
             control: Mutex::new(Control::default()),
             status: Mutex::new(FakeUrStatus::default()),
         });
         let mut c = Controller::new(config, rtde, dashboard, scripts);
+        c.realtime = [(realtime, false), (realtime_ro, true)]
+            .into_iter()
+            .filter_map(|(l, ro)| l.map(|l| (l, ro)))
+            .collect();
         c.publish(&shared);
         let s = shared.clone();
         let thread = std::thread::Builder::new()
@@ -285,6 +342,8 @@ impl FakeUr {
             rtde: rtde_addr,
             dashboard: dashboard_addr,
             scripts: script_addrs,
+            realtime: realtime_addr,
+            realtime_read_only: realtime_ro_addr,
         })
     }
 
@@ -298,9 +357,19 @@ impl FakeUr {
         self.dashboard
     }
 
-    /// The script ports' addresses (secondary, then real-time).
+    /// The script-only ports' addresses (the secondary interface's).
     pub fn script_addrs(&self) -> &[SocketAddr] {
         &self.scripts
+    }
+
+    /// The real-time interface's address (streams the state, takes URScript).
+    pub fn realtime_addr(&self) -> Option<SocketAddr> {
+        self.realtime
+    }
+
+    /// The read-only real-time interface's address.
+    pub fn realtime_read_only_addr(&self) -> Option<SocketAddr> {
+        self.realtime_read_only
     }
 
     /// What the fake has seen so far.
@@ -341,6 +410,18 @@ impl FakeUr {
         self.control(|c| c.drop_rtde = true);
     }
 
+    /// The force and torque at the tool from now on (N, N·m; `actual_TCP_force` in RTDE,
+    /// "TCP force" in the real-time interface), as a contact would cause.
+    pub fn set_tcp_force(&self, wrench: [f64; 6]) {
+        self.control(|c| c.tcp_force = Some(wrench));
+    }
+
+    /// The digital inputs from now on (standard 0–7, configurable 8–15, tool 16–17), as the
+    /// cell's wiring would set them.
+    pub fn set_digital_inputs(&self, bits: u64) {
+        self.control(|c| c.digital_inputs = Some(bits & 0x3_FFFF));
+    }
+
     /// Stops the thread and waits for it (also done on drop).
     pub fn shutdown(&mut self) {
         self.shared.stop.store(true, Ordering::Relaxed);
@@ -375,11 +456,27 @@ struct Session {
     closed: bool,
 }
 
-/// A line-based client (dashboard) or a script sender.
+/// A line-based client (dashboard), a script sender, or a real-time interface client.
 struct TextClient {
     stream: TcpStream,
     rx: Vec<u8>,
     closed: bool,
+    /// A real-time interface client: the messages queued for it.
+    realtime: Option<Vec<u8>>,
+    /// The read-only real-time port: what it sends is dropped.
+    read_only: bool,
+}
+
+impl TextClient {
+    fn new(stream: TcpStream) -> Self {
+        Self {
+            stream,
+            rx: Vec::new(),
+            closed: false,
+            realtime: None,
+            read_only: false,
+        }
+    }
 }
 
 /// A watchdog set by the program.
@@ -403,6 +500,8 @@ struct Controller {
     rtde: Option<TcpListener>,
     dashboard: Option<TcpListener>,
     scripts: Vec<TcpListener>,
+    /// The real-time interface's listeners (read only or not).
+    realtime: Vec<(TcpListener, bool)>,
     sessions: Vec<Session>,
     dash_clients: Vec<TextClient>,
     script_clients: Vec<TextClient>,
@@ -426,6 +525,8 @@ struct Controller {
     speed_slider: f64,
     analog_out: [f64; 2],
     analog_types: u32,
+    tcp_force: [f64; 6],
+    digital_in: u64,
     tick: u64,
     frozen_until: Option<Instant>,
     popup: bool,
@@ -450,6 +551,7 @@ impl Controller {
             rtde: Some(rtde),
             dashboard,
             scripts,
+            realtime: Vec::new(),
             sessions: Vec::new(),
             dash_clients: Vec::new(),
             script_clients: Vec::new(),
@@ -471,6 +573,8 @@ impl Controller {
             speed_slider: 1.0,
             analog_out: [0.0; 2],
             analog_types: 0,
+            tcp_force: [0.0; 6],
+            digital_in: 0,
             tick: 0,
             frozen_until: None,
             popup: false,
@@ -523,6 +627,12 @@ impl Controller {
         if std::mem::take(&mut c.drop_rtde) {
             self.sessions.clear();
         }
+        if let Some(w) = c.tcp_force.take() {
+            self.tcp_force = w;
+        }
+        if let Some(b) = c.digital_inputs.take() {
+            self.digital_in = b;
+        }
     }
 
     fn publish(&mut self, shared: &Shared) {
@@ -559,7 +669,9 @@ impl Controller {
         if !frozen {
             self.frozen_until = None;
             self.send_outputs();
+            self.send_realtime();
         }
+        self.flush_realtime();
     }
 
     fn accept(&mut self) {
@@ -588,21 +700,29 @@ impl Controller {
                         &mut stream,
                         b"Connected: Universal Robots Dashboard Server\n",
                     );
-                    self.dash_clients.push(TextClient {
-                        stream,
-                        rx: Vec::new(),
-                        closed: false,
-                    });
+                    self.dash_clients.push(TextClient::new(stream));
                 }
             }
         }
         for l in &self.scripts {
             while let Ok((stream, _)) = l.accept() {
                 if stream.set_nonblocking(true).is_ok() {
+                    self.script_clients.push(TextClient::new(stream));
+                }
+            }
+        }
+        for (l, read_only) in &self.realtime {
+            while let Ok((stream, _)) = l.accept() {
+                if stream.set_nonblocking(true).is_ok() {
+                    let _ = stream.set_nodelay(true);
+                    // The kernel's share of a client's backlog stays near the fake's own
+                    // queue (autotuned, it would grow to megabytes: seconds of the stream).
+                    let _ = socket2::SockRef::from(&stream).set_send_buffer_size(REALTIME_QUEUE);
+                    self.status.realtime_clients += 1;
                     self.script_clients.push(TextClient {
-                        stream,
-                        rx: Vec::new(),
-                        closed: false,
+                        realtime: Some(Vec::new()),
+                        read_only: *read_only,
+                        ..TextClient::new(stream)
                     });
                 }
             }
@@ -927,6 +1047,101 @@ impl Controller {
         self.sessions = sessions;
     }
 
+    /// The joints' mode: 253 running, 239 powered off, 255 idle.
+    fn joint_mode(&self) -> i32 {
+        if self.robot_mode == robot_mode::RUNNING {
+            253
+        } else if self.robot_mode == robot_mode::POWER_OFF {
+            239
+        } else {
+            255
+        }
+    }
+
+    /// The state as the real-time interface sends it. Currents, torques and speeds of the
+    /// tool are not simulated (zero), as in RTDE.
+    fn realtime_state(&self) -> crate::proto::ur_realtime::RealtimeState {
+        let arm = &self.arm;
+        let powered = self.robot_mode >= robot_mode::POWER_ON;
+        crate::proto::ur_realtime::RealtimeState {
+            length: self.config.realtime_length,
+            time: self.tick as f64 * DT,
+            q_target: arm.target_q,
+            qd_target: arm.target_qd,
+            qdd_target: arm.target_qdd,
+            q_actual: arm.q,
+            qd_actual: arm.qd,
+            tool_vector_actual: arm.tcp_pose(&arm.q),
+            tcp_force: self.tcp_force,
+            tool_vector_target: arm.tcp_pose(&arm.target_q),
+            digital_input_bits: self.digital_in,
+            motor_temperatures: [32.0; 6],
+            robot_mode: self.robot_mode,
+            joint_modes: [self.joint_mode(); 6],
+            safety_mode: self.safety_mode,
+            speed_scaling: self.speed_slider,
+            v_main: if powered { 48.0 } else { 0.0 },
+            v_robot: if powered { 48.0 } else { 0.0 },
+            digital_outputs: self.digital_out,
+            program_state: self.runtime_state as i32,
+            safety_status: self.safety_mode,
+            ..Default::default()
+        }
+    }
+
+    /// Queues this cycle's real-time message for every real-time client (a full queue skips
+    /// it for that client).
+    fn send_realtime(&mut self) {
+        if !self.script_clients.iter().any(|c| c.realtime.is_some()) {
+            return;
+        }
+        let mut message = [0u8; crate::proto::ur_realtime::MAX_LEN];
+        let Ok(n) = self
+            .realtime_state()
+            .encode(self.config.realtime_length, &mut message)
+        else {
+            return;
+        };
+        for c in &mut self.script_clients {
+            let Some(queue) = c.realtime.as_mut() else {
+                continue;
+            };
+            if queue.len() + n > REALTIME_QUEUE {
+                self.status.realtime_skipped += 1;
+            } else {
+                queue.extend_from_slice(&message[..n]);
+                self.status.realtime_sent += 1;
+            }
+        }
+    }
+
+    /// Writes what the real-time clients' queues hold, as far as their sockets take it now.
+    fn flush_realtime(&mut self) {
+        for c in &mut self.script_clients {
+            let Some(queue) = c.realtime.as_mut() else {
+                continue;
+            };
+            while !queue.is_empty() {
+                match io::Write::write(&mut c.stream, queue) {
+                    Ok(0) => {
+                        c.closed = true;
+                        break;
+                    }
+                    Ok(k) => {
+                        queue.drain(..k);
+                    }
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+                    Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                    Err(_) => {
+                        c.closed = true;
+                        break;
+                    }
+                }
+            }
+        }
+        self.script_clients.retain(|c| !c.closed);
+    }
+
     fn robot_status_bits(&self) -> u32 {
         let powered = matches!(
             self.robot_mode,
@@ -961,26 +1176,21 @@ impl Controller {
             Var::InputDoubleRegister(n) => w.f64(self.input_double[usize::from(n)]),
             Var::InputBitRegister(n) => w.u8(u8::from(self.input_bits & (1u128 << n) != 0)),
             Var::Named(n) => {
-                let powered = self.robot_mode == robot_mode::RUNNING;
                 match n {
                     Named::Timestamp => w.f64(self.tick as f64 * DT),
                     Named::TargetQ => six(w, arm.target_q),
                     Named::TargetQd => six(w, arm.target_qd),
                     Named::TargetQdd => six(w, arm.target_qdd),
                     Named::ActualQ => six(w, arm.q),
+                    Named::ActualTcpForce => six(w, self.tcp_force),
+                    Named::ActualDigitalInputBits => w.u64(self.digital_in),
                     Named::ActualQd => six(w, arm.qd),
                     Named::ActualTcpPose => six(w, arm.tcp_pose(&arm.q)),
                     Named::TargetTcpPose => six(w, arm.tcp_pose(&arm.target_q)),
                     Named::JointTemperatures => six(w, [32.0; 6]),
                     Named::RobotMode => w.i32(self.robot_mode),
                     Named::JointMode => {
-                        let m = if powered {
-                            253
-                        } else if self.robot_mode == robot_mode::POWER_OFF {
-                            239
-                        } else {
-                            255
-                        };
+                        let m = self.joint_mode();
                         (0..6).try_for_each(|_| w.i32(m))
                     }
                     Named::SafetyMode | Named::SafetyStatus => w.i32(self.safety_mode),
@@ -1294,6 +1504,11 @@ impl Controller {
         for c in &mut clients {
             if !read_into(&mut c.stream, &mut c.rx) {
                 c.closed = true;
+            }
+            if c.read_only {
+                self.status.read_only_ignored += c.rx.len() as u64;
+                c.rx.clear();
+                continue;
             }
             if c.rx.is_empty() || !(c.rx.ends_with(b"\n") || c.closed) {
                 continue;

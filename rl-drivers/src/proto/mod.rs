@@ -13,3 +13,4 @@ pub mod netft;
 pub mod r3;
 pub mod robotiq;
 pub mod rtde;
+pub mod ur_realtime;

@@ -264,9 +264,15 @@ pub struct UrArgs {
     /// The dashboard server's port.
     #[arg(long, default_value_t = rl_drivers::fake::ur_controller::DASHBOARD_PORT)]
     pub dashboard_port: u16,
-    /// The ports that take URScript (the secondary and real-time interfaces).
-    #[arg(long, value_delimiter = ',', default_value = "30002,30003")]
+    /// The ports that take URScript only (the secondary interface).
+    #[arg(long, value_delimiter = ',', default_value = "30002")]
     pub script_ports: Vec<u16>,
+    /// The real-time interface's port: streams the state at 500 Hz, takes URScript.
+    #[arg(long, default_value_t = rl_drivers::fake::ur_controller::REALTIME_PORT)]
+    pub realtime_port: u16,
+    /// The read-only real-time interface's port.
+    #[arg(long, default_value_t = rl_drivers::fake::ur_controller::REALTIME_READ_ONLY_PORT)]
+    pub realtime_read_only_port: u16,
     /// The arm: ur5e or ur10e (kinematics and joint speed limits).
     #[arg(long, default_value = "ur5e")]
     pub arm: String,
@@ -301,6 +307,8 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
         rtde_port: args.rtde_port,
         dashboard_port: Some(args.dashboard_port),
         script_ports: args.script_ports.clone(),
+        realtime_port: Some(args.realtime_port),
+        realtime_read_only_port: Some(args.realtime_read_only_port),
         kinematics,
         running: !args.power_off,
         on_thread_start: Some(rl::devices::fake_process_thread_realtime),
@@ -328,12 +336,15 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
         .map(ToString::to_string)
         .collect();
     let printed = outln!(
-        "fake UR controller ({}{}): RTDE on {}, dashboard on {}, URScript on {}; Ctrl-C to stop",
+        "fake UR controller ({}{}): RTDE on {}, dashboard on {}, URScript on {}, real-time interface on {} (read only {}); Ctrl-C to stop",
         kinematics.name,
         if args.power_off { ", powered off" } else { "" },
         fake.rtde_addr(),
         fake.dashboard_addr().map_or("-".into(), |a| a.to_string()),
-        scripts.join(", ")
+        scripts.join(", "),
+        fake.realtime_addr().map_or("-".into(), |a| a.to_string()),
+        fake.realtime_read_only_addr()
+            .map_or("-".into(), |a| a.to_string()),
     );
     let mut last = 0;
     let printed = printed.and_then(|()| {
