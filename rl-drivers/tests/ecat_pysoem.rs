@@ -15,7 +15,7 @@ use std::process::Command;
 use rl_drivers::fake::ecat_segment::description::{FAKE_DRIVE_PRODUCT, FAKE_VENDOR_ID};
 use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
 use support::netns::veth_or_skip;
-use support::stall::{Canary, STALL, unless_stalled};
+use support::stall::{Canary, STALL, emulated, unless_stalled};
 
 /// The pysoem version the checks were made with.
 pub const PYSOEM: &str = "pysoem==1.1.13";
@@ -118,10 +118,9 @@ fn pysoem_configures_our_fake_segment_and_exchanges_process_data() {
             miscounted.is_empty(),
             "wrong working counters: {miscounted:?}"
         );
-        // Under an emulator (RL_EMULATED, set by scripts/cross) the fake's code is translated
-        // as it first runs and its frames can miss SOEM's 2 ms: counted and reported, not
-        // bounded (as ecat_units does).
-        if let Ok(emulator) = std::env::var("RL_EMULATED") {
+        // Under an emulator the fake's code is translated as it first runs and its frames can
+        // miss SOEM's 2 ms: counted and reported, not bounded (as ecat_units does).
+        if let Some(emulator) = emulated() {
             println!(
                 "under {emulator}: {} of 600 frames not back within 2 ms: {wrong:?}",
                 wrong.len()

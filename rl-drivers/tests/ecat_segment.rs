@@ -16,7 +16,7 @@ use rl_drivers::{
     JointPositionActuator, JointPositionSensor, LinkStatisticsSensor, State,
 };
 use support::netns::{Veth, veth_or_skip};
-use support::stall::{Canary, STALL, unless_stalled, within_bound_or_stall};
+use support::stall::{Canary, STALL, emulated, unless_stalled, within_bound_or_stall};
 
 const COUNTS: f64 = (1u32 << 20) as f64;
 
@@ -41,10 +41,10 @@ fn only_timeouts(errors: &[rl_drivers::Error], cycles: usize) {
         .filter(|e| e.kind() != ErrorKind::Timeout)
         .collect();
     assert!(other.is_empty(), "{other:?}");
-    // The 1 % bound is this machine's scheduling; under an emulator (scripts/cross runs the
-    // suite in qemu-user and says so in RL_EMULATED) it is reported, not asserted.
-    match std::env::var("RL_EMULATED") {
-        Ok(emulator) if errors.len() * 100 > cycles => println!(
+    // The 1 % bound is this machine's scheduling; under an emulator it is reported, not
+    // asserted.
+    match emulated() {
+        Some(emulator) if errors.len() * 100 > cycles => println!(
             "SKIPPED the 1 % timeout bound under {emulator}: {} of {cycles} cycles timed out",
             errors.len()
         ),
@@ -229,7 +229,7 @@ fn ten_thousand_cycles_at_1_ms_without_a_working_counter_error() {
     // again, up to three times, then SKIPPED with the measurements. Any of these with the
     // machine on time fails the test. Under an emulator every session stalls, and runs slower
     // than real time (10 000 cycles can take minutes): one session, then SKIPPED.
-    let emulated = std::env::var_os("RL_EMULATED").is_some();
+    let emulated = emulated().is_some();
     let mut stalls = Vec::new();
     let (fake, mut d, errors) = loop {
         let fake = segment(&veth, 6);
@@ -252,7 +252,7 @@ fn ten_thousand_cycles_at_1_ms_without_a_working_counter_error() {
         );
         let faulted = d.state() == State::Faulted;
         let wkc_errors = d.process().map_or(0, |p| p.counters.wkc_errors);
-        // Under an emulator (RL_EMULATED) the fake's threads stall as this loop does.
+        // Under an emulator the fake's threads stall as this loop does.
         let stalled = late >= d.update_period() || canary >= Duration::from_micros(900) || emulated;
         let short = faulted || wkc_errors > 0 || errors.len() * 100 > 10_000;
         if !short || !stalled {
@@ -340,10 +340,10 @@ fn injected_faults_are_counted_and_typed_and_a_device_recovers_to_op() {
     // A wrong working counter: a protocol error naming expected and received. A falsified
     // frame that comes back after the frame timeout is a timeout instead: when the machine
     // stalled, the two go again (at most three times, then SKIPPED with the numbers). Under an
-    // emulator (RL_EMULATED) the fake's and the master's threads stall as the canary's do not
-    // (the qemu-aarch64 run of a clean-clone CI: a falsified frame back after 900 µs with the
-    // canary 582 µs late): every such session counts as stalled, as run_timed's caller does.
-    let emulated = std::env::var_os("RL_EMULATED").is_some();
+    // emulator the fake's and the master's threads stall as the canary's do not (the
+    // qemu-aarch64 run of a clean-clone CI: a falsified frame back after 900 µs with the canary
+    // 582 µs late): every such session counts as stalled, as run_timed's caller does.
+    let emulated = emulated().is_some();
     let mut stalls = Vec::new();
     while stalls.len() < 3 {
         let wkc_before = d.process().unwrap().counters.wkc_errors;

@@ -15,7 +15,7 @@ use rl_drivers::fake::ecat_segment::{FakeSegment, FakeSegmentConfig};
 use rl_drivers::proto::ecat::al::AlState;
 use rl_drivers::{CyclicDevice, Device, JointPositionActuator, JointPositionSensor, State};
 use support::netns::{Veth, veth_or_skip};
-use support::stall::{Canary, unless_stalled, within_bound_or_stall};
+use support::stall::{Canary, emulated, unless_stalled, within_bound_or_stall};
 use support::{GEARED_121, MILLIDEGREES};
 
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -60,10 +60,9 @@ fn config(veth: &Veth, units: Vec<UnitsOverride>) -> EthercatDrives {
 
 /// Frames lost to scheduling are counted, at most 1 % of `n` cycles: `Err` (the session to run
 /// again) when more went with a stall of the machine the `canary` saw, a failure when they went
-/// without one; under an emulator (`RL_EMULATED`, set by `scripts/cross`) the count is
-/// reported, not bounded.
+/// without one; under an emulator ([`emulated`]) the count is reported, not bounded.
 fn few_failures(failed: usize, n: usize, canary: Canary) -> Result<(), String> {
-    if let Ok(emulator) = std::env::var("RL_EMULATED") {
+    if let Some(emulator) = emulated() {
         let _ = canary.worst();
         println!("under {emulator}: {failed} of {n} steps failed");
         return Ok(());

@@ -7,9 +7,11 @@
 
 #[path = "devices/realtime.rs"]
 mod realtime;
+mod support;
 
 use realtime::realtime;
 use std::time::{Duration, Instant};
+use support::stall::emulated;
 
 use rl_drivers::fake::robotiq_gripper::{FakeGripper, FakeGripperConfig};
 use rl_drivers::proto::modbus::{ExceptionCode, MAX_PDU, Registers, Request, Response};
@@ -191,11 +193,11 @@ fn wrong_crcs_garbage_and_late_answers_are_counted_and_survived() {
     g.start().unwrap();
     fake.corrupt_answers(2);
     let first = g.step();
-    // Under an emulator (RL_EMULATED, set by scripts/cross) the 50 ms answer wait does not
-    // hold: an answer that came after its wait is taken by the next step (RTU answers carry no
-    // transaction number), and the steps and the fake's answers no longer pair one to one.
+    // Under an emulator the 50 ms answer wait does not hold: an answer that came after its wait
+    // is taken by the next step (RTU answers carry no transaction number), and the steps and the
+    // fake's answers no longer pair one to one.
     if first.is_ok()
-        && let Ok(emulator) = std::env::var("RL_EMULATED")
+        && let Some(emulator) = emulated()
     {
         println!(
             "SKIPPED the corrupted-answer sequence under {emulator}: the step meant to get the \

@@ -7,6 +7,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// The emulator's name when the test binaries run under one: `RL_EMULATED`, which
+/// `scripts/cross` sets to the qemu binary (e.g. `qemu-aarch64`) when it runs them in
+/// qemu-user. There the threads of a test, its fakes and its master do not keep real time (code
+/// is translated as it first runs), so the tests report their timing bounds instead of
+/// asserting them. `None` when `RL_EMULATED` is not set.
+pub fn emulated() -> Option<String> {
+    std::env::var_os("RL_EMULATED").map(|v| v.to_string_lossy().into_owned())
+}
+
 /// A stall at least this long explains lost frames: the masters' frame timeout (900 µs).
 pub const STALL: Duration = Duration::from_micros(900);
 
