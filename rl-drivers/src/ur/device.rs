@@ -29,8 +29,6 @@ use core::time::Duration;
 use std::net::{IpAddr, SocketAddr};
 use std::time::Instant;
 
-use glam::{DMat3, DVec3};
-
 use super::dashboard::{self, Dashboard};
 use super::link::{LinkError, Package, RtdeLink};
 use super::program::{FollowerProgram, MODE_POSITION, MODE_VELOCITY};
@@ -947,33 +945,18 @@ impl UniversalRobot {
 impl CartesianPositionSensor for UniversalRobot {
     fn cartesian_position(&self) -> Result<Pose, Error> {
         self.lifecycle.check(Operation::Get)?;
-        let p = self.state.tcp_pose;
-        let v = DVec3::new(p[3], p[4], p[5]);
-        let angle = v.length();
-        let rotation = if angle > 0.0 {
-            DMat3::from_axis_angle(v / angle, angle)
-        } else {
-            DMat3::IDENTITY
-        };
-        Ok(Pose::new(rotation, DVec3::new(p[0], p[1], p[2])))
+        Ok(super::convert::tool_pose(&self.state.tcp_pose))
     }
 }
 
 impl DigitalInputReader for UniversalRobot {
     fn digital_input_count(&self) -> usize {
-        18
+        super::convert::DIGITAL_INPUTS
     }
 
     fn digital_input(&self, index: usize) -> Result<bool, Error> {
         self.lifecycle.check(Operation::Get)?;
-        if index >= 18 {
-            return Err(Error::InvalidArgument {
-                what: "UR digital input",
-                expected: 17,
-                got: index,
-            });
-        }
-        Ok(self.state.digital_inputs & (1 << index) != 0)
+        super::convert::digital_input(self.state.digital_inputs, index)
     }
 }
 

@@ -18,6 +18,7 @@
 //! Not built: analog I/O through the device, and the primary and secondary interfaces'
 //! messages (a program that does not compile is seen only as one that does not start).
 
+mod convert;
 pub mod dashboard;
 mod device;
 mod link;

@@ -28,8 +28,6 @@ use core::time::Duration;
 use std::net::{IpAddr, SocketAddr};
 use std::time::Instant;
 
-use glam::{DMat3, DVec3};
-
 use crate::capability::{
     CartesianPositionSensor, Delivery, DigitalInputReader, JointDevice, JointPositionSensor,
     JointVelocitySensor, LinkStatistics, LinkStatisticsSensor, Pose, SixAxisForceTorqueSensor,
@@ -400,15 +398,7 @@ impl CartesianPositionSensor for UrRealtime {
     /// The tool's pose in the base frame (its rotation vector as a matrix).
     fn cartesian_position(&self) -> Result<Pose, Error> {
         self.lifecycle.check(Operation::Get)?;
-        let p = self.state.tool_vector_actual;
-        let v = DVec3::new(p[3], p[4], p[5]);
-        let angle = v.length();
-        let rotation = if angle > 0.0 {
-            DMat3::from_axis_angle(v / angle, angle)
-        } else {
-            DMat3::IDENTITY
-        };
-        Ok(Pose::new(rotation, DVec3::new(p[0], p[1], p[2])))
+        Ok(super::convert::tool_pose(&self.state.tool_vector_actual))
     }
 }
 
@@ -424,19 +414,12 @@ impl SixAxisForceTorqueSensor for UrRealtime {
 impl DigitalInputReader for UrRealtime {
     /// Standard inputs 0–7, configurable 8–15, tool 16–17.
     fn digital_input_count(&self) -> usize {
-        18
+        super::convert::DIGITAL_INPUTS
     }
 
     fn digital_input(&self, index: usize) -> Result<bool, Error> {
         self.lifecycle.check(Operation::Get)?;
-        if index >= 18 {
-            return Err(Error::InvalidArgument {
-                what: "UR digital input",
-                expected: 17,
-                got: index,
-            });
-        }
-        Ok(self.state.digital_input_bits & (1 << index) != 0)
+        super::convert::digital_input(self.state.digital_input_bits, index)
     }
 }
 
