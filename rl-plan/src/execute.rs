@@ -29,8 +29,10 @@ use crate::path::Path;
 use crate::space::JointSpace;
 
 pub mod blend;
+pub mod topp;
 
 pub use blend::{BlendOptions, BlendReport, Blended, StopReason, WaypointOutcome};
+pub use topp::{Discretization, Parameterization, ToppProblem, topp_ra};
 
 /// Time to reach the speed limit at the acceleration limit, s (the controller's convention:
 /// `a = v / 0.5 s`, `j = a / 0.15 s`).
