@@ -142,7 +142,12 @@ impl ToppProblem<'_> {
         if n < 2 {
             return bad("TOPP grid", format!("{n} points; at least 2"));
         }
-        if self.grid.windows(2).any(|w| !(w[1] > w[0])) || !self.grid[0].is_finite() {
+        if self
+            .grid
+            .windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(core::cmp::Ordering::Greater))
+            || !self.grid[0].is_finite()
+        {
             return bad("TOPP grid", "not finite and strictly increasing".into());
         }
         if self.acceleration.len() != nq || nq == 0 {
@@ -176,7 +181,7 @@ impl ToppProblem<'_> {
             ("velocity", self.velocity),
             ("acceleration", self.acceleration),
         ] {
-            if let Some(k) = lim.iter().position(|v| !(*v > 0.0)) {
+            if let Some(k) = lim.iter().position(|v| v.is_nan() || *v <= 0.0) {
                 return bad(
                     "TOPP limits",
                     format!("{what} limit of joint {k} is {}: positive", lim[k]),
@@ -364,7 +369,7 @@ pub fn topp_ra(problem: &ToppProblem<'_>) -> Result<Parameterization, PlanError>
             .clamp(k_lo[i + 1], k_hi[i + 1])
             .max(0.0);
         let speeds = x[i].sqrt() + x[i + 1].sqrt();
-        if !(speeds > 0.0) {
+        if speeds.is_nan() || speeds <= 0.0 {
             return Err(PlanError::setting(
                 "TOPP path",
                 format!("the path stops at s = {}", problem.grid[i]),
