@@ -29,9 +29,11 @@ use crate::path::Path;
 use crate::space::JointSpace;
 
 pub mod blend;
+pub mod retime;
 pub mod topp;
 
 pub use blend::{BlendOptions, BlendReport, Blended, StopReason, WaypointOutcome};
+pub use retime::{Retimed, time_optimal};
 pub use topp::{Discretization, Parameterization, ToppProblem, topp_ra};
 
 /// Time to reach the speed limit at the acceleration limit, s (the controller's convention:

@@ -211,8 +211,18 @@ impl ToppProblem<'_> {
     fn stage(&self, i: usize, out: &mut Vec<Half>) {
         out.clear();
         let nq = self.nq();
+        let n = self.grid.len();
+        // The stage's length (the last point's: the stage before it).
+        let d = self.grid[(i + 1).min(n - 1)] - self.grid[i.min(n - 2)];
         let mut push = |a: f64, b: f64, lim: f64| {
-            // −lim ≤ a·u + b·x ≤ lim
+            // −lim ≤ a·u + b·x ≤ lim. Where q' vanishes (the path at rest in its own time), a
+            // is rounding noise: a·u changes x's bound by less than 1e-12 of b·Δx (Δx = 2d·u)
+            // and, kept, divides the rounding of lim − b·x by ~1e-17.
+            let a = if a.abs() <= 1e-12 * b.abs() * 2.0 * d {
+                0.0
+            } else {
+                a
+            };
             if lim.is_finite() {
                 out.push(Half {
                     alpha: b,
@@ -233,13 +243,19 @@ impl ToppProblem<'_> {
                 self.acceleration[k],
             );
         }
-        if self.discretization == Discretization::Interpolation && i + 1 < self.grid.len() {
-            let d = self.grid[i + 1] - self.grid[i];
+        if self.discretization == Discretization::Interpolation && i + 1 < n {
             let j = i + 1;
             for k in 0..nq {
                 let (a, b) = (self.dq[j * nq + k], self.ddq[j * nq + k]);
-                // a·u + b·(x + 2d·u)
-                push(a + 2.0 * d * b, b, self.acceleration[k]);
+                // a·u + b·(x + 2d·u). Where the two terms cancel (to 1e-9 of their size) the
+                // coefficient is their rounding: zero.
+                let beta = a + 2.0 * d * b;
+                let beta = if beta.abs() <= 1e-9 * (a.abs() + 2.0 * d * b.abs()) {
+                    0.0
+                } else {
+                    beta
+                };
+                push(beta, b, self.acceleration[k]);
             }
         }
     }
