@@ -29,10 +29,12 @@ use crate::path::Path;
 use crate::space::JointSpace;
 
 pub mod blend;
+pub mod jerk;
 pub mod retime;
 pub mod topp;
 
 pub use blend::{BlendOptions, BlendReport, Blended, StopReason, WaypointOutcome};
+pub use jerk::{JerkRetimed, jerk_limited, rests_of};
 pub use retime::{Retimed, time_optimal};
 pub use topp::{Discretization, Parameterization, ToppProblem, topp_ra};
 

@@ -583,3 +583,126 @@ fn time_optimal_retiming_bounds_the_blended_durations() {
         "no path of one segment to check the closed form on"
     );
 }
+
+/// The blended trajectory retimed with bounded jerk along its own configurations
+/// (`execute::jerk_limited`): it starts and ends at rest at the start and goal, it keeps every
+/// velocity, acceleration and jerk limit on 37 117 samples, its derivatives are those of its
+/// positions (central differences), it never goes back along the path, on a single straight
+/// segment it is rl-core's time-optimal jerk-limited move (to the 1e-3 margin asked), and it
+/// is never faster than TOPP-RA's velocity-and-acceleration optimum. Prints the durations:
+/// the retiming beats the blends where they keep one speed through many corners (cage).
+#[test]
+fn jerk_limited_retiming_keeps_the_limits_and_the_path() {
+    let robot = panda();
+    let limits = limits(&robot);
+    let delta = options().verifier.delta;
+    let n = limits.velocity.len();
+    for name in [
+        "box_panda",
+        "table_pick_panda",
+        "bookshelf_small_panda",
+        "bookshelf_tall_panda",
+        "cage_panda",
+    ] {
+        let (env, start, goal, path) = planned(&robot, name);
+        let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
+        let mut exact = robot.exact_checker(env).unwrap();
+        let b = ex
+            .blended::<D, MAX>(
+                &robot.space,
+                &mut exact,
+                &BlendOptions::for_resolution(delta),
+            )
+            .unwrap();
+        let tr = &*b.trajectory;
+        let topp = rl_plan::execute::time_optimal(tr, &limits, 4000).unwrap();
+        let rests = rl_plan::execute::rests_of::<D, _, MAX>(tr, n);
+        let j = rl_plan::execute::jerk_limited(tr, &rests, &limits, 1000, 1e-3).unwrap();
+        let total = j.duration();
+        // At rest at the start and the goal.
+        for (t, q) in [(0.0, &start), (total, &goal)] {
+            let [p, v, a, _] = j.sample::<D>(t);
+            for k in 0..n {
+                assert!((p[k] - q[k]).abs() < 1e-9, "{name}: joint {k} at {t}");
+                assert!(
+                    v[k].abs() < 1e-9 && a[k].abs() < 1e-6,
+                    "{name}: moving at {t}"
+                );
+            }
+        }
+        // Every limit; the path's own time never decreases.
+        let m = 37_117;
+        let mut worst = [0.0f64; 3];
+        let mut last = 0.0;
+        for i in 0..=m {
+            let t = total * i as f64 / m as f64;
+            let [_, v, a, jj] = j.sample::<D>(t);
+            for k in 0..n {
+                worst[0] = worst[0].max(v[k].abs() / limits.velocity[k]);
+                worst[1] = worst[1].max(a[k].abs() / limits.acceleration[k]);
+                worst[2] = worst[2].max(jj[k].abs() / limits.jerk[k]);
+            }
+            let tau = j.path_time::<D>(t);
+            assert!(tau >= last - 1e-12, "{name}: back along the path at {t}");
+            last = tau;
+        }
+        assert!(
+            worst.iter().all(|w| *w <= 1.0),
+            "{name}: velocity, acceleration, jerk at {worst:?} of the limits"
+        );
+        // The derivatives are the positions': central differences, step h, agree to the
+        // next derivative's bound times h² (velocity, acceleration); jerk steps where the
+        // averaged s̈ bends, so there a difference of accelerations is checked at most
+        // points.
+        let h = 1e-5;
+        let (mut jerk_ok, mut jerk_n) = (0, 0);
+        for i in 1..400 {
+            let t = total * i as f64 / 400.0;
+            let [p0, v0, a0, _] = j.sample::<D>(t - h);
+            let [_, v1, a1, j1] = j.sample::<D>(t);
+            let [p2, v2, a2, _] = j.sample::<D>(t + h);
+            for k in 0..n {
+                let fv = (p2[k] - p0[k]) / (2.0 * h);
+                let fa = (v2[k] - v0[k]) / (2.0 * h);
+                let fj = (a2[k] - a0[k]) / (2.0 * h);
+                assert!(
+                    (fv - v1[k]).abs() <= 1e-6 * limits.velocity[k],
+                    "{name}: joint {k} at {t}: velocity {} vs {fv}",
+                    v1[k]
+                );
+                assert!(
+                    (fa - a1[k]).abs() <= 1e-3 * limits.acceleration[k],
+                    "{name}: joint {k} at {t}: acceleration {} vs {fa}",
+                    a1[k]
+                );
+                jerk_n += 1;
+                jerk_ok += usize::from((fj - j1[k]).abs() <= 1e-3 * limits.jerk[k]);
+            }
+        }
+        assert!(
+            jerk_ok * 100 >= jerk_n * 99,
+            "{name}: jerk matches the accelerations' differences at {jerk_ok} of {jerk_n}"
+        );
+        assert!(
+            total >= topp.duration() * (1.0 - 1e-3),
+            "{name}: {total} s, below TOPP-RA's {} s",
+            topp.duration()
+        );
+        if ex.waypoints().len() == 2 {
+            assert!(
+                total <= tr.duration() * (1.0 + 2e-3),
+                "{name}: one straight segment in {total} s, rl-core's move {} s",
+                tr.duration()
+            );
+        }
+        println!(
+            "{name}: blended {:.3} s, jerk-limited retiming {total:.3} s ({:.3} of blended), \
+             TOPP-RA (v, a) {:.3} s: retiming/TOPP-RA {:.3}; limits reached {worst:.4?}; jerk \
+             as the accelerations' differences at {jerk_ok} of {jerk_n} points",
+            tr.duration(),
+            total / tr.duration(),
+            topp.duration(),
+            total / topp.duration()
+        );
+    }
+}

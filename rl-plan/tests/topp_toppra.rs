@@ -49,6 +49,7 @@ fn topp_ra_agrees_with_toppra() {
             start_speed: 0.0,
             end_speed: 0.0,
             discretization,
+            speed_cap: &[],
         })
         .unwrap_or_else(|e| panic!("case {c}: {e}"));
         let want = case["toppra_duration"].as_f64().unwrap();

@@ -59,6 +59,7 @@ pub fn time_optimal<'a, const D: usize, T: Trajectory<D>>(
         start_speed: 0.0,
         end_speed: 0.0,
         discretization: Discretization::Interpolation,
+        speed_cap: &[],
     })?;
     Ok(Retimed { path, nq, timing })
 }

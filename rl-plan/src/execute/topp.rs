@@ -65,16 +65,18 @@ pub struct ToppProblem<'a> {
     pub end_speed: f64,
     /// Where the acceleration constraints hold.
     pub discretization: Discretization,
+    /// Caps on `ṡ` per grid point (empty: none), on top of the velocity limits.
+    pub speed_cap: &'a [f64],
 }
 
 /// The time-optimal timing of the grid: `ṡ` at each grid point and the time it is reached.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Parameterization {
-    grid: Vec<f64>,
+    pub(super) grid: Vec<f64>,
     /// `ṡ²` at each grid point.
-    x: Vec<f64>,
+    pub(super) x: Vec<f64>,
     /// The time at each grid point.
-    t: Vec<f64>,
+    pub(super) t: Vec<f64>,
 }
 
 /// One linear constraint `alpha·x + beta·u ≤ gamma` of a stage.
@@ -188,6 +190,18 @@ impl ToppProblem<'_> {
                 );
             }
         }
+        if !self.speed_cap.is_empty() && self.speed_cap.len() != n {
+            return bad(
+                "TOPP speed caps",
+                format!("{} caps for {n} points", self.speed_cap.len()),
+            );
+        }
+        if let Some(i) = self.speed_cap.iter().position(|c| c.is_nan() || *c < 0.0) {
+            return bad(
+                "TOPP speed caps",
+                format!("cap {i} is {}", self.speed_cap[i]),
+            );
+        }
         for (what, v) in [("start", self.start_speed), ("end", self.end_speed)] {
             if !(v >= 0.0 && v.is_finite()) {
                 return bad("TOPP path speed", format!("{what} speed {v}"));
@@ -200,11 +214,12 @@ impl ToppProblem<'_> {
     fn x_max(&self, i: usize) -> f64 {
         let nq = self.nq();
         let row = &self.dq[i * nq..(i + 1) * nq];
+        let cap = self.speed_cap.get(i).map_or(f64::INFINITY, |c| c * c);
         row.iter()
             .zip(self.velocity)
             .filter(|(d, _)| d.abs() > 0.0)
             .map(|(d, v)| (v / d) * (v / d))
-            .fold(f64::INFINITY, f64::min)
+            .fold(cap, f64::min)
     }
 
     /// Stage `i`'s acceleration constraints, into `out`.
@@ -429,6 +444,7 @@ mod tests {
                     start_speed: 0.0,
                     end_speed: 0.0,
                     discretization: Discretization::Interpolation,
+                    speed_cap: &[],
                 };
                 let r = topp_ra(&p).unwrap();
                 let err = (r.duration() - want) / want;
@@ -461,6 +477,7 @@ mod tests {
             start_speed: 0.0,
             end_speed: 0.0,
             discretization: Discretization::Collocation,
+            speed_cap: &[],
         };
         assert!(topp_ra(&p).unwrap_err().to_string().contains("increasing"));
         let grid = [0.0, 0.5, 1.0];
