@@ -283,6 +283,49 @@ fn bench_panda_fixtures(dir: &Path, extra: &[&str]) -> std::process::Output {
     o
 }
 
+/// `--retime`: every returned path executed three ways and each duration over TOPP-RA's
+/// optimum on the same path: stopping at each waypoint is never faster than blending, and no
+/// execution beats the optimum (every ratio at least 1).
+#[test]
+fn bench_retime_prints_the_execution_ratios() {
+    let dir = tmp("bench-retime");
+    let o = bench_panda_fixtures(&dir, &["--retime"]);
+    let table = String::from_utf8_lossy(&o.stdout);
+    let line = table
+        .lines()
+        .find(|l| l.starts_with("execution of "))
+        .unwrap_or_else(|| panic!("{table}"));
+    let timed: usize = line["execution of ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(timed >= 10, "{line}");
+    let row = |name: &str| -> Vec<f64> {
+        let l = table
+            .lines()
+            .find(|l| l.starts_with(name))
+            .unwrap_or_else(|| panic!("no row {name}: {table}"));
+        l[name.len()..]
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect()
+    };
+    for name in [
+        "stop at every waypoint",
+        "blended",
+        "retimed, jerk bounded",
+        "faster of blended and retimed",
+    ] {
+        let r = row(name);
+        assert_eq!(r.len(), 6, "{name}");
+        assert!(r[0] >= 1.0 - 1e-3, "{name}: min {} below the optimum", r[0]);
+    }
+    assert!(row("blended")[2] <= row("stop at every waypoint")[2]);
+    assert!(row("faster of blended and retimed")[5] <= row("blended")[5]);
+}
+
 #[test]
 fn bench_writes_ompl_logs_and_rl_csv() {
     let dir = tmp("bench");

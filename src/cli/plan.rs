@@ -195,6 +195,11 @@ pub struct BenchArgs {
     /// Check every returned path with the exact meshes at a resolution 10× finer.
     #[arg(long)]
     pub fine_check: bool,
+    /// Time the execution of every returned path at this fraction of the model's speed limits
+    /// (0.5 if given bare): stopping at every waypoint, blended, retimed with bounded jerk,
+    /// each over TOPP-RA's velocity-and-acceleration optimum on the same path.
+    #[arg(long, value_name = "FRACTION", num_args = 0..=1, default_missing_value = "0.5")]
+    pub retime: Option<f64>,
     /// Write OMPL benchmark logs (one per problem) and RL's benchmark.csv into this directory.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -652,6 +657,11 @@ fn run_bench(b: BenchArgs) -> CliResult {
             Checker::Exact => CheckerKind::Exact,
         },
         fine_check: b.fine_check.then_some(10.0),
+        retime: b
+            .retime
+            .map(|f| rl_plan::execute::ExecutionLimits::from_model(&robot.kinematics.model, f))
+            .transpose()
+            .map_err(|e| usage(format!("--retime: {e}")))?,
     };
     let spheres = match (&b.common.checker, b.common.raw_spheres) {
         (Checker::Exact, _) => "exact meshes".to_string(),
@@ -698,6 +708,9 @@ fn run_bench(b: BenchArgs) -> CliResult {
     line.clear();
     drop(line);
     outln!("{}", bench::vamp_table(&runs))?;
+    if opts.retime.is_some() {
+        outln!("{}", bench::retime_table(&runs))?;
+    }
     if let Some(dir) = &b.paths {
         for r in runs.iter().filter(|r| r.run == 0) {
             if let Some(path) = r.result.as_ref().and_then(|x| x.optimized.as_ref()) {

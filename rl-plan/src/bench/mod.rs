@@ -3,10 +3,12 @@
 //! database), and the CSV columns RL's rlPlanDemo appends to its `benchmark.csv`.
 
 mod ompl_log;
+mod retime;
 mod runner;
 mod stats;
 
 pub use ompl_log::write_ompl_log;
+pub use retime::{Timing, retime_table, time_path};
 pub use runner::{BenchOptions, CheckerKind, run_mbm};
 pub use stats::Summary;
 
@@ -37,6 +39,10 @@ pub struct Run {
     pub fine_valid: Option<bool>,
     /// Time limit per run.
     pub time_limit: Duration,
+    /// The optimised path's executions, if they were timed ([`BenchOptions::retime`]).
+    pub timing: Option<Timing>,
+    /// Why the path could not be timed.
+    pub timing_error: Option<String>,
 }
 
 impl Run {

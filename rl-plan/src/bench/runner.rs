@@ -35,6 +35,9 @@ pub struct BenchOptions {
     /// Check every optimised path with the exact geometry at the planner's resolution divided
     /// by this factor (10 in the tests); `None`: no check.
     pub fine_check: Option<f64>,
+    /// Time the execution of every optimised path within these limits (blended, retimed,
+    /// TOPP-RA: [`super::time_path`]); `None`: not timed.
+    pub retime: Option<crate::execute::ExecutionLimits>,
 }
 
 /// Runs `problems` for `robot`; `progress` sees every run as it finishes. A problem whose
@@ -81,6 +84,8 @@ pub fn run_mbm(
                 result: None,
                 fine_valid: None,
                 time_limit: options.plan.time,
+                timing: None,
+                timing_error: None,
             };
             if valid {
                 let mut opts = options.plan.clone();
@@ -98,6 +103,12 @@ pub fn run_mbm(
                 if let (Some(factor), Some(path)) = (options.fine_check, &result.optimized) {
                     let fine = Verifier::sequential(opts.verifier.delta / factor);
                     run.fine_valid = Some(path_valid(&robot.space, &mut exact, path, &fine));
+                }
+                if let (Some(limits), Some(path)) = (&options.retime, &result.optimized) {
+                    match super::time_path(robot, &mut exact, path, limits, opts.verifier.delta) {
+                        Ok(t) => run.timing = Some(t),
+                        Err(e) => run.timing_error = Some(e.to_string()),
+                    }
                 }
                 run.result = Some(result);
             }
