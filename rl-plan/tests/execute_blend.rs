@@ -487,6 +487,42 @@ fn a_corner_blocked_in_configuration_space_is_shrunk_then_stopped_at() {
     check_limits("square, stopped", &b.trajectory, ex.waypoints(), &limits);
 }
 
+/// The problems the retiming tests run.
+const RETIMED: [&str; 5] = [
+    "box_panda",
+    "table_pick_panda",
+    "bookshelf_small_panda",
+    "bookshelf_tall_panda",
+    "cage_panda",
+];
+
+/// A problem planned and its path blended (checked with the exact meshes): start, goal, path,
+/// its execution and the blended trajectory.
+fn blended_problem(
+    robot: &Robot,
+    name: &str,
+    limits: &ExecutionLimits,
+    delta: f64,
+) -> (
+    Vec<f64>,
+    Vec<f64>,
+    Path,
+    Execution,
+    rl_plan::execute::Blended<D, MAX>,
+) {
+    let (env, start, goal, path) = planned(robot, name);
+    let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
+    let mut exact = robot.exact_checker(env).unwrap();
+    let b = ex
+        .blended::<D, MAX>(
+            &robot.space,
+            &mut exact,
+            &BlendOptions::for_resolution(delta),
+        )
+        .unwrap();
+    (start, goal, path, ex, b)
+}
+
 /// TOPP-RA on the geometry the blended trajectory follows: the least time any timing of it can
 /// take within the velocity and acceleration limits (jerk unbounded), so at most the blended
 /// duration; on a path of one segment (a straight line) the closed-form optimum, the limits'
@@ -500,23 +536,8 @@ fn time_optimal_retiming_bounds_the_blended_durations() {
     let delta = options().verifier.delta;
     let n = limits.velocity.len();
     let mut single = 0;
-    for name in [
-        "box_panda",
-        "table_pick_panda",
-        "bookshelf_small_panda",
-        "bookshelf_tall_panda",
-        "cage_panda",
-    ] {
-        let (env, _, _, path) = planned(&robot, name);
-        let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
-        let mut exact = robot.exact_checker(env).unwrap();
-        let b = ex
-            .blended::<D, MAX>(
-                &robot.space,
-                &mut exact,
-                &BlendOptions::for_resolution(delta),
-            )
-            .unwrap();
+    for name in RETIMED {
+        let (_, _, path, ex, b) = blended_problem(&robot, name, &limits, delta);
         let tr = &*b.trajectory;
         let coarse = rl_plan::execute::time_optimal(tr, &limits, 2000).unwrap();
         let fine = rl_plan::execute::time_optimal(tr, &limits, 8000).unwrap();
@@ -597,23 +618,8 @@ fn jerk_limited_retiming_keeps_the_limits_and_the_path() {
     let limits = limits(&robot);
     let delta = options().verifier.delta;
     let n = limits.velocity.len();
-    for name in [
-        "box_panda",
-        "table_pick_panda",
-        "bookshelf_small_panda",
-        "bookshelf_tall_panda",
-        "cage_panda",
-    ] {
-        let (env, start, goal, path) = planned(&robot, name);
-        let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
-        let mut exact = robot.exact_checker(env).unwrap();
-        let b = ex
-            .blended::<D, MAX>(
-                &robot.space,
-                &mut exact,
-                &BlendOptions::for_resolution(delta),
-            )
-            .unwrap();
+    for name in RETIMED {
+        let (start, goal, _, ex, b) = blended_problem(&robot, name, &limits, delta);
         let tr = &*b.trajectory;
         let topp = rl_plan::execute::time_optimal(tr, &limits, 4000).unwrap();
         let rests = rl_plan::execute::rests_of::<D, _, MAX>(tr, n);
