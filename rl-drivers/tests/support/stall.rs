@@ -19,43 +19,61 @@ pub fn emulated() -> Option<String> {
 /// A stall at least this long explains lost frames: the masters' frame timeout (900 µs).
 pub const STALL: Duration = Duration::from_micros(900);
 
-/// A thread with nothing to do but wake every 500 µs at SCHED_FIFO 90 (above the fake's 80 and
-/// the master's 70) that records how late it woke at worst: the machine's own stalls during a
-/// session (on a shared VM the host holds a CPU, real-time threads included, for milliseconds),
-/// seen independently of the master and the fake.
+/// Threads with nothing to do but wake every 500 µs at SCHED_FIFO 90 (above the fake's 80 and
+/// the master's 70), one pinned to each CPU, that record how late they woke at worst: the
+/// machine's own stalls during a session (on a shared VM the host holds a CPU, real-time
+/// threads included, for milliseconds), seen independently of the master and the fake. One per
+/// CPU, because a host that holds one virtual CPU (where the fake, the master or the kernel's
+/// packet delivery runs) leaves the others on time: a single canary on another CPU saw no stall
+/// while a fake's answers came back 17 ms late.
 pub struct Canary {
     stop: Arc<AtomicBool>,
-    thread: JoinHandle<Duration>,
+    threads: Vec<JoinHandle<Duration>>,
 }
 
 impl Canary {
     pub fn start() -> Self {
         let stop = Arc::new(AtomicBool::new(false));
-        let flag = stop.clone();
-        let thread = std::thread::spawn(move || {
-            super::realtime(90);
-            let period = Duration::from_micros(500);
-            let mut next = Instant::now() + period;
-            let mut worst = Duration::ZERO;
-            while !flag.load(Ordering::Relaxed) {
-                let now = Instant::now();
-                if next > now {
-                    std::thread::sleep(next - now);
-                }
-                worst = worst.max(Instant::now().saturating_duration_since(next));
-                next += period;
-                // After a stall, the next wake-up is measured from now, not from the backlog.
-                next = next.max(Instant::now());
-            }
-            worst
-        });
-        Self { stop, thread }
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let threads = (0..cpus)
+            .map(|cpu| {
+                let flag = stop.clone();
+                std::thread::spawn(move || {
+                    let _ = rl_rt::RtThreadBuilder::new("canary")
+                        .policy(rl_rt::Policy::Fifo)
+                        .priority(90)
+                        .cpus([cpu])
+                        .best_effort(true)
+                        .apply_to_current();
+                    let period = Duration::from_micros(500);
+                    let mut next = Instant::now() + period;
+                    let mut worst = Duration::ZERO;
+                    while !flag.load(Ordering::Relaxed) {
+                        let now = Instant::now();
+                        if next > now {
+                            std::thread::sleep(next - now);
+                        }
+                        worst = worst.max(Instant::now().saturating_duration_since(next));
+                        next += period;
+                        // After a stall, the next wake-up is measured from now, not from the
+                        // backlog.
+                        next = next.max(Instant::now());
+                    }
+                    worst
+                })
+            })
+            .collect();
+        Self { stop, threads }
     }
 
-    /// The worst lateness seen.
+    /// The worst lateness seen on any CPU.
     pub fn worst(self) -> Duration {
         self.stop.store(true, Ordering::Relaxed);
-        self.thread.join().unwrap_or(Duration::MAX)
+        self.threads
+            .into_iter()
+            .map(|t| t.join().unwrap_or(Duration::MAX))
+            .max()
+            .unwrap_or(Duration::ZERO)
     }
 }
 
