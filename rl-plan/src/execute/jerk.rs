@@ -38,7 +38,7 @@
 use rl_core::traj::Trajectory;
 
 use super::ExecutionLimits;
-use super::topp::{Discretization, Parameterization, ToppProblem, topp_ra};
+use super::topp::{Parameterization, ToppProblem, topp_ra};
 use crate::error::PlanError;
 
 /// Gauss–Legendre nodes and weights on [0, 1], 5 points (exact for degree 9).
@@ -426,21 +426,11 @@ pub fn jerk_limited<'a, const D: usize, T: Trajectory<D>>(
             ddq.extend_from_slice(&d[1][..nq]);
         }
         // TOPP-RA, averaged; where a sample needs slowing by ρ, the path speed over the
-        // stretch its window averages is capped at 1/ρ of what it was, and again.
+        // stretch its window averages is capped at 1/√ρ of what it was, and again.
         let mut caps = vec![f64::INFINITY; grid.len()];
         let mut best: Option<Run> = None;
         for round in 0..=REFINE {
-            run.timing = topp_ra(&ToppProblem {
-                grid: &grid,
-                dq: &dq,
-                ddq: &ddq,
-                velocity: &limits.velocity,
-                acceleration: &limits.acceleration,
-                start_speed: 0.0,
-                end_speed: 0.0,
-                discretization: Discretization::Interpolation,
-                speed_cap: &caps,
-            })?;
+            run.timing = topp_ra(&ToppProblem::rest_to_rest(&grid, &dq, &ddq, limits, &caps))?;
             let p = &run.timing;
             let mut integral = vec![0.0; p.t.len()];
             for i in 1..p.t.len() {

@@ -15,7 +15,7 @@
 use rl_core::traj::Trajectory;
 
 use super::ExecutionLimits;
-use super::topp::{Discretization, Parameterization, ToppProblem, topp_ra};
+use super::topp::{Parameterization, ToppProblem, topp_ra};
 use crate::error::PlanError;
 
 /// `path` retimed: its timing and the path itself.
@@ -50,17 +50,7 @@ pub fn time_optimal<'a, const D: usize, T: Trajectory<D>>(
         dq.extend_from_slice(&path.derivative(tau, 1)[..nq]);
         ddq.extend_from_slice(&path.derivative(tau, 2)[..nq]);
     }
-    let timing = topp_ra(&ToppProblem {
-        grid: &grid,
-        dq: &dq,
-        ddq: &ddq,
-        velocity: &limits.velocity,
-        acceleration: &limits.acceleration,
-        start_speed: 0.0,
-        end_speed: 0.0,
-        discretization: Discretization::Interpolation,
-        speed_cap: &[],
-    })?;
+    let timing = topp_ra(&ToppProblem::rest_to_rest(&grid, &dq, &ddq, limits, &[]))?;
     Ok(Retimed { path, nq, timing })
 }
 

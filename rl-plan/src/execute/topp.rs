@@ -133,6 +133,30 @@ impl Parameterization {
     }
 }
 
+impl<'a> ToppProblem<'a> {
+    /// Rest to rest under `limits`' velocity and acceleration, interpolation scheme, speeds
+    /// capped by `speed_cap` (empty: none).
+    pub fn rest_to_rest(
+        grid: &'a [f64],
+        dq: &'a [f64],
+        ddq: &'a [f64],
+        limits: &'a super::ExecutionLimits,
+        speed_cap: &'a [f64],
+    ) -> Self {
+        Self {
+            grid,
+            dq,
+            ddq,
+            velocity: &limits.velocity,
+            acceleration: &limits.acceleration,
+            start_speed: 0.0,
+            end_speed: 0.0,
+            discretization: Discretization::Interpolation,
+            speed_cap,
+        }
+    }
+}
+
 impl ToppProblem<'_> {
     fn nq(&self) -> usize {
         self.velocity.len()
