@@ -355,7 +355,7 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
             outln!(
                 "t={t}s robot_mode={} safety_mode={} runtime_state={} program={} outputs={} ({rate}/s) \
                  inputs={} rtde_clients={} protocol_errors={} servoj={} watchdogs={} protective_stops={} \
-                 dashboard={} slips={} max_lateness_us={} q=[{}]{}",
+                 dashboard={} realtime_clients={} realtime_skipped={} slips={} max_lateness_us={} q=[{}]{}",
                 s.robot_mode,
                 s.safety_mode,
                 s.runtime_state,
@@ -368,6 +368,8 @@ pub fn run_ur(args: &UrArgs, stop: &AtomicBool) -> CliResult {
                 s.watchdog_triggers,
                 s.protective_stops,
                 s.dashboard_commands,
+                s.realtime_clients,
+                s.realtime_skipped,
                 s.slips,
                 s.max_lateness_us,
                 s.q.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", "),
