@@ -246,6 +246,20 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
 #[cfg(feature = "plan")]
 #[test]
 fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
+    follow_planned_path(false);
+}
+
+/// The same path retimed with bounded jerk (`PlanTrajectory::Retimed`, what `rl run --plan`
+/// follows by default): each cycle finds the path's own time by bisection and Newton steps on
+/// its arc length, without allocating.
+#[cfg(feature = "plan")]
+#[test]
+fn steady_state_cycle_following_a_retimed_path_allocates_nothing() {
+    follow_planned_path(true);
+}
+
+#[cfg(feature = "plan")]
+fn follow_planned_path(retime: bool) {
     use rl::controller::plan::BLENDED_SEGMENTS;
     use rl::controller::{MotionLimits, Plan, PlanBudget, PlanTrajectory, default_waypoints};
     use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits};
@@ -280,13 +294,17 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
         )
         .expect("blended");
     assert_eq!(blended.report.blended(), 2, "{}", blended.report);
-    let plan = Plan::from_trajectory(
-        &model,
-        PlanTrajectory::Blended(blended.trajectory),
-        &limits,
-        &PlanBudget::default(),
-    )
-    .expect("plan");
+    let trajectory = if retime {
+        let path = blended.trajectory;
+        let rests = rl_plan::execute::rests_of::<8, _, BLENDED_SEGMENTS>(&*path, dof);
+        let retimed = rl_plan::execute::jerk_limited(path, &rests, execution.limits(), 1000, 1e-3)
+            .expect("retimed");
+        PlanTrajectory::Retimed(Box::new(retimed))
+    } else {
+        PlanTrajectory::Blended(blended.trajectory)
+    };
+    let plan =
+        Plan::from_trajectory(&model, trajectory, &limits, &PlanBudget::default()).expect("plan");
     let mut control =
         Box::new(Controller::new(robot, model, plan, common::PERIOD).expect("controller"));
     for _ in 0..50 {
@@ -301,7 +319,7 @@ fn steady_state_cycle_following_a_blended_path_allocates_nothing() {
     assert!(!finished, "the plan is longer than 450 cycles");
     assert_eq!(
         counted, 0,
-        "allocations in 400 cycles following a blended path"
+        "allocations in 400 cycles following a planned path (retimed: {retime})"
     );
     assert_eq!(control.failed_steps(), 0);
     assert!(control.tracking().max_error() > 0.0, "the arm moved");

@@ -89,10 +89,12 @@ fn start_and_goal(robot: &Robot, request: &Path) -> (Vec<f64>, Vec<f64>) {
         .expect("start and goal")
 }
 
-/// Commanded and measured joints per telemetry row.
+/// Commanded and measured joints per telemetry row, the row's time and state.
 struct Telemetry {
     commanded: Vec<Vec<f64>>,
     measured: Vec<Vec<f64>>,
+    time_s: Vec<f64>,
+    running: Vec<bool>,
 }
 
 fn telemetry(path: &Path, joints: usize) -> Telemetry {
@@ -108,7 +110,9 @@ fn telemetry(path: &Path, joints: usize) -> Telemetry {
         .position(|h| h.starts_with("meas_"))
         .expect("meas_ columns");
     assert_eq!(header[cmd], "cmd_panda_joint1");
+    assert_eq!(header[1], "t_s");
     let (mut commanded, mut measured) = (Vec::new(), Vec::new());
+    let (mut time_s, mut running) = (Vec::new(), Vec::new());
     let state = header
         .iter()
         .position(|h| *h == "state")
@@ -121,11 +125,15 @@ fn telemetry(path: &Path, joints: usize) -> Telemetry {
             .collect();
         commanded.push(v[cmd..cmd + joints].to_vec());
         measured.push(v[meas..meas + joints].to_vec());
+        time_s.push(v[1]);
+        running.push(line.split(',').nth(state) == Some("running"));
     }
     assert!(commanded.len() > 10, "{} rows", commanded.len());
     Telemetry {
         commanded,
         measured,
+        time_s,
+        running,
     }
 }
 
@@ -164,13 +172,66 @@ fn check_motion(problem_name: &str, tel: &Telemetry, tolerance: &[f64]) {
     assert!(moved > 0.5, "the arm hardly moved: {moved} rad");
 }
 
+/// The commanded positions' differences over the run's equally spaced cycles: the first over
+/// `T`, the second over `T²`, the third over `T³` are weighted averages of the trajectory's
+/// velocity, acceleration and jerk (B-spline kernels of unit weight), so each is within the
+/// limit its trajectory keeps: `speed` × the Panda's velocity limits, acceleration = velocity
+/// / 0.5 s, jerk = acceleration / 0.15 s (`MotionLimits`), plus the retiming's margin (1e-3)
+/// and the CSV's rounding (1e-7 rad, 1 µs: `slack`). Returns the largest ratio of each.
+// Joint `k` of four rows at once reads as the differences are written.
+#[allow(clippy::needless_range_loop)]
+fn check_commanded_limits(tel: &Telemetry, speed: f64) -> [f64; 3] {
+    let model = rl::core::loader::load_file::<16>(&panda())
+        .expect("panda")
+        .model;
+    let mut worst = [0.0f64; 3];
+    let rows = tel.commanded.len();
+    for i in 3..rows {
+        let t = &tel.time_s[i - 3..=i];
+        let dt = t[1] - t[0];
+        let even = (1..4).all(|k| ((t[k] - t[k - 1]) - dt).abs() <= 3e-6);
+        if !(tel.running[i - 3..=i].iter().all(|r| *r) && even && dt > 1e-3) {
+            continue;
+        }
+        let q = &tel.commanded[i - 3..=i];
+        for k in 0..7 {
+            let v = speed * model.limits(k).velocity;
+            let limit = [v, v / 0.5, v / 0.5 / 0.15];
+            let d = [
+                (q[3][k] - q[2][k]) / dt,
+                (q[3][k] - 2.0 * q[2][k] + q[1][k]) / dt.powi(2),
+                (q[3][k] - 3.0 * q[2][k] + 3.0 * q[1][k] - q[0][k]) / dt.powi(3),
+            ];
+            for order in 0..3 {
+                // Rounding: 1e-7 rad per position (2^order terms' weights sum to 2^order),
+                // and 1 µs in each time (relative 2e-6/dt per power of dt).
+                let slack = 2f64.powi(order as i32) * 1e-7 / dt.powi(order as i32 + 1)
+                    + d[order].abs() * (order as f64 + 1.0) * 2e-6 / dt;
+                let ratio = (d[order].abs() - slack).max(0.0) / limit[order];
+                assert!(
+                    ratio <= 1.0 + 1e-3,
+                    "row {i}, joint {k}: derivative {} is {} over the limit {}",
+                    order + 1,
+                    d[order],
+                    limit[order]
+                );
+                worst[order] = worst[order].max(ratio);
+            }
+        }
+    }
+    worst
+}
+
 #[test]
 fn run_plan_follows_the_path_to_the_goal_and_says_so() {
     let _run = one_run_at_a_time();
-    let Some((stdout, tel)) = run_problem("box_panda", &[], false, "box.csv") else {
+    let Some((stdout, tel)) = run_problem("box_panda", &["--no-retime"], false, "box.csv") else {
         return;
     };
     assert!(stdout.contains("result: ok"), "{stdout}");
+    // The blends' own timing: not retimed.
+    assert!(stdout.contains("blended through"), "{stdout}");
+    assert!(!stdout.contains("retimed"), "{stdout}");
     assert!(
         stdout.contains("trajectory (plan): planned path by RRT Extend Connect (seed 0)"),
         "the report says where the trajectory came from:\n{stdout}"
@@ -183,7 +244,10 @@ fn run_plan_follows_the_path_to_the_goal_and_says_so() {
     );
     let bound = tracking_bound(&stdout);
     assert_eq!(bound.len(), 7, "{stdout}");
-    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    let tel_rows = telemetry(&tel, 7);
+    check_motion("box_panda", &tel_rows, &bound);
+    let worst = check_commanded_limits(&tel_rows, SPEED.parse().unwrap());
+    println!("box_panda blended: velocity, acceleration, jerk at most {worst:?} of the limits");
     std::fs::remove_file(&tel).ok();
 }
 
@@ -246,10 +310,11 @@ fn tracking_bound(stdout: &str) -> Vec<f64> {
         .collect()
 }
 
-/// `rl run --plan` (blended by default; `--stop-at-waypoints` in the next test) on box_panda,
-/// whose optimised path has interior waypoints: the run completes at the goal, every commanded
-/// position is free for the exact meshes, and the report (text and JSON) says how the path was
-/// executed, with both durations.
+/// `rl run --plan` (blended and retimed with bounded jerk by default; `--no-retime` in the test
+/// above, `--stop-at-waypoints` in the next) on box_panda, whose optimised path has interior
+/// waypoints: the run completes at the goal, every commanded position is free for the exact
+/// meshes and within the velocity, acceleration and jerk limits, and the report (text and JSON)
+/// says how the path was executed, with the three durations.
 #[test]
 fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
     let _run = one_run_at_a_time();
@@ -260,7 +325,8 @@ fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
     assert_eq!(v["end"], "completed", "{v}");
     assert_eq!(v["limit_violations"], 0, "{v}");
     let plan = &v["plan"];
-    assert_eq!(plan["execution"], "blended", "{v}");
+    // box_panda's blended path, retimed, is faster (3.44 s against 3.57 s at 60 %).
+    assert_eq!(plan["execution"], "retimed", "{v}");
     let blend = &plan["blend"];
     let interior = blend["interior_waypoints"].as_u64().expect("count");
     assert_eq!(
@@ -278,12 +344,22 @@ fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
         plan["trajectory_duration_s"].as_f64().unwrap(),
         plan["stop_at_waypoints_duration_s"].as_f64().unwrap(),
     );
-    println!("box_panda: blended {duration:.3} s, stopping at every waypoint {stop:.3} s");
+    let blended = plan["blended_duration_s"].as_f64().unwrap();
+    println!(
+        "box_panda: retimed {duration:.3} s, blended {blended:.3} s, stopping at every waypoint \
+         {stop:.3} s"
+    );
+    assert_eq!(plan["retimed_duration_s"].as_f64(), Some(duration), "{v}");
+    assert!(duration < blended, "{v}");
     if blend["blended"].as_u64().unwrap() > 0 {
-        assert!(duration < stop, "{v}");
+        assert!(blended < stop, "{v}");
     }
     let description = v["trajectory"].as_str().expect("trajectory description");
     assert!(description.contains("blended through"), "{description}");
+    assert!(
+        description.contains(&format!("retimed with bounded jerk to {duration:.2} s")),
+        "{description}"
+    );
     // Certified on the meshes by conservative advancement, not only at samples.
     assert!(
         description.contains("certified on the exact geometry"),
@@ -305,7 +381,10 @@ fn run_plan_blends_through_the_waypoints_by_default_and_says_so() {
         .iter()
         .map(|x| x.as_f64().unwrap())
         .collect();
-    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    let tel_rows = telemetry(&tel, 7);
+    check_motion("box_panda", &tel_rows, &bound);
+    let worst = check_commanded_limits(&tel_rows, SPEED.parse().unwrap());
+    println!("box_panda retimed: velocity, acceleration, jerk at most {worst:?} of the limits");
     std::fs::remove_file(&tel).ok();
 }
 
@@ -335,7 +414,10 @@ fn run_plan_stop_at_waypoints_stops_at_each_and_says_so() {
     assert!(line.contains("certified on the exact geometry"), "{line}");
     assert!(!stdout.contains("blended through"), "{stdout}");
     let bound = tracking_bound(&stdout);
-    check_motion("box_panda", &telemetry(&tel, 7), &bound);
+    let tel_rows = telemetry(&tel, 7);
+    check_motion("box_panda", &tel_rows, &bound);
+    let worst = check_commanded_limits(&tel_rows, SPEED.parse().unwrap());
+    println!("box_panda stopping: velocity, acceleration, jerk at most {worst:?} of the limits");
     std::fs::remove_file(&tel).ok();
 }
 

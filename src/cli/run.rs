@@ -13,8 +13,10 @@
 //! plan request, as `rl plan` takes them) the run follows a collision-free path instead of the
 //! tour: rl-plan plans it before anything is opened (bounded by `--plan-time`, Ctrl-C cancels),
 //! [`rl::controller::planned`] makes it a trajectory within the model's velocity, acceleration
-//! and jerk limits (blended through the path's waypoints, every sample checked for collisions;
-//! `--stop-at-waypoints` stops at each of them instead), the
+//! and jerk limits (blended through the path's waypoints, every sample checked for collisions,
+//! then retimed near time-optimally with bounded jerk along the same configurations when that is
+//! faster; `--no-retime` keeps the blends' timing, `--stop-at-waypoints` stops at each waypoint
+//! instead), the
 //! in-process fake stands at the request's start state (a real robot must stand there, or the
 //! run refuses to start), and the report says the trajectory came from the plan.
 //!
@@ -191,9 +193,14 @@ pub struct RunArgs {
     pub plan_time: Option<Duration>,
     /// Stop at every waypoint of the planned path, on its straight segments exactly, instead
     /// of blending through them (the default: lines and jerk-continuous blends, every sample
-    /// checked for collisions, a blend that collides shrunk or replaced by a stop).
-    #[arg(long, help_heading = "Planned motion")]
+    /// checked for collisions, a blend that collides shrunk or replaced by a stop, then
+    /// retimed with bounded jerk along the same configurations when that is faster).
+    #[arg(long, help_heading = "Planned motion", conflicts_with = "no_retime")]
     pub stop_at_waypoints: bool,
+    /// Keep the blended path's own timing (one speed along each line and blend) instead of
+    /// retiming it near time-optimally with bounded jerk.
+    #[arg(long, help_heading = "Planned motion")]
+    pub no_retime: bool,
     /// Show the run live in the robot viewer's page (as `rl view`), served by this process on
     /// ADDR while the run goes; the address is printed before the run starts. Port 0 picks a
     /// free port [default ADDR: 127.0.0.1:8080].
@@ -486,6 +493,7 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
         ("--plan-time", args.plan_time.is_some()),
         ("--limits", args.limits.is_some()),
         ("--stop-at-waypoints", args.stop_at_waypoints),
+        ("--no-retime", args.no_retime),
     ]
     .iter()
     .filter(|(_, on)| *on)
@@ -544,8 +552,10 @@ fn check_plan(args: &RunArgs) -> Result<Option<PlanSetup>, CliError> {
         options,
         execution: if args.stop_at_waypoints {
             PathExecution::StopAtWaypoints
-        } else {
+        } else if args.no_retime {
             PathExecution::Blended
+        } else {
+            PathExecution::Retimed
         },
     }))
 }
@@ -727,10 +737,14 @@ fn drive<const B: usize, const J: usize>(
                 "waypoints": planned.waypoints,
                 "trajectory_duration_s": planned.duration_s,
                 "execution": match planned.execution {
+                    PathExecution::Retimed => "retimed",
                     PathExecution::Blended => "blended",
                     PathExecution::StopAtWaypoints => "stop-at-waypoints",
                 },
                 "stop_at_waypoints_duration_s": planned.stop_duration_s,
+                "blended_duration_s": planned.blended_duration_s,
+                "retimed_duration_s": planned.retimed.as_ref().and_then(|r| r.as_ref().ok()),
+                "not_retimed_because": planned.retimed.as_ref().and_then(|r| r.as_ref().err()),
                 "blend": planned.blend.as_ref().map(|b| serde_json::json!({
                     "interior_waypoints": b.waypoints.len(),
                     "blended": b.blended(),

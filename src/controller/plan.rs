@@ -58,7 +58,16 @@ pub enum PlanTrajectory<const J: usize = DEFAULT_JOINTS> {
     Moves(Box<Piecewise<JerkLimited<J>, MOVE_SEGMENTS>>),
     /// Lines, blends and moves ([`Segment`]).
     Blended(Box<Piecewise<Segment<J>, BLENDED_SEGMENTS>>),
+    /// Lines, blends and moves retimed with bounded jerk along their own configurations.
+    #[cfg(feature = "plan")]
+    Retimed(Box<RetimedPath<J>>),
 }
+
+/// A blended path retimed near time-optimally with bounded jerk along its own configurations
+/// (rl-plan's [`jerk_limited`](rl_plan::execute::jerk_limited)); evaluated without allocating.
+#[cfg(feature = "plan")]
+pub type RetimedPath<const J: usize> =
+    rl_plan::execute::JerkRetimed<Box<Piecewise<Segment<J>, BLENDED_SEGMENTS>>>;
 
 impl<const J: usize> PlanTrajectory<J> {
     /// Number of segments.
@@ -66,6 +75,8 @@ impl<const J: usize> PlanTrajectory<J> {
         match self {
             Self::Moves(p) => p.len(),
             Self::Blended(p) => p.len(),
+            #[cfg(feature = "plan")]
+            Self::Retimed(p) => p.path().len(),
         }
     }
 
@@ -74,11 +85,13 @@ impl<const J: usize> PlanTrajectory<J> {
         self.len() == 0
     }
 
-    /// Where segment `i` starts (zeros beyond the last).
+    /// Where segment `i` starts (zeros beyond the last; a retimed path's are its path's).
     pub fn segment_start(&self, i: usize) -> [f64; J] {
         match self {
             Self::Moves(p) => p.segments().get(i).map(|s| s.position(0.0)),
             Self::Blended(p) => p.segments().get(i).map(|s| s.position(0.0)),
+            #[cfg(feature = "plan")]
+            Self::Retimed(p) => p.path().segments().get(i).map(|s| s.position(0.0)),
         }
         .unwrap_or([0.0; J])
     }
@@ -89,6 +102,8 @@ impl<const J: usize> Trajectory<J> for PlanTrajectory<J> {
         match self {
             Self::Moves(p) => p.duration(),
             Self::Blended(p) => p.duration(),
+            #[cfg(feature = "plan")]
+            Self::Retimed(p) => Trajectory::<J>::duration(&**p),
         }
     }
 
@@ -96,6 +111,8 @@ impl<const J: usize> Trajectory<J> for PlanTrajectory<J> {
         match self {
             Self::Moves(p) => p.derivative(t, order),
             Self::Blended(p) => p.derivative(t, order),
+            #[cfg(feature = "plan")]
+            Self::Retimed(p) => p.derivative(t, order),
         }
     }
 
@@ -104,6 +121,8 @@ impl<const J: usize> Trajectory<J> for PlanTrajectory<J> {
         match self {
             Self::Moves(p) => p.sample(t),
             Self::Blended(p) => p.sample(t),
+            #[cfg(feature = "plan")]
+            Self::Retimed(p) => Trajectory::<J>::sample(&**p, t),
         }
     }
 }

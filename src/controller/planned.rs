@@ -8,7 +8,7 @@
 //! when the run's [`StopFlag`] is raised (Ctrl-C). A start or goal in collision, or no path
 //! within the budget, is an error and nothing moves.
 //!
-//! By default ([`PathExecution::Blended`]) the trajectory does not stop at the optimised
+//! By default ([`PathExecution::Retimed`]) the trajectory does not stop at the optimised
 //! path's interior waypoints: rl-plan's blended execution ([`rl_plan::execute::blend`]) runs
 //! straight lines joined by jerk-continuous blends (and jerk-limited ramps from and to rest)
 //! within every joint's velocity,
@@ -17,8 +17,11 @@
 //! shrinks a blend that collides, or stops at that waypoint. [`PathExecution::StopAtWaypoints`]
 //! keeps the older execution: it stops at every waypoint and follows the straight segments
 //! between them exactly (every joint on the same normalised profile), so the arm passes only
-//! through configurations the planner checked. The description (the run's report) says which,
-//! how many waypoints were blended and both durations.
+//! through configurations the planner checked. The certified blended trajectory is then retimed
+//! near time-optimally with bounded jerk along its own configurations
+//! ([`rl_plan::execute::jerk_limited`]) and the faster of the two is followed
+//! ([`PathExecution::Blended`] keeps the blends' timing). The description (the run's report)
+//! says which, how many waypoints were blended and the durations.
 //!
 //! Sampling, however fine, can step over an obstacle. So before it is handed to the controller
 //! the motion is certified on the checker's exact geometry by conservative advancement
@@ -63,7 +66,9 @@ use core::fmt;
 
 use rl_core::Model;
 use rl_plan::budget::Cancel;
-use rl_plan::execute::{BlendOptions, BlendReport, Execution, ExecutionLimits};
+use rl_plan::execute::{
+    BlendOptions, BlendReport, Execution, ExecutionLimits, jerk_limited, rests_of,
+};
 use rl_plan::scene::{Certificate, CertifyOptions, Uncertified};
 use rl_plan::solve::plan_cancellable;
 use rl_plan::{JointSpace, PlanOptions, PlanResult, Validity};
@@ -156,9 +161,16 @@ impl From<rl_plan::PlanError> for PlannedMotionError {
 /// How a planned path is executed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PathExecution {
-    /// Through the interior waypoints without stopping where blends are valid and faster
-    /// (rl-plan's [`blend`](rl_plan::execute::blend)); the default.
+    /// Blended ([`Blended`](Self::Blended)), then retimed near time-optimally with bounded
+    /// jerk along the blended configurations (rl-plan's
+    /// [`jerk_limited`]: TOPP-RA, its path acceleration
+    /// averaged, slowed where a sample would exceed a limit) when that is faster; the default.
+    /// The configurations are the blended trajectory's, so its certificate holds.
     #[default]
+    Retimed,
+    /// Through the interior waypoints without stopping where blends are valid and faster
+    /// (rl-plan's [`blend`](rl_plan::execute::blend)), at the blends' own timing: one speed
+    /// along each line and through each blend.
     Blended,
     /// Stopping at every waypoint, on the path's straight segments exactly.
     StopAtWaypoints,
@@ -167,6 +179,7 @@ pub enum PathExecution {
 impl fmt::Display for PathExecution {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
+            Self::Retimed => "blended through the waypoints and retimed with bounded jerk",
             Self::Blended => "blended through the waypoints",
             Self::StopAtWaypoints => "stopping at every waypoint",
         })
@@ -190,8 +203,14 @@ pub struct PlannedMotion<const J: usize> {
     /// The duration when stopping at every waypoint, s (equal to `duration_s` for
     /// [`PathExecution::StopAtWaypoints`]).
     pub stop_duration_s: f64,
-    /// For [`PathExecution::Blended`]: waypoints blended and stopped at, the collision check.
+    /// For [`PathExecution::Blended`] and [`PathExecution::Retimed`]: waypoints blended and
+    /// stopped at, the collision check.
     pub blend: Option<BlendReport>,
+    /// The blended trajectory's duration at the blends' own timing, s (`None`: not blended).
+    pub blended_duration_s: Option<f64>,
+    /// The retiming of the blended trajectory (asked for with [`PathExecution::Retimed`]):
+    /// its duration in s, or why there is none. Followed when shorter than the blended one.
+    pub retimed: Option<Result<f64, String>>,
     /// The certificate of the motion followed (`None`: the checker has no exact geometry).
     pub certificate: Option<Certificate>,
     /// Earlier attempts refused as not certified: `(seed, why)`.
@@ -208,8 +227,8 @@ enum Attempt<const J: usize> {
 }
 
 /// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
-/// optimised path a trajectory blended through its waypoints ([`PathExecution::Blended`],
-/// checked with `validity`) within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
+/// optimised path a trajectory blended through its waypoints and retimed with bounded jerk
+/// ([`PathExecution::Retimed`], checked with `validity`) within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
 /// with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
 /// model: its joints must be the space's, in the same order. `stop` cancels planning.
 #[allow(clippy::too_many_arguments)]
@@ -232,7 +251,7 @@ pub fn plan_motion<const B: usize, const J: usize>(
         options,
         speed,
         stop,
-        PathExecution::Blended,
+        PathExecution::Retimed,
     )
 }
 
@@ -328,7 +347,7 @@ fn plan_once<const B: usize, const J: usize>(
             Ok(c) => (PlanTrajectory::Moves(moves), None, c, None),
             Err(why) => return Ok(Attempt::Uncertified(why)),
         },
-        PathExecution::Blended => {
+        PathExecution::Blended | PathExecution::Retimed => {
             // The planner's collision resolution (the finer of planning and optimising).
             let resolution = options
                 .optimizer_verifier
@@ -359,18 +378,36 @@ fn plan_once<const B: usize, const J: usize>(
             }
         }
     };
+    let blended_duration_s = match &trajectory {
+        PlanTrajectory::Blended(b) => Some(rl_core::traj::Trajectory::duration(&**b)),
+        _ => None,
+    };
+    // The certified blended trajectory retimed along its own configurations (so the
+    // certificate holds), kept when faster.
+    let (trajectory, retimed) = match (execution, trajectory) {
+        (PathExecution::Retimed, PlanTrajectory::Blended(b)) => retime(b, limits),
+        (_, trajectory) => (trajectory, None),
+    };
     let duration_s = rl_core::traj::Trajectory::duration(&trajectory);
     let how = match &blend {
         Some(r) => format!(
             "blended through {} of {} interior waypoints ({} shrunk, stopped at {}), {:.2} s \
-             (stopping at every waypoint: {:.2} s), {} configurations checked",
+             (stopping at every waypoint: {:.2} s), {} configurations checked{}",
             r.blended(),
             r.waypoints.len(),
             r.shrunk(),
             r.stopped(),
             r.duration_s,
             r.stop_duration_s,
-            r.checks
+            r.checks,
+            match &retimed {
+                Some(Ok(t)) if matches!(trajectory, PlanTrajectory::Retimed(_)) => {
+                    format!(", retimed with bounded jerk to {t:.2} s")
+                }
+                Some(Ok(t)) => format!(" (retimed: {t:.2} s, not faster: kept)"),
+                Some(Err(why)) => format!(" (not retimed: {why})"),
+                None => String::new(),
+            }
         ),
         None => format!("stopping at every waypoint, {duration_s:.2} s"),
     };
@@ -399,10 +436,10 @@ fn plan_once<const B: usize, const J: usize>(
         result.length_after,
         speed * 100.0
     );
-    let execution = if fell_back.is_some() {
-        PathExecution::StopAtWaypoints
-    } else {
-        execution
+    let execution = match &trajectory {
+        PlanTrajectory::Moves(_) => PathExecution::StopAtWaypoints,
+        PlanTrajectory::Blended(_) => PathExecution::Blended,
+        PlanTrajectory::Retimed(_) => PathExecution::Retimed,
     };
     Ok(Attempt::Done(Box::new(PlannedMotion {
         motion: Motion::trajectory(trajectory, "plan", description),
@@ -412,9 +449,47 @@ fn plan_once<const B: usize, const J: usize>(
         execution,
         stop_duration_s,
         blend,
+        blended_duration_s,
+        retimed,
         certificate,
         refused: Vec::new(),
     })))
+}
+
+/// TOPP-RA stages per run of the retiming (as rl-plan's benchmark).
+const RETIME_STAGES: usize = 1000;
+/// The retiming's margin on its slow-down.
+const RETIME_MARGIN: f64 = 1e-3;
+
+/// `blended` retimed with bounded jerk within `limits` (the same configurations), when that is
+/// faster; otherwise `blended` as it was. Also the retiming's duration, or why there is none.
+fn retime<const J: usize>(
+    blended: Box<rl_core::traj::Piecewise<rl_core::traj::Segment<J>, BLENDED_SEGMENTS>>,
+    limits: &MotionLimits<J>,
+) -> (PlanTrajectory<J>, Option<Result<f64, String>>) {
+    let dof = limits.dof;
+    let execution_limits = ExecutionLimits {
+        velocity: limits.velocity[..dof].to_vec(),
+        acceleration: limits.acceleration[..dof].to_vec(),
+        jerk: limits.jerk[..dof].to_vec(),
+    };
+    let before = rl_core::traj::Trajectory::duration(&*blended);
+    let rests = rests_of::<J, _, BLENDED_SEGMENTS>(&*blended, dof);
+    let path = blended.clone();
+    match jerk_limited(
+        path,
+        &rests,
+        &execution_limits,
+        RETIME_STAGES,
+        RETIME_MARGIN,
+    ) {
+        Ok(r) if r.duration() < before => {
+            let t = r.duration();
+            (PlanTrajectory::Retimed(Box::new(r)), Some(Ok(t)))
+        }
+        Ok(r) => (PlanTrajectory::Blended(blended), Some(Ok(r.duration()))),
+        Err(e) => (PlanTrajectory::Blended(blended), Some(Err(e.to_string()))),
+    }
 }
 
 /// Certifies the straight edges of `path` (what the stop-at-waypoints execution follows) on

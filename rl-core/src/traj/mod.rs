@@ -118,6 +118,38 @@ pub trait Trajectory<const D: usize> {
     }
 }
 
+/// A borrowed trajectory is one: code generic over an owned trajectory (a retiming that keeps
+/// its path) takes a reference as well.
+impl<const D: usize, T: Trajectory<D> + ?Sized> Trajectory<D> for &T {
+    fn duration(&self) -> f64 {
+        (**self).duration()
+    }
+
+    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
+        (**self).derivative(t, order)
+    }
+
+    fn sample(&self, t: f64) -> Sample<D> {
+        (**self).sample(t)
+    }
+}
+
+/// A boxed trajectory is one (a large piecewise trajectory kept off the stack).
+#[cfg(feature = "std")]
+impl<const D: usize, T: Trajectory<D> + ?Sized> Trajectory<D> for std::boxed::Box<T> {
+    fn duration(&self) -> f64 {
+        (**self).duration()
+    }
+
+    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
+        (**self).derivative(t, order)
+    }
+
+    fn sample(&self, t: f64) -> Sample<D> {
+        (**self).sample(t)
+    }
+}
+
 /// `t` clamped to `[0, duration]`; NaN stays NaN (and evaluates to NaN, never panics). Written
 /// so that it compiles to one `maxsd` and one `minsd` (no branches).
 #[inline]

@@ -74,10 +74,12 @@ struct Run {
     ends: [Vec<f64>; 2],
 }
 
-/// `path` retimed with bounded jerk (see the module docs).
+/// `path` retimed with bounded jerk (see the module docs). It keeps its path (`P`: the path
+/// itself, a reference to it or a box), and is a [`Trajectory`] of the path's axes: evaluation
+/// allocates nothing, for a real-time loop.
 #[derive(Clone, Debug)]
-pub struct JerkRetimed<'a, T> {
-    path: &'a T,
+pub struct JerkRetimed<P> {
+    path: P,
     nq: usize,
     runs: Vec<Run>,
     duration: f64,
@@ -242,7 +244,17 @@ fn stage(p: &Parameterization, i: usize) -> (f64, f64) {
     (p.x[i].max(0.0).sqrt(), (p.x[i + 1] - p.x[i]) / (2.0 * ds))
 }
 
-impl<T> JerkRetimed<'_, T> {
+impl<P> JerkRetimed<P> {
+    /// The path retimed.
+    pub fn path(&self) -> &P {
+        &self.path
+    }
+
+    /// The path back, its timing dropped.
+    pub fn into_path(self) -> P {
+        self.path
+    }
+
     /// The duration.
     pub fn duration(&self) -> f64 {
         self.duration
@@ -261,11 +273,11 @@ impl<T> JerkRetimed<'_, T> {
     /// The path's own time at `t` (the configuration is the path's there).
     pub fn path_time<const D: usize>(&self, t: f64) -> f64
     where
-        T: Trajectory<D>,
+        P: Trajectory<D>,
     {
         let (run, t) = self.locate(t);
         let [s, ..] = run.path_timing(t);
-        run.tau_at(self.path, self.nq, s)
+        run.tau_at(&self.path, self.nq, s)
     }
 
     fn locate(&self, t: f64) -> (&Run, f64) {
@@ -281,13 +293,13 @@ impl<T> JerkRetimed<'_, T> {
     /// Position, velocity, acceleration and jerk of the joints at `t`.
     pub fn sample<const D: usize>(&self, t: f64) -> [[f64; D]; 4]
     where
-        T: Trajectory<D>,
+        P: Trajectory<D>,
     {
         let (run, t) = self.locate(t.clamp(0.0, self.duration));
         let [s, sd, sdd, sddd] = run.path_timing(t);
-        let tau = run.tau_at(self.path, self.nq, s);
+        let tau = run.tau_at(&self.path, self.nq, s);
         let mut d = [[0.0; D]; 3];
-        run.arc_derivatives(self.path, self.nq, tau, &mut d);
+        run.arc_derivatives(&self.path, self.nq, tau, &mut d);
         let q = self.path.derivative(tau, 0);
         let (mut v, mut a, mut j) = ([0.0; D], [0.0; D], [0.0; D]);
         for m in 0..self.nq {
@@ -299,11 +311,34 @@ impl<T> JerkRetimed<'_, T> {
     }
 }
 
+impl<const D: usize, P: Trajectory<D>> Trajectory<D> for JerkRetimed<P> {
+    fn duration(&self) -> f64 {
+        self.duration
+    }
+
+    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
+        match order {
+            0..=3 => self.sample(t)[order],
+            _ => [0.0; D],
+        }
+    }
+
+    fn sample(&self, t: f64) -> rl_core::traj::Sample<D> {
+        let [position, velocity, acceleration, jerk] = JerkRetimed::sample(self, t);
+        rl_core::traj::Sample {
+            position,
+            velocity,
+            acceleration,
+            jerk,
+        }
+    }
+}
+
 /// Calls `each(a, b, ρ)` for every sample of `run` 0.25 ms apart, with `ρ` the worst of
 /// `|q̇|/V`, `(|q̈|/A)^½`, `(|q⃛|/J)^⅓` over the joints (the uniform slow-down the sample
 /// needs) and `[a, b]` the TOPP-RA times its window averages; returns the worst `ρ`.
-fn ratios<const D: usize, T: Trajectory<D>>(
-    retimed: &JerkRetimed<'_, T>,
+fn ratios<const D: usize, P: Trajectory<D>>(
+    retimed: &JerkRetimed<P>,
     run: &Run,
     limits: &ExecutionLimits,
     mut each: impl FnMut(f64, f64, f64),
@@ -314,8 +349,8 @@ fn ratios<const D: usize, T: Trajectory<D>>(
     for i in 0..=n {
         let t = run.duration() * i as f64 / n as f64;
         let [s, sd, sdd, sddd] = run.path_timing(t);
-        let tau = run.tau_at(retimed.path, retimed.nq, s);
-        run.arc_derivatives(retimed.path, retimed.nq, tau, &mut d);
+        let tau = run.tau_at(&retimed.path, retimed.nq, s);
+        run.arc_derivatives(&retimed.path, retimed.nq, tau, &mut d);
         let mut rho = 0.0f64;
         for m in 0..retimed.nq {
             let v = d[0][m] * sd;
@@ -337,13 +372,13 @@ fn ratios<const D: usize, T: Trajectory<D>>(
 /// `rests` are the path's own times where it is at rest (its start and end included, in
 /// order; [`rests_of`] finds them), `stages` TOPP-RA stages per run, `margin` added to the
 /// slow-down.
-pub fn jerk_limited<'a, const D: usize, T: Trajectory<D>>(
-    path: &'a T,
+pub fn jerk_limited<const D: usize, P: Trajectory<D>>(
+    path: P,
     rests: &[f64],
     limits: &ExecutionLimits,
     stages: usize,
     margin: f64,
-) -> Result<JerkRetimed<'a, T>, PlanError> {
+) -> Result<JerkRetimed<P>, PlanError> {
     let nq = limits.velocity.len();
     if nq > D || stages == 0 || rests.len() < 2 {
         return Err(PlanError::setting(
@@ -378,6 +413,7 @@ pub fn jerk_limited<'a, const D: usize, T: Trajectory<D>>(
         if tb.is_nan() || ta.is_nan() || tb <= ta {
             continue;
         }
+        let path = &out.path;
         // The arc length table: 8 points per stage.
         let m = 8 * stages;
         let tau: Vec<f64> = (0..=m)
