@@ -93,6 +93,23 @@ fn states_until_closed(addr: &str) -> Vec<Value> {
     panic!("the viewer still serves after {WAIT:?}");
 }
 
+/// Everything `child` printed on its standard output, to its end.
+fn read_stdout(child: &mut Child) -> String {
+    let mut stdout = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout piped")
+        .read_to_string(&mut stdout)
+        .expect("stdout read");
+    stdout
+}
+
+/// The run's JSON report, or a panic showing its standard error.
+fn json_report(stdout: &str, stderr: &str) -> Value {
+    serde_json::from_str(stdout).unwrap_or_else(|e| panic!("the report as JSON ({e}): {stderr}"))
+}
+
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array()
         .map(|a| a.iter().map(|x| x.as_f64().expect("a number")).collect())
@@ -112,17 +129,10 @@ fn a_run_shows_its_motion_and_tracking_error_live() {
                 "{addr}"
             );
             let states = states_until_closed(&addr);
-            let mut stdout = String::new();
-            child
-                .stdout
-                .take()
-                .unwrap()
-                .read_to_string(&mut stdout)
-                .unwrap();
+            let stdout = read_stdout(&mut child);
             let status = child.wait().expect("rl run ends");
             let stderr = rest.join().unwrap();
-            let report: Value = serde_json::from_str(&stdout)
-                .unwrap_or_else(|e| panic!("the report as JSON ({e}): {stderr}"));
+            let report = json_report(&stdout, &stderr);
             (status, stderr, report, states)
         },
         |(_, _, report, _)| late::json_late(report),
@@ -278,16 +288,8 @@ fn view_hold_session() -> (std::process::ExitStatus, String, Value) {
         std::thread::sleep(Duration::from_millis(20));
     };
     let stderr = rest.join().unwrap();
-    let mut stdout = String::new();
-    child
-        .stdout
-        .take()
-        .unwrap()
-        .read_to_string(&mut stdout)
-        .unwrap();
-    let report: Value = serde_json::from_str(&stdout)
-        .unwrap_or_else(|e| panic!("the report as JSON ({e}): {stderr}"));
-    (status, stderr, report)
+    let stdout = read_stdout(&mut child);
+    (status, stderr.clone(), json_report(&stdout, &stderr))
 }
 
 #[test]

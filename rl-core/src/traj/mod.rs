@@ -118,37 +118,30 @@ pub trait Trajectory<const D: usize> {
     }
 }
 
-/// A borrowed trajectory is one: code generic over an owned trajectory (a retiming that keeps
-/// its path) takes a reference as well.
-impl<const D: usize, T: Trajectory<D> + ?Sized> Trajectory<D> for &T {
-    fn duration(&self) -> f64 {
-        (**self).duration()
-    }
+/// A pointer to a trajectory is one, forwarding every method: code generic over an owned
+/// trajectory (a retiming that keeps its path) takes a reference, or a box that keeps a large
+/// piecewise trajectory off the stack.
+macro_rules! trajectory_through_pointer {
+    ($(#[$attr:meta])* $pointer:ty) => {
+        $(#[$attr])*
+        impl<const D: usize, T: Trajectory<D> + ?Sized> Trajectory<D> for $pointer {
+            fn duration(&self) -> f64 {
+                (**self).duration()
+            }
 
-    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
-        (**self).derivative(t, order)
-    }
+            fn derivative(&self, t: f64, order: usize) -> [f64; D] {
+                (**self).derivative(t, order)
+            }
 
-    fn sample(&self, t: f64) -> Sample<D> {
-        (**self).sample(t)
-    }
+            fn sample(&self, t: f64) -> Sample<D> {
+                (**self).sample(t)
+            }
+        }
+    };
 }
 
-/// A boxed trajectory is one (a large piecewise trajectory kept off the stack).
-#[cfg(feature = "std")]
-impl<const D: usize, T: Trajectory<D> + ?Sized> Trajectory<D> for std::boxed::Box<T> {
-    fn duration(&self) -> f64 {
-        (**self).duration()
-    }
-
-    fn derivative(&self, t: f64, order: usize) -> [f64; D] {
-        (**self).derivative(t, order)
-    }
-
-    fn sample(&self, t: f64) -> Sample<D> {
-        (**self).sample(t)
-    }
-}
+trajectory_through_pointer!(&T);
+trajectory_through_pointer!(#[cfg(feature = "std")] std::boxed::Box<T>);
 
 /// `t` clamped to `[0, duration]`; NaN stays NaN (and evaluates to NaN, never panics). Written
 /// so that it compiles to one `maxsd` and one `minsd` (no branches).
