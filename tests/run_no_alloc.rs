@@ -355,21 +355,27 @@ fn following_streamed_targets_and_braking_allocates_nothing() {
         assert!(!control.cycle().finished);
     }
     // A target every four cycles from another thread (sending is the sender's work, not the
-    // loop's), each sent before the cycle that takes it.
+    // loop's), in lockstep: target i is sent once the loop has reached cycle 4i, and that cycle
+    // waits for it, so each is taken (a loaded machine that held the loop while two were sent
+    // left one unseen: the exchange keeps the latest).
     use std::sync::atomic::{AtomicU32, Ordering};
     let sent = std::sync::Arc::new(AtomicU32::new(0));
-    let sent_by = sent.clone();
+    let reached = std::sync::Arc::new(AtomicU32::new(0));
+    let (sent_by, reached_by) = (sent.clone(), reached.clone());
     let sender = std::thread::spawn(move || {
         for i in 0..100u32 {
+            while reached_by.load(Ordering::Acquire) < i {
+                std::thread::yield_now();
+            }
             let _ = tx.send_position(&target(i + 2));
             sent_by.store(i + 1, Ordering::Release);
-            std::thread::sleep(std::time::Duration::from_micros(300));
         }
     });
     let mut finished = false;
     let counted = allocations(|| {
         for k in 0..400u32 {
             if k % 4 == 0 {
+                reached.store(k / 4, Ordering::Release);
                 while sent.load(Ordering::Acquire) < k / 4 + 1 {
                     std::thread::yield_now();
                 }
@@ -391,8 +397,10 @@ fn following_streamed_targets_and_braking_allocates_nothing() {
         "allocations in 400 cycles following targets and the stop"
     );
     assert_eq!(control.end(), Some(rl::controller::RunEnd::Stopped));
-    assert!(
-        control.law().counts().targets >= 90,
+    // The first target and the hundred sent in lockstep, every one taken.
+    assert_eq!(
+        control.law().counts().targets,
+        101,
         "{:?}",
         control.law().counts()
     );
