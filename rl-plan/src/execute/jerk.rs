@@ -53,6 +53,8 @@ const GAUSS: [(f64, f64); 5] = [
 const SAMPLES_PER_S: f64 = 4000.0;
 /// Rounds of local slowing where the averaged timing exceeds a limit.
 const REFINE: usize = 16;
+/// Steps at most in finding the path's own time at an arc length.
+const TAU_STEPS: usize = 48;
 /// Averaging windows tried, as fractions of the limits' `max A/J`.
 const WINDOWS: [f64; 6] = [0.5, 0.75, 1.0, 1.25, 1.5, 2.0];
 
@@ -118,8 +120,10 @@ fn arc<const D: usize, T: Trajectory<D>>(path: &T, nq: usize, a: f64, b: f64) ->
 }
 
 impl Run {
-    /// The path's own time at arc length `s` (bisection on the table, then Newton steps on
-    /// the arc length: `dσ/dτ = r`).
+    /// The path's own time at arc length `s`: bisection on the table, then Newton steps on
+    /// the arc length (`dσ/dτ = r`) kept inside a bracket that each step narrows; a step that
+    /// would leave it (near a rest, where `r` → 0) bisects instead. At most [`TAU_STEPS`]
+    /// steps: the table's intervals are short, so bisection alone reaches rounding in them.
     fn tau_at<const D: usize, T: Trajectory<D>>(&self, path: &T, nq: usize, s: f64) -> f64 {
         let n = self.sigma.len();
         let s = s.clamp(self.sigma[0], self.sigma[n - 1]);
@@ -131,14 +135,25 @@ impl Run {
         } else {
             t0
         };
-        for _ in 0..4 {
-            let r = speed(path, nq, t);
-            if r <= 0.0 {
+        let (mut lo, mut hi) = (t0, t1);
+        for _ in 0..TAU_STEPS {
+            let err = s0 + arc(path, nq, t0, t) - s;
+            if err.abs() <= 1e-13 * (1.0 + s.abs()) {
                 break;
             }
-            let err = s0 + arc(path, nq, t0, t) - s;
-            t = (t - err / r).clamp(t0, t1);
-            if err.abs() <= 1e-13 * (1.0 + s.abs()) {
+            if err > 0.0 {
+                hi = t;
+            } else {
+                lo = t;
+            }
+            let r = speed(path, nq, t);
+            let newton = t - err / r;
+            t = if r > 0.0 && newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            if hi - lo <= 4.0 * f64::EPSILON * hi.abs().max(1.0) {
                 break;
             }
         }
