@@ -28,9 +28,7 @@ use rl::core::algo::rnea;
 use rl::core::loader::{UrdfOptions, load_urdf_str};
 use rl::core::traj::{JerkLimited, Limits, Trajectory};
 use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
 use rl::drivers::franka::{ControlMode as FrankaMode, FrankaArm, FrankaConfig};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 
 const PERIOD: Duration = Duration::from_millis(2);
 
@@ -215,13 +213,7 @@ impl ControlLaw<16, 8> for Swing {
 #[test]
 fn a_position_law_of_ones_own_drives_the_fake_h7() {
     let Some((report, (rows, fake, brakes, reason))) = on_time("own position law", || {
-        let fake = FakeH7::spawn(FakeH7Config {
-            on_thread_start: Some(rl::devices::fake_thread_realtime),
-            ..FakeH7Config::loopback(6)
-        })
-        .expect("fake H7");
-        let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
-            .expect("device");
+        let (fake, robot) = common::realtime_fake_h7();
         let law = Swing::new(0.05);
         let (brakes, reason) = (law.brakes.clone(), law.reason.clone());
         let run = ControlRun::start_law(

@@ -15,6 +15,7 @@
 //! one `SKIPPED:` line with the reason and passes.
 #![cfg(feature = "gpio")]
 
+mod common;
 mod late;
 
 use std::fs;
@@ -29,8 +30,8 @@ use std::time::{Duration, Instant};
 use rl::controller::safety::SafetyHandle;
 use rl::controller::safety::gpio::{GpioChain, GpioLine};
 use rl::controller::{ControlRun, Fault, RunEnd, RunError, RunOptions, RunReport, rv6sl};
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+use rl::drivers::fake::h7_controller::FakeH7;
+use rl::drivers::mitsubishi_h7::MitsubishiH7;
 use rl::drivers::safety::{ChainState, StopCategory, StopReason};
 
 const NAME: &str = "safety chain on gpio-sim lines";
@@ -206,13 +207,7 @@ fn start(
     handle: &SafetyHandle,
     duration: Duration,
 ) -> (FakeH7, Result<ControlRun<MitsubishiH7, 16, 8>, RunError>) {
-    let fake = FakeH7::spawn(FakeH7Config {
-        on_thread_start: Some(rl::devices::fake_thread_realtime),
-        ..FakeH7Config::loopback(6)
-    })
-    .expect("fake H7");
-    let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
-        .expect("device");
+    let (fake, robot) = common::realtime_fake_h7();
     let options = RunOptions {
         lock_memory: false,
         priority: 60,

@@ -6,6 +6,7 @@
 //! and holds after it; closing the e-stop again restarts nothing — only a new run, which arms
 //! the chain again, moves.
 
+mod common;
 mod late;
 
 use std::convert::Infallible;
@@ -18,8 +19,7 @@ use rl::controller::safety::SafetyHandle;
 use rl::controller::{
     ControlRun, CycleRecord, Fault, RunEnd, RunError, RunOptions, RunReport, rv6sl,
 };
-use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config};
-use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
+use rl::drivers::fake::h7_controller::FakeH7;
 use rl::drivers::safety::{ChainState, SafetyChain, SafetyConfig, StopCategory, StopReason};
 
 /// An input line another thread sets (a switch).
@@ -124,13 +124,7 @@ fn run(
     pins: &Pins,
     open_after: Option<Duration>,
 ) -> Result<Outcome, RunError> {
-    let fake = FakeH7::spawn(FakeH7Config {
-        on_thread_start: Some(rl::devices::fake_thread_realtime),
-        ..FakeH7Config::loopback(6)
-    })
-    .expect("fake H7");
-    let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
-        .expect("device");
+    let (fake, robot) = common::realtime_fake_h7();
     let mut run = ControlRun::<_, 16, 8>::start(robot, rv6sl().expect("model"), options(handle))?;
     let started = Instant::now();
     let mut rows = Vec::new();
@@ -155,13 +149,7 @@ fn an_open_estop_refuses_the_run_before_anything_moves() {
     let _one = one_run_at_a_time();
     let (handle, pins) = chain(StopCategory::Zero);
     pins.estop.store(false, Ordering::Release);
-    let fake = FakeH7::spawn(FakeH7Config {
-        on_thread_start: Some(rl::devices::fake_thread_realtime),
-        ..FakeH7Config::loopback(6)
-    })
-    .expect("fake H7");
-    let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
-        .expect("device");
+    let (fake, robot) = common::realtime_fake_h7();
     let e = ControlRun::<_, 16, 8>::start(robot, rv6sl().expect("model"), options(&handle))
         .err()
         .expect("refused");

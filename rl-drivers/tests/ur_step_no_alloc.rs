@@ -23,6 +23,20 @@ fn the_counter_sees_allocations() {
     assert!(rl_testkit::allocations(|| drop(std::hint::black_box(vec![1u8; 64]))).0 >= 1);
 }
 
+/// Allocations made by 300 calls of `step(k)`, the fake's controller frozen for 30 ms at the
+/// 100th (lost steps, skipped messages).
+fn allocations_in_300_steps(fake: &FakeUr, mut step: impl FnMut(usize)) -> u64 {
+    rl_testkit::allocations(|| {
+        for k in 0..300 {
+            if k == 100 {
+                fake.freeze(Duration::from_millis(30));
+            }
+            step(k);
+        }
+    })
+    .0
+}
+
 #[test]
 fn steps_allocate_nothing() {
     let fake = FakeUr::spawn(FakeUrConfig::loopback().free_ports()).unwrap();
@@ -39,22 +53,17 @@ fn steps_allocate_nothing() {
     for _ in 0..20 {
         let _ = r.step();
     }
-    let (n, _) = rl_testkit::allocations(|| {
-        for k in 0..300 {
-            if k == 100 {
-                fake.freeze(Duration::from_millis(30));
-            }
-            if k % 50 == 0 {
-                r.set_digital_output(k / 50, true).unwrap();
-            }
-            let mut m = [0.0; 6];
-            r.joint_position(&mut m).unwrap();
-            r.joint_velocity(&mut m).unwrap();
-            r.set_joint_position(&q).unwrap();
-            let _ = r.step();
-            let _ = r.cartesian_position();
-            let _ = r.link_statistics();
+    let n = allocations_in_300_steps(&fake, |k| {
+        if k % 50 == 0 {
+            r.set_digital_output(k / 50, true).unwrap();
         }
+        let mut m = [0.0; 6];
+        r.joint_position(&mut m).unwrap();
+        r.joint_velocity(&mut m).unwrap();
+        r.set_joint_position(&q).unwrap();
+        let _ = r.step();
+        let _ = r.cartesian_position();
+        let _ = r.link_statistics();
     });
     assert_eq!(n, 0, "allocations in 300 steps");
     let c = r.counters();
@@ -76,23 +85,18 @@ fn real_time_interface_steps_allocate_nothing() {
     for _ in 0..20 {
         let _ = r.step();
     }
-    let (n, _) = rl_testkit::allocations(|| {
-        for k in 0..300 {
-            if k == 100 {
-                fake.freeze(Duration::from_millis(30));
-            }
-            if k % 100 == 50 {
-                r.queue_script("textmsg(\"rl\")\n").unwrap();
-            }
-            let mut m = [0.0; 6];
-            r.joint_position(&mut m).unwrap();
-            r.joint_velocity(&mut m).unwrap();
-            let _ = r.step();
-            let _ = r.cartesian_position();
-            let _ = r.forces_torques();
-            let _ = r.digital_input(3);
-            let _ = r.link_statistics();
+    let n = allocations_in_300_steps(&fake, |k| {
+        if k % 100 == 50 {
+            r.queue_script("textmsg(\"rl\")\n").unwrap();
         }
+        let mut m = [0.0; 6];
+        r.joint_position(&mut m).unwrap();
+        r.joint_velocity(&mut m).unwrap();
+        let _ = r.step();
+        let _ = r.cartesian_position();
+        let _ = r.forces_torques();
+        let _ = r.digital_input(3);
+        let _ = r.link_statistics();
     });
     assert_eq!(n, 0, "allocations in 300 steps");
     let c = r.counters();

@@ -99,6 +99,20 @@ use rl::drivers::fake::h7_controller::{FakeH7, FakeH7Config, Pacing};
 use rl::drivers::mitsubishi_h7::{MitsubishiH7, MitsubishiH7Config};
 use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
 
+/// A fake H7 with six axes on its 7.11 ms cycle, its thread at a real-time priority where the
+/// process may (a real controller has its own CPU), and an H7 device for it: for runs of the
+/// embedded RV-6SL's tour.
+pub fn realtime_fake_h7() -> (FakeH7, MitsubishiH7) {
+    let fake = FakeH7::spawn(FakeH7Config {
+        on_thread_start: Some(rl::devices::fake_thread_realtime),
+        ..FakeH7Config::loopback(6)
+    })
+    .expect("fake H7");
+    let robot = MitsubishiH7::new(MitsubishiH7Config::new(6, fake.udp_addr(), fake.r3_addr()))
+        .expect("device");
+    (fake, robot)
+}
+
 /// A fake H7 with `dof` axes that answers at once instead of on its 7.11 ms cycle: for tests
 /// that step the controller by hand (its logic, not its timing).
 pub fn immediate_fake(dof: usize) -> FakeH7 {
