@@ -210,21 +210,19 @@ fn blended_panda_paths_stay_within_limits_and_free_and_beat_stopping() {
         "bookshelf_tall_panda",
         "cage_panda",
     ] {
-        let (env, start, goal, path) = planned(&robot, name);
-        let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
+        let BlendedProblem {
+            env,
+            start,
+            goal,
+            path,
+            ex,
+            b,
+        } = blended_problem(&robot, name, &limits, delta);
         // No circle joints on the Panda: the unwrapped waypoints (sums of differences) are the
         // request's, to rounding.
         let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
         assert!(close(&ex.waypoints()[0], &start) && close(ex.waypoints().last().unwrap(), &goal));
         let stop = ex.trajectory::<D, 64>().unwrap();
-        let mut exact = robot.exact_checker(env.clone()).unwrap();
-        let b = ex
-            .blended::<D, MAX>(
-                &robot.space,
-                &mut exact,
-                &BlendOptions::for_resolution(delta),
-            )
-            .unwrap();
         let tr = &b.trajectory;
         println!(
             "{name}: {} waypoints; blended {:.3} s, stop at every waypoint {:.3} s; {}",
@@ -496,23 +494,28 @@ const RETIMED: [&str; 5] = [
     "cage_panda",
 ];
 
-/// A problem planned and its path blended (checked with the exact meshes): start, goal, path,
-/// its execution and the blended trajectory.
+/// A problem planned and its path blended (checked with the exact meshes).
+struct BlendedProblem {
+    /// The problem's scene.
+    env: rl_sg::Model,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+    path: Path,
+    /// The path's execution.
+    ex: Execution,
+    /// Its blended trajectory.
+    b: rl_plan::execute::Blended<D, MAX>,
+}
+
 fn blended_problem(
     robot: &Robot,
     name: &str,
     limits: &ExecutionLimits,
     delta: f64,
-) -> (
-    Vec<f64>,
-    Vec<f64>,
-    Path,
-    Execution,
-    rl_plan::execute::Blended<D, MAX>,
-) {
+) -> BlendedProblem {
     let (env, start, goal, path) = planned(robot, name);
     let ex = Execution::new(&robot.space, &path, limits.clone()).unwrap();
-    let mut exact = robot.exact_checker(env).unwrap();
+    let mut exact = robot.exact_checker(env.clone()).unwrap();
     let b = ex
         .blended::<D, MAX>(
             &robot.space,
@@ -520,7 +523,14 @@ fn blended_problem(
             &BlendOptions::for_resolution(delta),
         )
         .unwrap();
-    (start, goal, path, ex, b)
+    BlendedProblem {
+        env,
+        start,
+        goal,
+        path,
+        ex,
+        b,
+    }
 }
 
 /// TOPP-RA on the geometry the blended trajectory follows: the least time any timing of it can
@@ -537,7 +547,7 @@ fn time_optimal_retiming_bounds_the_blended_durations() {
     let n = limits.velocity.len();
     let mut single = 0;
     for name in RETIMED {
-        let (_, _, path, ex, b) = blended_problem(&robot, name, &limits, delta);
+        let BlendedProblem { path, ex, b, .. } = blended_problem(&robot, name, &limits, delta);
         let tr = &*b.trajectory;
         let coarse = rl_plan::execute::time_optimal(tr, &limits, 2000).unwrap();
         let fine = rl_plan::execute::time_optimal(tr, &limits, 8000).unwrap();
@@ -619,7 +629,9 @@ fn jerk_limited_retiming_keeps_the_limits_and_the_path() {
     let delta = options().verifier.delta;
     let n = limits.velocity.len();
     for name in RETIMED {
-        let (start, goal, _, ex, b) = blended_problem(&robot, name, &limits, delta);
+        let BlendedProblem {
+            start, goal, ex, b, ..
+        } = blended_problem(&robot, name, &limits, delta);
         let tr = &*b.trajectory;
         let topp = rl_plan::execute::time_optimal(tr, &limits, 4000).unwrap();
         let rests = rl_plan::execute::rests_of::<D, _, MAX>(tr, n);
