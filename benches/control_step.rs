@@ -4,6 +4,10 @@
 //! trip). The parts are measured alone too, so the network's share is visible. This is the
 //! number that tells how fast a loop the library supports on a machine.
 //!
+//! A planned path's trajectory is sampled alone too: blended through its waypoints, and the same
+//! path retimed with bounded jerk (`rl run --plan`'s default, whose sample finds the path's own
+//! time by Newton steps on its arc length).
+//!
 //! `cargo bench --bench control_step`
 
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
@@ -14,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rl::controller::{Controller, MotionLimits, Plan, default_waypoints, rv6sl};
+use rl::controller::{Controller, MotionLimits, Plan, PlanTrajectory, default_waypoints, rv6sl};
 use rl::core::traj::Trajectory;
 use rl::core::{Data, algo};
 use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
@@ -60,6 +64,20 @@ fn control_step(c: &mut Criterion) {
             black_box(trajectory.sample(black_box(t)))
         })
     });
+    let (blended, retimed) = planned_trajectories(&model, &start, &limits);
+    for (name, tr) in [
+        ("planned path sample, blended", &blended),
+        ("planned path sample, retimed with bounded jerk", &retimed),
+    ] {
+        let duration = tr.duration();
+        let mut t = 0.0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                t = if t > duration { 0.0 } else { t + 0.00711 };
+                black_box(tr.sample(black_box(t)))
+            })
+        });
+    }
     let mut data = Box::new(Data::new());
     let s = trajectory.sample(0.3 * duration);
     group.bench_function("RNEA feed-forward", |b| {
@@ -82,6 +100,49 @@ fn control_step(c: &mut Criterion) {
     group.finish();
     robot.stop().expect("stop");
     robot.close().expect("close");
+}
+
+/// The tour's waypoints as a planned path (no obstacles): blended, and blended then retimed with
+/// bounded jerk, as `rl run --plan` builds them.
+fn planned_trajectories<const N: usize>(
+    model: &rl::core::Model<N>,
+    start: &[f64],
+    limits: &MotionLimits<8>,
+) -> (PlanTrajectory<8>, PlanTrajectory<8>) {
+    use rl::controller::plan::BLENDED_SEGMENTS;
+    use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits, jerk_limited, rests_of};
+    use rl_plan::validity::AlwaysValid;
+    use rl_plan::{JointSpace, Path};
+
+    let dof = model.dof();
+    let mut points = vec![start.to_vec()];
+    points.extend(default_waypoints(model, start));
+    let space = JointSpace::from_model(model).expect("space");
+    let execution = Execution::new(
+        &space,
+        &Path::from_points(dof, &points),
+        ExecutionLimits {
+            velocity: limits.velocity[..dof].to_vec(),
+            acceleration: limits.acceleration[..dof].to_vec(),
+            jerk: limits.jerk[..dof].to_vec(),
+        },
+    )
+    .expect("execution");
+    let blended = execution
+        .blended::<8, BLENDED_SEGMENTS>(
+            &space,
+            &mut AlwaysValid::new(space.clone()),
+            &BlendOptions::for_resolution(0.05),
+        )
+        .expect("blended")
+        .trajectory;
+    let rests = rests_of::<8, _, BLENDED_SEGMENTS>(&*blended, dof);
+    let retimed =
+        jerk_limited(blended.clone(), &rests, execution.limits(), 1000, 1e-3).expect("retimed");
+    (
+        PlanTrajectory::Blended(blended),
+        PlanTrajectory::Retimed(Box::new(retimed)),
+    )
 }
 
 criterion_group!(benches, control_step);
