@@ -162,10 +162,9 @@ impl From<rl_plan::PlanError> for PlannedMotionError {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PathExecution {
     /// Blended ([`Blended`](Self::Blended)), then retimed near time-optimally with bounded
-    /// jerk along the blended configurations (rl-plan's
-    /// [`jerk_limited`]: TOPP-RA, its path acceleration
-    /// averaged, slowed where a sample would exceed a limit) when that is faster; the default.
-    /// The configurations are the blended trajectory's, so its certificate holds.
+    /// jerk along the blended configurations (rl-plan's [`jerk_limited`]: TOPP-RA, its path
+    /// acceleration averaged, slowed where a sample would exceed a limit) when that is faster;
+    /// the default. The configurations are the blended trajectory's, so its certificate holds.
     #[default]
     Retimed,
     /// Through the interior waypoints without stopping where blends are valid and faster
@@ -228,8 +227,8 @@ enum Attempt<const J: usize> {
 
 /// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
 /// optimised path a trajectory blended through its waypoints and retimed with bounded jerk
-/// ([`PathExecution::Retimed`], checked with `validity`) within `speed` (a fraction, (0, 1]) of `model`'s speed limits,
-/// with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
+/// ([`PathExecution::Retimed`], checked with `validity`) within `speed` (a fraction, (0, 1])
+/// of `model`'s speed limits, with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
 /// model: its joints must be the space's, in the same order. `stop` cancels planning.
 #[allow(clippy::too_many_arguments)]
 pub fn plan_motion<const B: usize, const J: usize>(
