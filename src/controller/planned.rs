@@ -228,8 +228,9 @@ enum Attempt<const J: usize> {
 /// Plans from `start` to `goal` in `space` with `validity` and `options`, and makes the
 /// optimised path a trajectory blended through its waypoints and retimed with bounded jerk
 /// ([`PathExecution::Retimed`], checked with `validity`) within `speed` (a fraction, (0, 1])
-/// of `model`'s speed limits, with the controller's acceleration and jerk ([`MotionLimits`]). `model` is the controller's
-/// model: its joints must be the space's, in the same order. `stop` cancels planning.
+/// of `model`'s speed limits, with the controller's acceleration and jerk ([`MotionLimits`]).
+/// `model` is the controller's model: its joints must be the space's, in the same order.
+/// `stop` cancels planning.
 #[allow(clippy::too_many_arguments)]
 pub fn plan_motion<const B: usize, const J: usize>(
     model: &Model<B>,
