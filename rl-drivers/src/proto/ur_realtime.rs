@@ -267,7 +267,9 @@ fn integer(
     max: f64,
 ) -> Result<f64, RealtimeError> {
     let value = d[at];
-    if value.is_finite() && value.fract() == 0.0 && (min..=max).contains(&value) {
+    // In range (so finite, and within i64's), a double is an integer when the truncating cast
+    // gives it back (`f64::fract` is not in core).
+    if (min..=max).contains(&value) && value as i64 as f64 == value {
         Ok(value)
     } else {
         Err(RealtimeError::NotAnInteger {
