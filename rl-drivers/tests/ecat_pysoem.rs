@@ -120,22 +120,26 @@ fn pysoem_configures_our_fake_segment_and_exchanges_process_data() {
         );
         // Under an emulator the fake's code is translated as it first runs and its frames can
         // miss SOEM's 2 ms: counted and reported, not bounded (as ecat_units does).
+        // (A clean-clone CI run under qemu-arm: one frame back after 7 ms, reported, then
+        // failed by the bound below, which the emulated case had skipped only in intent.)
         if let Some(emulator) = emulated() {
             println!(
                 "under {emulator}: {} of 600 frames not back within 2 ms: {wrong:?}",
                 wrong.len()
             );
-        } else if !wrong.is_empty() && stalled >= STALL {
-            return Err(format!(
-                "{} of 600 frames not back within 2 ms ({wrong:?}) while the machine stalled a \
-                 thread {stalled:?}",
-                wrong.len()
-            ));
+        } else {
+            if !wrong.is_empty() && stalled >= STALL {
+                return Err(format!(
+                    "{} of 600 frames not back within 2 ms ({wrong:?}) while the machine \
+                     stalled a thread {stalled:?}",
+                    wrong.len()
+                ));
+            }
+            assert_eq!(
+                r["wkc_errors"], 0,
+                "frames lost with no stall ({stalled:?}): {wrong:?}"
+            );
         }
-        assert_eq!(
-            r["wkc_errors"], 0,
-            "frames lost with no stall ({stalled:?}): {wrong:?}"
-        );
         for (k, sw) in r["statusword"].as_array().unwrap().iter().enumerate() {
             assert_eq!(
                 sw.as_u64().unwrap() & 0x6F,
