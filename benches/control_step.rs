@@ -18,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rl::controller::{Controller, MotionLimits, Plan, PlanTrajectory, default_waypoints, rv6sl};
+use rl::controller::{Controller, MotionLimits, Plan, default_waypoints, rv6sl};
 use rl::core::traj::Trajectory;
 use rl::core::{Data, algo};
 use rl::drivers::{CyclicDevice, Device, JointPositionSensor};
@@ -64,7 +64,8 @@ fn control_step(c: &mut Criterion) {
             black_box(trajectory.sample(black_box(t)))
         })
     });
-    let (blended, retimed) = planned_trajectories(&model, &start, &limits);
+    let blended = common::tour_as_planned_path(&model, &start, &limits, false);
+    let retimed = common::tour_as_planned_path(&model, &start, &limits, true);
     for (name, tr) in [
         ("planned path sample, blended", &blended),
         ("planned path sample, retimed with bounded jerk", &retimed),
@@ -100,49 +101,6 @@ fn control_step(c: &mut Criterion) {
     group.finish();
     robot.stop().expect("stop");
     robot.close().expect("close");
-}
-
-/// The tour's waypoints as a planned path (no obstacles): blended, and blended then retimed with
-/// bounded jerk, as `rl run --plan` builds them.
-fn planned_trajectories<const N: usize>(
-    model: &rl::core::Model<N>,
-    start: &[f64],
-    limits: &MotionLimits<8>,
-) -> (PlanTrajectory<8>, PlanTrajectory<8>) {
-    use rl::controller::plan::BLENDED_SEGMENTS;
-    use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits, jerk_limited, rests_of};
-    use rl_plan::validity::AlwaysValid;
-    use rl_plan::{JointSpace, Path};
-
-    let dof = model.dof();
-    let mut points = vec![start.to_vec()];
-    points.extend(default_waypoints(model, start));
-    let space = JointSpace::from_model(model).expect("space");
-    let execution = Execution::new(
-        &space,
-        &Path::from_points(dof, &points),
-        ExecutionLimits {
-            velocity: limits.velocity[..dof].to_vec(),
-            acceleration: limits.acceleration[..dof].to_vec(),
-            jerk: limits.jerk[..dof].to_vec(),
-        },
-    )
-    .expect("execution");
-    let blended = execution
-        .blended::<8, BLENDED_SEGMENTS>(
-            &space,
-            &mut AlwaysValid::new(space.clone()),
-            &BlendOptions::for_resolution(0.05),
-        )
-        .expect("blended")
-        .trajectory;
-    let rests = rests_of::<8, _, BLENDED_SEGMENTS>(&*blended, dof);
-    let retimed =
-        jerk_limited(blended.clone(), &rests, execution.limits(), 1000, 1e-3).expect("retimed");
-    (
-        PlanTrajectory::Blended(blended),
-        PlanTrajectory::Retimed(Box::new(retimed)),
-    )
 }
 
 criterion_group!(benches, control_step);

@@ -260,11 +260,7 @@ fn steady_state_cycle_following_a_retimed_path_allocates_nothing() {
 
 #[cfg(feature = "plan")]
 fn follow_planned_path(retime: bool) {
-    use rl::controller::plan::BLENDED_SEGMENTS;
-    use rl::controller::{MotionLimits, Plan, PlanBudget, PlanTrajectory, default_waypoints};
-    use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits};
-    use rl_plan::validity::AlwaysValid;
-    use rl_plan::{JointSpace, Path};
+    use rl::controller::{MotionLimits, Plan, PlanBudget};
 
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
@@ -272,37 +268,8 @@ fn follow_planned_path(retime: bool) {
     let dof = model.dof();
     let fake = common::immediate_fake(dof);
     let (robot, start) = common::started_h7_standing(&fake, dof);
-    let mut points = vec![start.clone()];
-    points.extend(default_waypoints(&model, &start));
     let limits = MotionLimits::<8>::from_model(&model, 0.25).expect("limits");
-    let space = JointSpace::from_model(&model).expect("space");
-    let execution = Execution::new(
-        &space,
-        &Path::from_points(dof, &points),
-        ExecutionLimits {
-            velocity: limits.velocity[..dof].to_vec(),
-            acceleration: limits.acceleration[..dof].to_vec(),
-            jerk: limits.jerk[..dof].to_vec(),
-        },
-    )
-    .expect("execution");
-    let blended = execution
-        .blended::<8, BLENDED_SEGMENTS>(
-            &space,
-            &mut AlwaysValid::new(space.clone()),
-            &BlendOptions::for_resolution(0.05),
-        )
-        .expect("blended");
-    assert_eq!(blended.report.blended(), 2, "{}", blended.report);
-    let trajectory = if retime {
-        let path = blended.trajectory;
-        let rests = rl_plan::execute::rests_of::<8, _, BLENDED_SEGMENTS>(&*path, dof);
-        let retimed = rl_plan::execute::jerk_limited(path, &rests, execution.limits(), 1000, 1e-3)
-            .expect("retimed");
-        PlanTrajectory::Retimed(Box::new(retimed))
-    } else {
-        PlanTrajectory::Blended(blended.trajectory)
-    };
+    let trajectory = common::tour_as_planned_path(&model, &start, &limits, retime);
     let plan =
         Plan::from_trajectory(&model, trajectory, &limits, &PlanBudget::default()).expect("plan");
     let mut control =

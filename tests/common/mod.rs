@@ -210,3 +210,50 @@ pub struct LawOnH7<L: rl::controller::ControlLaw<16, 8>> {
     /// The limits it runs with.
     pub limits: MotionLimits<8>,
 }
+
+/// The tour's waypoints from `start` as a planned path (no obstacles) blended through its two
+/// interior corners, as `rl run --plan` builds it — and with `retime`, then retimed with bounded
+/// jerk (its default).
+#[cfg(feature = "plan")]
+pub fn tour_as_planned_path<const N: usize>(
+    model: &rl::core::Model<N>,
+    start: &[f64],
+    limits: &MotionLimits<8>,
+    retime: bool,
+) -> rl::controller::PlanTrajectory<8> {
+    use rl::controller::PlanTrajectory;
+    use rl::controller::plan::BLENDED_SEGMENTS;
+    use rl_plan::execute::{BlendOptions, Execution, ExecutionLimits, jerk_limited, rests_of};
+    use rl_plan::validity::AlwaysValid;
+    use rl_plan::{JointSpace, Path};
+
+    let dof = model.dof();
+    let mut points = vec![start.to_vec()];
+    points.extend(default_waypoints(model, start));
+    let space = JointSpace::from_model(model).expect("space");
+    let execution = Execution::new(
+        &space,
+        &Path::from_points(dof, &points),
+        ExecutionLimits {
+            velocity: limits.velocity[..dof].to_vec(),
+            acceleration: limits.acceleration[..dof].to_vec(),
+            jerk: limits.jerk[..dof].to_vec(),
+        },
+    )
+    .expect("execution");
+    let blended = execution
+        .blended::<8, BLENDED_SEGMENTS>(
+            &space,
+            &mut AlwaysValid::new(space.clone()),
+            &BlendOptions::for_resolution(0.05),
+        )
+        .expect("blended");
+    assert_eq!(blended.report.blended(), 2, "{}", blended.report);
+    let path = blended.trajectory;
+    if !retime {
+        return PlanTrajectory::Blended(path);
+    }
+    let rests = rests_of::<8, _, BLENDED_SEGMENTS>(&*path, dof);
+    let retimed = jerk_limited(path, &rests, execution.limits(), 1000, 1e-3).expect("retimed");
+    PlanTrajectory::Retimed(Box::new(retimed))
+}
