@@ -385,7 +385,7 @@ fn plan_once<const B: usize, const J: usize>(
     // The certified blended trajectory retimed along its own configurations (so the
     // certificate holds), kept when faster.
     let (trajectory, retimed) = match (execution, trajectory) {
-        (PathExecution::Retimed, PlanTrajectory::Blended(b)) => retime(b, limits),
+        (PathExecution::Retimed, PlanTrajectory::Blended(b)) => retime(b, execution_plan.limits()),
         (_, trajectory) => (trajectory, None),
     };
     let duration_s = rl_core::traj::Trajectory::duration(&trajectory);
@@ -465,24 +465,12 @@ const RETIME_MARGIN: f64 = 1e-3;
 /// faster; otherwise `blended` as it was. Also the retiming's duration, or why there is none.
 fn retime<const J: usize>(
     blended: Box<rl_core::traj::Piecewise<rl_core::traj::Segment<J>, BLENDED_SEGMENTS>>,
-    limits: &MotionLimits<J>,
+    limits: &ExecutionLimits,
 ) -> (PlanTrajectory<J>, Option<Result<f64, String>>) {
-    let dof = limits.dof;
-    let execution_limits = ExecutionLimits {
-        velocity: limits.velocity[..dof].to_vec(),
-        acceleration: limits.acceleration[..dof].to_vec(),
-        jerk: limits.jerk[..dof].to_vec(),
-    };
     let before = rl_core::traj::Trajectory::duration(&*blended);
-    let rests = rests_of::<J, _, BLENDED_SEGMENTS>(&*blended, dof);
+    let rests = rests_of::<J, _, BLENDED_SEGMENTS>(&*blended, limits.velocity.len());
     let path = blended.clone();
-    match jerk_limited(
-        path,
-        &rests,
-        &execution_limits,
-        RETIME_STAGES,
-        RETIME_MARGIN,
-    ) {
+    match jerk_limited(path, &rests, limits, RETIME_STAGES, RETIME_MARGIN) {
         Ok(r) if r.duration() < before => {
             let t = r.duration();
             (PlanTrajectory::Retimed(Box::new(r)), Some(Ok(t)))
