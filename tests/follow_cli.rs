@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 
 mod cli;
 use cli::{exit_by, last_commanded, rl};
+mod late;
 
 fn temp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rl-follow-{}-{name}", std::process::id()));
@@ -18,7 +19,9 @@ fn temp(name: &str) -> PathBuf {
     d
 }
 
-/// One controller run at a time (each is a SCHED_FIFO loop and an in-process fake).
+/// One controller run at a time (each is a SCHED_FIFO loop and an in-process fake). A run the
+/// machine made late (lost replies while the loop or the fake measured itself late) runs again
+/// by the shared rule ([`late::while_late`], [`late::json_late`]).
 fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
     static RUNS: std::sync::Mutex<()> = std::sync::Mutex::new(());
     RUNS.lock().unwrap_or_else(|p| p.into_inner())
@@ -95,7 +98,13 @@ fn targets_on_standard_input_are_followed_counted_and_the_end_of_input_ends_the_
         None,
         None,
     ];
-    let (code, report) = follow_stdin(&feed, &["--input-timeout", "10s"], &csv);
+    let Some((code, report)) = late::while_late(
+        "follow on standard input",
+        || follow_stdin(&feed, &["--input-timeout", "10s"], &csv),
+        |(_, report)| late::json_late(report),
+    ) else {
+        return;
+    };
     let follow = &report["follow"];
     assert_eq!(code, Some(0), "{report}");
     assert_eq!(
@@ -141,46 +150,56 @@ fn targets_in_udp_datagrams_are_followed_and_a_second_sender_is_refused() {
         .and_then(|s| s.local_addr())
         .expect("free port")
         .port();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--follow",
-            &format!("udp:{port}"),
-            "--json",
-            "--input-timeout",
-            "3s",
-        ])
-        .arg("--telemetry")
-        .arg(&csv)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("rl runs");
-    let to = format!("127.0.0.1:{port}");
-    let ours = UdpSocket::bind("127.0.0.1:0").expect("socket");
-    let theirs = UdpSocket::bind("127.0.0.1:0").expect("socket");
     let goal = [-0.2, 0.1, 0.2, 0.1, -0.1, 0.05];
-    // The socket is bound once the run has started: send until the run takes the first.
-    let started = Instant::now();
-    while started.elapsed() < Duration::from_secs(5) {
-        ours.send_to(b"position 0.1 0 0 0 0 0\n", &to)
+    let Some((out, report, ours)) = late::while_late(
+        "follow over UDP",
+        || {
+            let mut child = Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args([
+                    "run",
+                    "--follow",
+                    &format!("udp:{port}"),
+                    "--json",
+                    "--input-timeout",
+                    "3s",
+                ])
+                .arg("--telemetry")
+                .arg(&csv)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("rl runs");
+            let to = format!("127.0.0.1:{port}");
+            let ours = UdpSocket::bind("127.0.0.1:0").expect("socket");
+            let theirs = UdpSocket::bind("127.0.0.1:0").expect("socket");
+            // The socket is bound once the run has started: send until the run takes the first.
+            let started = Instant::now();
+            while started.elapsed() < Duration::from_secs(5) {
+                ours.send_to(b"position 0.1 0 0 0 0 0\n", &to)
+                    .expect("sent");
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            ours.send_to(
+                b"p 0 0 0.1 0 0 0\nposition -0.2 0.1 0.2 0.1 -0.1 0.05\n",
+                &to,
+            )
             .expect("sent");
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    ours.send_to(
-        b"p 0 0 0.1 0 0 0\nposition -0.2 0.1 0.2 0.1 -0.1 0.05\n",
-        &to,
-    )
-    .expect("sent");
-    theirs
-        .send_to(b"position 1 1 1 1 1 1\n", &to)
-        .expect("sent");
-    std::thread::sleep(Duration::from_millis(1500));
-    ours.send_to(b"stop\n", &to).expect("sent");
-    let ended = exit_by(&mut child, Instant::now() + Duration::from_secs(30));
-    let out = child.wait_with_output().expect("output");
-    assert!(ended.is_some(), "{}", String::from_utf8_lossy(&out.stderr));
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+            theirs
+                .send_to(b"position 1 1 1 1 1 1\n", &to)
+                .expect("sent");
+            std::thread::sleep(Duration::from_millis(1500));
+            ours.send_to(b"stop\n", &to).expect("sent");
+            let ended = exit_by(&mut child, Instant::now() + Duration::from_secs(30));
+            let out = child.wait_with_output().expect("output");
+            assert!(ended.is_some(), "{}", String::from_utf8_lossy(&out.stderr));
+            let report: serde_json::Value =
+                serde_json::from_slice(&out.stdout).expect("JSON report");
+            (out, report, ours)
+        },
+        |(_, report, _)| late::json_late(report),
+    ) else {
+        return;
+    };
     assert_eq!(out.status.code(), Some(0), "{report}");
     let follow = &report["follow"];
     assert_eq!(follow["foreign"], 1, "{follow}");
@@ -207,24 +226,34 @@ fn targets_that_stop_coming_bring_the_arm_to_rest_and_fail_the_run() {
         .and_then(|s| s.local_addr())
         .expect("free port")
         .port();
-    let out = cli::run_bounded(
-        {
-            let mut c = Command::new(env!("CARGO_BIN_EXE_rl"));
-            c.args([
-                "run",
-                "--follow",
-                &format!("udp:{port}"),
-                "--json",
-                "--input-timeout",
-                "500ms",
-            ])
-            .arg("--telemetry")
-            .arg(&csv);
-            c
+    let Some((out, report)) = late::while_late(
+        "follow with inputs that stop",
+        || {
+            let out = cli::run_bounded(
+                {
+                    let mut c = Command::new(env!("CARGO_BIN_EXE_rl"));
+                    c.args([
+                        "run",
+                        "--follow",
+                        &format!("udp:{port}"),
+                        "--json",
+                        "--input-timeout",
+                        "500ms",
+                    ])
+                    .arg("--telemetry")
+                    .arg(&csv);
+                    c
+                },
+                Duration::from_secs(30),
+            );
+            let report: serde_json::Value =
+                serde_json::from_slice(&out.stdout).expect("JSON report");
+            (out, report)
         },
-        Duration::from_secs(30),
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+        |(_, report)| late::json_late(report),
+    ) else {
+        return;
+    };
     assert_eq!(
         report["end"], "inputs stopped coming, brought to rest",
         "{report}"
