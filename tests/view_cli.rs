@@ -3,6 +3,7 @@
 //! warned about; a model that does not load exits with 2 and names the file.
 
 mod cli;
+mod late;
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
@@ -166,36 +167,47 @@ fn rl_run_over_coach_moves_the_robot_in_rl_view_as_it_happens() {
     };
     let (q0, _) = q_now(&url);
 
-    let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--device",
-            &format!("coach://{coach}"),
-            "--duration",
-            "2s",
-            "--json",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start rl run");
-    let mut seen: Vec<Vec<f64>> = Vec::new();
-    let start = std::time::Instant::now();
-    let status = loop {
-        if let Some(status) = run.try_wait().expect("wait") {
-            break status;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "rl run did not end"
-        );
-        let (q, s) = q_now(&url);
-        if q != q0 && s["models"][0]["source"] == "coach" && seen.last() != Some(&q) {
-            seen.push(q);
-        }
-        std::thread::sleep(Duration::from_millis(50));
+    // A run the machine made late runs again by the shared rule (`late::json_late`).
+    let Some((status, out, seen)) = late::while_late(
+        "a run over Coach",
+        || {
+            let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args([
+                    "run",
+                    "--device",
+                    &format!("coach://{coach}"),
+                    "--duration",
+                    "2s",
+                    "--json",
+                ])
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("start rl run");
+            let mut seen: Vec<Vec<f64>> = Vec::new();
+            let start = std::time::Instant::now();
+            let status = loop {
+                if let Some(status) = run.try_wait().expect("wait") {
+                    break status;
+                }
+                assert!(
+                    start.elapsed() < Duration::from_secs(60),
+                    "rl run did not end"
+                );
+                let (q, s) = q_now(&url);
+                if q != q0 && s["models"][0]["source"] == "coach" && seen.last() != Some(&q) {
+                    seen.push(q);
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            };
+            let out = run.wait_with_output().expect("output");
+            (status, out, seen)
+        },
+        |(_, out, _)| late::json_late(&serde_json::from_slice(&out.stdout).ok()?),
+    ) else {
+        let _ = view.kill();
+        return;
     };
-    let out = run.wait_with_output().expect("output");
     assert!(
         status.success(),
         "{}\n{}",
