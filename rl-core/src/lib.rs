@@ -21,6 +21,7 @@ pub mod loader;
 pub mod math;
 pub mod model;
 pub mod spatial;
+pub mod task;
 
 pub use error::Error;
 pub use model::{Data, Model, ModelBuilder};

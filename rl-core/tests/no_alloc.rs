@@ -7,7 +7,7 @@ use rl_core::Data;
 use rl_core::algo;
 use rl_core::spatial::ForceVector;
 use rl_testkit::{CountingAllocator, allocations};
-use support::{Rng, every_joint_type, mimic_tree, random_state};
+use support::{Rng, every_joint_type, mimic_tree, random_chain, random_state};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -100,6 +100,34 @@ fn run_all(model: &rl_core::Model<32>) {
 
     assert!(sink.is_finite());
     assert_eq!(n, 0, "the algorithms allocated");
+}
+
+/// The task-space law (fixed-base models only: a chain of seven).
+#[test]
+fn the_operational_impedance_allocates_nothing() {
+    use rl_core::task::{ImpedanceGains, TaskData, TaskTarget, limit_rate, operational_impedance};
+    let model = random_chain::<32>(7, 5);
+    let mut data = Box::new(Data::<32>::new());
+    let mut task = Box::new(TaskData::<32>::new());
+    let mut r = Rng(2);
+    let states: Vec<_> = (0..20).map(|_| random_state(&model, &mut r)).collect();
+    let target = TaskTarget::at(r.pose());
+    let gains = ImpedanceGains::default();
+    let mut tau = [0.0; 7];
+    let mut previous = [0.0; 7];
+    let mut sink = 0.0;
+    let (n, ()) = allocations(|| {
+        for (q, qd, posture) in &states {
+            let report = operational_impedance(
+                &model, &mut data, &mut task, 0, &gains, &target, q, qd, posture, &mut tau,
+            )
+            .unwrap();
+            sink += report.position_error + limit_rate(&previous, &mut tau, 1.0) as f64;
+            previous = tau;
+        }
+    });
+    assert!(sink.is_finite() && previous.iter().any(|t| *t != 0.0));
+    assert_eq!(n, 0, "the task-space law allocated");
 }
 
 #[test]

@@ -1,0 +1,407 @@
+//! Operational-space impedance with a dynamically consistent nullspace.
+//!
+//! The tool's task acceleration is commanded as a mass–spring–damper of unit mass per task
+//! direction, and the joint torques that produce it are found through the operational-space
+//! inertia (Khatib, *A unified approach for motion and force control of robot manipulators:
+//! the operational space formulation*, IEEE J. Robotics and Automation 3(1), 1987):
+//!
+//! ```text
+//! a   = ẍ_d + K_d (ẋ_d − ẋ) + K_p e                 e = [p_d − p; log(R_d Rᵀ)]   (world)
+//! Λ   = (J M⁻¹ Jᵀ + Λ_ε)⁻¹                            Λ_ε: singularity damping (diagonal)
+//! τ   = Jᵀ Λ (a − J̇ q̇) + Nᵀ M a₀ + C(q, q̇) + G(q)     Nᵀ = I − Jᵀ Λ J M⁻¹
+//! a₀  = K_q (q_r − q) − D_q q̇ + a_lim                (posture and joint-limit avoidance)
+//! ```
+//!
+//! With `Λ_ε = 0` away from singularities the closed loop is exactly `ë + K_d ė + K_p e = 0`
+//! in every task direction, decoupled, whatever the arm's inertia (`J M⁻¹ Nᵀ = 0`: the
+//! nullspace torque moves no task coordinate), and `K_d = 2ζ√K_p` makes it critically damped
+//! for `ζ = 1`. Near a singularity `J M⁻¹ Jᵀ` loses rank; the damping `Λ_ε` (damped least
+//! squares in the operational space, Nakamura & Hanafusa 1986) bounds `Λ` by `Λ_ε⁻¹`, so the
+//! torques stay bounded, at the price of a task error in the singular direction. `J`: the
+//! tool's world Jacobian at its origin, rows `[linear; angular]` (RL's convention,
+//! [`crate::algo::jacobian`]); only the rows [`ImpedanceGains::axes`] selects form the task
+//! (e.g. position only, leaving the tool's orientation to the nullspace). The orientation
+//! error is the rotation vector of `R_d Rᵀ` (the shortest way, `|e_o| ≤ π`); its derivative is
+//! the angular velocity error for small errors, as is usual.
+//!
+//! `q`, `q_r`: `nq` (= `nv`: fixed-base models without quaternion joints); `q̇`, `τ`: `nv`.
+//! Cost: one CRBA, its sparse factorisation and `m ≤ 6` solves, one Jacobian, one forward
+//! acceleration sweep (`J̇ q̇`) and one RNEA. Does not allocate.
+
+use core::fmt;
+
+use glam::{DQuat, DVec3};
+
+use crate::algo::{
+    Jacobian, crba, factor_mass_matrix, gravity, jacobian, jacobian_derivative_times_qd,
+    nonlinear_effects, solve_mass_matrix, tool_pose,
+};
+use crate::error::{Error, check_len};
+use crate::math::invert_spd;
+use crate::model::{Data, Model};
+use crate::rotation::quaternion;
+use crate::spatial::PlueckerTransform;
+
+/// What the task controls of the tool's orientation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Orientation {
+    /// Position and orientation (a 6-D task).
+    #[default]
+    Held,
+    /// Position only (a 3-D task); the orientation is left to the nullspace.
+    Free,
+}
+
+/// The gains of [`operational_impedance`]. Stiffnesses are per unit of operational inertia
+/// (accelerations per unit error, 1/s²): the task behaves the same whatever the arm carries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImpedanceGains {
+    /// Task stiffness `K_p`, 1/s², per world direction `[x y z; rx ry rz]`.
+    pub stiffness: [f64; 6],
+    /// Damping ratio `ζ` of the task directions (`K_d = 2ζ√K_p`; 1: critical).
+    pub damping_ratio: f64,
+    /// Which task rows are controlled.
+    pub orientation: Orientation,
+    /// The task error is saturated to this length (m) before the spring acts, so that a far
+    /// target pulls with a bounded acceleration; `f64::INFINITY`: not saturated.
+    pub max_position_error: f64,
+    /// The orientation error is saturated to this angle (rad).
+    pub max_orientation_error: f64,
+    /// Posture stiffness `K_q` in the nullspace, 1/s².
+    pub posture_stiffness: f64,
+    /// Damping ratio of the posture (`D_q = 2ζ_q√K_q`); it also damps the nullspace motion.
+    pub posture_damping_ratio: f64,
+    /// Joint-limit avoidance: within this distance of a joint's limit (rad or m) the nullspace
+    /// pushes it away, `a_lim = limit_stiffness · (band − distance)`; 0: off.
+    pub limit_band: f64,
+    /// The joint-limit push per unit of intrusion into the band, 1/s².
+    pub limit_stiffness: f64,
+    /// Singularity damping `Λ_ε` added to `J M⁻¹ Jᵀ`'s diagonal before it is inverted:
+    /// `[linear (1/kg), angular (1/(kg·m²))]`. 0 inverts exactly (and fails at a singularity).
+    pub singular_damping: [f64; 2],
+    /// The device adds the gravity torque itself (a Franka arm): `G(q)` is left out of `τ`.
+    pub gravity_by_device: bool,
+}
+
+impl Default for ImpedanceGains {
+    /// `K_p` 400 1/s² for position (20 rad/s, 3.2 Hz) and 300 1/s² for orientation
+    /// (17 rad/s), critically damped; errors saturated at 5 cm and 0.3 rad; a 10 1/s² posture;
+    /// a 0.1 rad joint-limit band pushing at 200 1/s²; singularity damping `1e-3`.
+    fn default() -> Self {
+        Self {
+            stiffness: [400.0, 400.0, 400.0, 300.0, 300.0, 300.0],
+            damping_ratio: 1.0,
+            orientation: Orientation::Held,
+            max_position_error: 0.05,
+            max_orientation_error: 0.3,
+            posture_stiffness: 10.0,
+            posture_damping_ratio: 1.0,
+            limit_band: 0.1,
+            limit_stiffness: 200.0,
+            singular_damping: [1e-3, 1e-3],
+            gravity_by_device: false,
+        }
+    }
+}
+
+/// Where the tool should be: its pose in the world, and the velocity and acceleration along
+/// the way (`[linear; angular]`, world; zero for a set point).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaskTarget {
+    /// The tool's pose.
+    pub pose: PlueckerTransform,
+    /// The tool's velocity, m/s and rad/s.
+    pub velocity: [f64; 6],
+    /// The tool's acceleration, m/s² and rad/s².
+    pub acceleration: [f64; 6],
+}
+
+impl TaskTarget {
+    /// A pose to hold still.
+    pub const fn at(pose: PlueckerTransform) -> Self {
+        Self {
+            pose,
+            velocity: [0.0; 6],
+            acceleration: [0.0; 6],
+        }
+    }
+}
+
+/// The task's workspace: the Jacobian and the operational quantities of the last call, kept
+/// for the caller (e.g. to add forces of its own through `Jᵀ` or to report the task's
+/// conditioning). Large for large `N`: box it or keep it in a static.
+#[derive(Clone, Debug)]
+pub struct TaskData<const N: usize> {
+    /// The tool's world Jacobian, rows `[linear; angular]`.
+    pub jacobian: Jacobian<N>,
+    /// `M⁻¹ Jᵀ` of the task rows (column `r` of the `m` task rows).
+    minv_jt: [[f64; N]; 6],
+    /// `Λ`, the damped operational inertia of the task rows (leading `m × m` block).
+    lambda: [[f64; 6]; 6],
+}
+
+impl<const N: usize> Default for TaskData<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> TaskData<N> {
+    /// A zeroed workspace.
+    pub const fn new() -> Self {
+        Self {
+            jacobian: [[0.0; N]; 6],
+            minv_jt: [[0.0; N]; 6],
+            lambda: [[0.0; 6]; 6],
+        }
+    }
+
+    /// The damped operational inertia `Λ` of the last call, `m × m` over the task rows (the
+    /// first `m` rows and columns of the result).
+    pub fn operational_inertia(&self) -> &[[f64; 6]; 6] {
+        &self.lambda
+    }
+}
+
+/// How the task stood at the call.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TaskReport {
+    /// `|p_d − p|`, m (before saturation).
+    pub position_error: f64,
+    /// The angle of `R_d Rᵀ`, rad (before saturation; 0 when the orientation is free).
+    pub orientation_error: f64,
+    /// The tool's velocity `J q̇`, `[linear; angular]`, world.
+    pub tool_velocity: [f64; 6],
+    /// The tool's pose.
+    pub tool_pose: PlueckerTransform,
+    /// Joints inside their limit band (pushed away by the nullspace).
+    pub joints_near_limits: usize,
+}
+
+/// Why [`operational_impedance`] gave no torques.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TaskError {
+    /// A dynamics algorithm failed (a length, the tool, a singular mass matrix).
+    Dynamics(Error),
+    /// The model has joints whose position is not their velocity's integral coordinate
+    /// (`nq ≠ nv`: a floating base or a spherical joint): the posture error is not defined.
+    NotFixedBase {
+        /// Position coordinates.
+        nq: usize,
+        /// Velocity coordinates.
+        nv: usize,
+    },
+    /// `J M⁻¹ Jᵀ + Λ_ε` is not positive definite: the arm is at a singularity of the task and
+    /// no damping was given.
+    Singular,
+    /// A gain, target or state is not finite.
+    NotFinite {
+        /// Which argument.
+        argument: &'static str,
+    },
+}
+
+impl From<Error> for TaskError {
+    fn from(e: Error) -> Self {
+        Self::Dynamics(e)
+    }
+}
+
+impl fmt::Display for TaskError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Dynamics(e) => e.fmt(f),
+            Self::NotFixedBase { nq, nv } => write!(
+                f,
+                "task-space control needs nq = nv (a fixed base, no quaternion joints); the \
+                 model has nq = {nq}, nv = {nv}"
+            ),
+            Self::Singular => f.write_str(
+                "the task's operational inverse inertia J M⁻¹ Jᵀ is singular (the arm is at a \
+                 singularity) and no singularity damping was given",
+            ),
+            Self::NotFinite { argument } => write!(f, "`{argument}` is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for TaskError {}
+
+/// The operational-space impedance torques (module doc) for tool `tool` at state `(q, q̇)`,
+/// toward `target`, with the posture `posture` in the nullspace, into `tau` (`nv`).
+#[allow(clippy::too_many_arguments)]
+pub fn operational_impedance<const N: usize>(
+    model: &Model<N>,
+    data: &mut Data<N>,
+    task: &mut TaskData<N>,
+    tool: usize,
+    gains: &ImpedanceGains,
+    target: &TaskTarget,
+    q: &[f64],
+    qd: &[f64],
+    posture: &[f64],
+    tau: &mut [f64],
+) -> Result<TaskReport, TaskError> {
+    let n = model.nv;
+    if model.nq != n {
+        return Err(TaskError::NotFixedBase {
+            nq: model.nq,
+            nv: n,
+        });
+    }
+    check_len("q", q, n)?;
+    check_len("qd", qd, n)?;
+    check_len("posture", posture, n)?;
+    check_len("tau", tau, n)?;
+    finite("q", q)?;
+    finite("qd", qd)?;
+    finite("posture", posture)?;
+    finite("target velocity", &target.velocity)?;
+    finite("target acceleration", &target.acceleration)?;
+    let t = &target.pose;
+    if !(t.translation.is_finite() && t.rotation.is_finite()) {
+        return Err(TaskError::NotFinite {
+            argument: "target pose",
+        });
+    }
+
+    // The task rows: all six, or the three linear ones.
+    let m = match gains.orientation {
+        Orientation::Held => 6,
+        Orientation::Free => 3,
+    };
+
+    // J, the tool's pose and velocity.
+    jacobian(model, data, q, tool, &mut task.jacobian)?;
+    let pose = tool_pose(model, data, tool)?;
+    let jac = &task.jacobian;
+    let mut xd = [0.0; 6];
+    for (r, x) in xd.iter_mut().enumerate() {
+        *x = dot(&jac[r][..n], qd);
+    }
+
+    // The error, saturated, and the commanded task acceleration a − J̇ q̇.
+    let dp = t.translation - pose.translation;
+    let mut dq = DQuat::from_mat3(&t.rotation) * DQuat::from_mat3(&pose.rotation).inverse();
+    if dq.w < 0.0 {
+        dq = -dq;
+    }
+    let dr = 2.0 * quaternion::log(dq.normalize());
+    let position_error = dp.length();
+    let orientation_error = if m == 6 { dr.length() } else { 0.0 };
+    let e_p = saturate(dp, gains.max_position_error);
+    let e_o = saturate(dr, gains.max_orientation_error);
+    let e = [e_p.x, e_p.y, e_p.z, e_o.x, e_o.y, e_o.z];
+    let jdqd = jacobian_derivative_times_qd(model, data, q, qd, tool)?;
+    let mut a = [0.0; 6];
+    for r in 0..m {
+        let kp = gains.stiffness[r];
+        let kd = 2.0 * gains.damping_ratio * libm::sqrt(kp.max(0.0));
+        a[r] = target.acceleration[r] + kd * (target.velocity[r] - xd[r]) + kp * e[r] - jdqd[r];
+    }
+
+    // C(q, q̇) + G(q) (less G for a device that adds it), before the sweeps below reuse `data`.
+    let mut bias = [0.0; N];
+    bias[..n].copy_from_slice(nonlinear_effects(model, data, q, qd)?);
+    if gains.gravity_by_device {
+        let g = gravity(model, data, q)?;
+        for (b, g) in bias[..n].iter_mut().zip(g) {
+            *b -= g;
+        }
+    }
+
+    // M, its factors, M⁻¹ Jᵀ (m solves) and Λ⁻¹ = J M⁻¹ Jᵀ + Λ_ε.
+    crba(model, data, q)?;
+    factor_mass_matrix(model, data)?;
+    let mut lambda_inv = [[0.0; 6]; 6];
+    for r in 0..m {
+        let x = &mut task.minv_jt[r];
+        x[..n].copy_from_slice(&jac[r][..n]);
+        solve_mass_matrix(model, data, &mut x[..n])?;
+    }
+    for r in 0..m {
+        for c in 0..=r {
+            let v = dot(&jac[r][..n], &task.minv_jt[c][..n]);
+            lambda_inv[r][c] = v;
+            lambda_inv[c][r] = v;
+        }
+        lambda_inv[r][r] += gains.singular_damping[r / 3];
+    }
+    if !invert_spd(&lambda_inv, m, &mut task.lambda) {
+        return Err(TaskError::Singular);
+    }
+    let lambda = &task.lambda;
+
+    // The task force F = Λ (a − J̇ q̇) and τ = Jᵀ F.
+    let mut f = [0.0; 6];
+    for r in 0..m {
+        f[r] = (0..m).map(|c| lambda[r][c] * a[c]).sum();
+    }
+    for k in 0..n {
+        tau[k] = (0..m).map(|r| jac[r][k] * f[r]).sum();
+    }
+
+    // The nullspace: τ₀ = M a₀, then Nᵀ τ₀ = τ₀ − Jᵀ Λ (M⁻¹ Jᵀ)ᵀ τ₀.
+    let kq = gains.posture_stiffness.max(0.0);
+    let dq_gain = 2.0 * gains.posture_damping_ratio * libm::sqrt(kq);
+    let mut a0 = [0.0; N];
+    let mut near = 0;
+    for k in 0..n {
+        a0[k] = kq * (posture[k] - q[k]) - dq_gain * qd[k];
+        let l = model.limits(k);
+        if gains.limit_band > 0.0 && l.is_bounded() && !l.wraparound {
+            let below = gains.limit_band - (q[k] - l.lower);
+            let above = gains.limit_band - (l.upper - q[k]);
+            if below > 0.0 {
+                a0[k] += gains.limit_stiffness * below;
+                near += 1;
+            } else if above > 0.0 {
+                a0[k] -= gains.limit_stiffness * above;
+                near += 1;
+            }
+        }
+    }
+    let mut tau0 = [0.0; N];
+    for r in 0..n {
+        tau0[r] = (0..n).map(|c| data.mass_matrix(r, c) * a0[c]).sum();
+    }
+    let mut y = [0.0; 6];
+    for r in 0..m {
+        y[r] = dot(&task.minv_jt[r][..n], &tau0[..n]);
+    }
+    let mut z = [0.0; 6];
+    for r in 0..m {
+        z[r] = (0..m).map(|c| lambda[r][c] * y[c]).sum();
+    }
+    for k in 0..n {
+        tau[k] += tau0[k] - (0..m).map(|r| jac[r][k] * z[r]).sum::<f64>() + bias[k];
+    }
+
+    let mut tool_velocity = [0.0; 6];
+    tool_velocity.copy_from_slice(&xd);
+    Ok(TaskReport {
+        position_error,
+        orientation_error,
+        tool_velocity,
+        tool_pose: pose,
+        joints_near_limits: near,
+    })
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `v` shortened to at most `max` long (direction kept).
+fn saturate(v: DVec3, max: f64) -> DVec3 {
+    let l = v.length();
+    if l > max && l > 0.0 { v * (max / l) } else { v }
+}
+
+fn finite(argument: &'static str, x: &[f64]) -> Result<(), TaskError> {
+    if x.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(TaskError::NotFinite { argument })
+    }
+}

@@ -1,0 +1,21 @@
+//! Task-space control mathematics: the torques that make a tool follow a pose while the
+//! remaining freedom of a redundant arm holds a posture, for the laws of a torque-controlled
+//! arm (the controller's task-space laws build on these).
+//!
+//! - [`impedance`]: operational-space impedance (Khatib) with a dynamically consistent
+//!   nullspace: the tool's acceleration is commanded, the posture and joint-limit avoidance act
+//!   only where the task leaves the arm free, and a damped operational inertia keeps the torques
+//!   bounded through singularities.
+//! - [`limit_rate`]: a torque-rate limit, as a torque-controlled arm enforces on its input
+//!   (Franka: 1 N·m per ms).
+//!
+//! Like the algorithms, these write into a [`Data`](crate::Data) (and the task's own
+//! [`TaskData`]), allocate nothing and check their arguments' lengths.
+
+pub mod impedance;
+mod rate;
+
+pub use impedance::{
+    ImpedanceGains, Orientation, TaskData, TaskError, TaskReport, TaskTarget, operational_impedance,
+};
+pub use rate::limit_rate;

@@ -1,0 +1,417 @@
+//! Operational-space impedance (`rl_core::task`) checked by what it promises, with algorithms
+//! it does not use: the arm's forward dynamics (ABA) under the law's torques gives the tool
+//! exactly the commanded task acceleration (undamped, away from singularities), whatever the
+//! posture asks of the nullspace, on a redundant arm (KUKA iiwa, 7 DoF) and on random chains;
+//! at rest on target the law holds the arm against gravity and nothing more; a device that
+//! adds gravity gets the same torques less gravity; through a singularity the damped law's
+//! torques stay bounded as its damping says, where the undamped one fails.
+#![cfg(feature = "std")]
+
+mod support;
+
+use glam::{DQuat, DVec3};
+use rl_core::algo;
+use rl_core::spatial::PlueckerTransform;
+use rl_core::task::{
+    self, ImpedanceGains, Orientation, TaskData, TaskError, TaskTarget, operational_impedance,
+};
+use rl_core::{Data, Model};
+use support::{Rng, assert_close, random_chain};
+
+fn iiwa() -> Model<16> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/urdf/kuka_lbr_iiwa.urdf"
+    );
+    rl_core::loader::load_file::<16>(path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .model
+}
+
+/// The undamped law with random gains.
+fn gains(r: &mut Rng, orientation: Orientation) -> ImpedanceGains {
+    let mut stiffness = [0.0; 6];
+    for k in &mut stiffness {
+        *k = r.range(10.0, 500.0);
+    }
+    ImpedanceGains {
+        stiffness,
+        damping_ratio: r.range(0.3, 1.5),
+        orientation,
+        max_position_error: 0.05,
+        max_orientation_error: 0.3,
+        posture_stiffness: r.range(1.0, 50.0),
+        posture_damping_ratio: 1.0,
+        limit_band: 0.3,
+        limit_stiffness: 100.0,
+        singular_damping: [0.0, 0.0],
+        gravity_by_device: false,
+    }
+}
+
+/// A state, a target a few cm and degrees away (sometimes beyond the saturation), and a
+/// posture elsewhere.
+fn scene<const N: usize>(
+    m: &Model<N>,
+    d: &mut Data<N>,
+    r: &mut Rng,
+) -> (Vec<f64>, Vec<f64>, TaskTarget, Vec<f64>) {
+    let n = m.dof();
+    let q: Vec<f64> = (0..n).map(|_| r.range(-1.5, 1.5)).collect();
+    let qd: Vec<f64> = (0..n).map(|_| r.range(-1.0, 1.0)).collect();
+    let posture: Vec<f64> = (0..n).map(|_| r.range(-1.0, 1.0)).collect();
+    algo::forward_position(m, d, &q).unwrap();
+    let x = algo::tool_pose(m, d, 0).unwrap();
+    let turn = DQuat::from_scaled_axis(r.vec3(0.4));
+    let pose = PlueckerTransform::new(
+        glam::DMat3::from_quat(turn) * x.rotation,
+        x.translation + r.vec3(0.08),
+    );
+    let mut velocity = [0.0; 6];
+    let mut acceleration = [0.0; 6];
+    for k in 0..6 {
+        velocity[k] = r.range(-0.3, 0.3);
+        acceleration[k] = r.range(-2.0, 2.0);
+    }
+    (
+        q,
+        qd,
+        TaskTarget {
+            pose,
+            velocity,
+            acceleration,
+        },
+        posture,
+    )
+}
+
+/// The commanded task acceleration, worked out here from the tool's pose and velocity
+/// (forward position and velocity, glam's axis–angle), saturated as the gains say.
+fn commanded<const N: usize>(
+    m: &Model<N>,
+    d: &mut Data<N>,
+    g: &ImpedanceGains,
+    t: &TaskTarget,
+    q: &[f64],
+    qd: &[f64],
+) -> [f64; 6] {
+    algo::forward_position(m, d, q).unwrap();
+    let x = algo::tool_pose(m, d, 0).unwrap();
+    algo::forward_velocity(m, d, q, qd).unwrap();
+    let v = algo::tool_velocity(m, d, 0).unwrap();
+    let sat = |e: DVec3, max: f64| {
+        if e.length() > max {
+            e * (max / e.length())
+        } else {
+            e
+        }
+    };
+    let ep = sat(t.pose.translation - x.translation, g.max_position_error);
+    let (axis, angle) = rotation_error(&t.pose, &x);
+    let eo = sat(axis * angle, g.max_orientation_error);
+    let e = [ep.x, ep.y, ep.z, eo.x, eo.y, eo.z];
+    let mut a = [0.0; 6];
+    for k in 0..6 {
+        let kd = 2.0 * g.damping_ratio * g.stiffness[k].sqrt();
+        a[k] = t.acceleration[k] + kd * (t.velocity[k] - v[k]) + g.stiffness[k] * e[k];
+    }
+    a
+}
+
+/// The rotation from the tool's orientation `x` to the target's, as axis and angle in
+/// `[0, π]` (glam's quaternion axis–angle).
+fn rotation_error(target: &PlueckerTransform, x: &PlueckerTransform) -> (DVec3, f64) {
+    let (axis, angle) = (DQuat::from_mat3(&target.rotation)
+        * DQuat::from_mat3(&x.rotation).conjugate())
+    .to_axis_angle();
+    if angle > std::f64::consts::PI {
+        (-axis, 2.0 * std::f64::consts::PI - angle)
+    } else {
+        (axis, angle)
+    }
+}
+
+/// The tool's distance to the target and the angle between their orientations at `q`.
+fn errors<const N: usize>(m: &Model<N>, d: &mut Data<N>, t: &TaskTarget, q: &[f64]) -> (f64, f64) {
+    algo::forward_position(m, d, q).unwrap();
+    let x = algo::tool_pose(m, d, 0).unwrap();
+    (
+        (t.pose.translation - x.translation).length(),
+        rotation_error(&t.pose, &x).1,
+    )
+}
+
+/// The tool's acceleration under torques `tau` (ABA, then forward acceleration), and `q̈`.
+fn tool_acceleration<const N: usize>(
+    m: &Model<N>,
+    d: &mut Data<N>,
+    q: &[f64],
+    qd: &[f64],
+    tau: &[f64],
+) -> ([f64; 6], Vec<f64>) {
+    let qdd = algo::aba(m, d, q, qd, tau).unwrap().to_vec();
+    algo::forward_acceleration(m, d, q, qd, &qdd).unwrap();
+    (algo::tool_acceleration(m, d, 0).unwrap(), qdd)
+}
+
+fn check_task_acceleration<const N: usize>(m: &Model<N>, seed: u64, states: usize) {
+    let mut r = Rng(seed);
+    let mut d = Box::new(Data::<N>::new());
+    let mut task = Box::new(TaskData::<N>::new());
+    let n = m.dof();
+    let mut checked = 0;
+    while checked < states {
+        let (q, qd, target, posture) = scene(m, &mut d, &mut r);
+        for orientation in [Orientation::Held, Orientation::Free] {
+            let g = gains(&mut r, orientation);
+            let rows = if orientation == Orientation::Held {
+                6
+            } else {
+                3
+            };
+            let mut tau = vec![0.0; n];
+            let report = operational_impedance(
+                m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut tau,
+            )
+            .unwrap();
+            // The errors as the law reports them (before saturation).
+            let (dp, angle) = errors(m, &mut d, &target, &q);
+            assert!((report.position_error - dp).abs() < 1e-12, "{report:?}");
+            let angle = if rows == 6 { angle } else { 0.0 };
+            assert!(
+                (report.orientation_error - angle).abs() < 1e-9,
+                "{report:?} {angle}"
+            );
+            let want = commanded(m, &mut d, &g, &target, &q, &qd);
+            let (got, qdd) = tool_acceleration(m, &mut d, &q, &qd, &tau);
+            // Relative to the size of the terms that cancel in it.
+            let scale = 1.0 + want.iter().map(|a| a.abs()).fold(0.0, f64::max);
+            assert_close(
+                "tool acceleration",
+                &got[..rows],
+                &want[..rows],
+                1e-7 * scale,
+            );
+
+            // Another posture: other joint accelerations, the same task acceleration.
+            let other: Vec<f64> = posture.iter().map(|p| -p).collect();
+            let mut tau2 = vec![0.0; n];
+            operational_impedance(
+                m, &mut d, &mut task, 0, &g, &target, &q, &qd, &other, &mut tau2,
+            )
+            .unwrap();
+            let (got2, qdd2) = tool_acceleration(m, &mut d, &q, &qd, &tau2);
+            assert_close(
+                "task under another posture",
+                &got2[..rows],
+                &got[..rows],
+                1e-7 * scale,
+            );
+            let moved = qdd
+                .iter()
+                .zip(&qdd2)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if n > rows {
+                assert!(
+                    moved > 1e-3,
+                    "the posture changed no joint acceleration ({moved})"
+                );
+            }
+        }
+        checked += 1;
+    }
+}
+
+#[test]
+fn the_tool_accelerates_as_commanded_whatever_the_posture_asks_iiwa() {
+    check_task_acceleration(&iiwa(), 1, 50);
+}
+
+#[test]
+fn the_tool_accelerates_as_commanded_whatever_the_posture_asks_random_chains() {
+    for (n, seed) in [(6, 11), (7, 12), (9, 13)] {
+        check_task_acceleration(&random_chain::<16>(n, seed), seed, 20);
+    }
+}
+
+#[test]
+fn at_rest_on_target_the_law_holds_the_arm_against_gravity_and_a_device_that_adds_gravity_gets_none()
+ {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut task = Box::new(TaskData::<16>::new());
+    let mut r = Rng(3);
+    for _ in 0..20 {
+        let q: Vec<f64> = (0..7).map(|_| r.range(-1.5, 1.5)).collect();
+        let zero = vec![0.0; 7];
+        algo::forward_position(&m, &mut d, &q).unwrap();
+        let target = TaskTarget::at(algo::tool_pose(&m, &d, 0).unwrap());
+        let g = ImpedanceGains {
+            limit_band: 0.0,
+            ..ImpedanceGains::default()
+        };
+        let mut tau = vec![0.0; 7];
+        let report = operational_impedance(
+            &m, &mut d, &mut task, 0, &g, &target, &q, &zero, &q, &mut tau,
+        )
+        .unwrap();
+        assert!(report.position_error < 1e-12 && report.orientation_error < 1e-7);
+        let gravity = algo::gravity(&m, &mut d, &q).unwrap().to_vec();
+        assert_close("holding torque", &tau, &gravity, 1e-9);
+        // The same moving toward a target, gravity left to the device.
+        let (q, qd, target, posture) = scene(&m, &mut d, &mut r);
+        let mut full = vec![0.0; 7];
+        operational_impedance(
+            &m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut full,
+        )
+        .unwrap();
+        let mut less = vec![0.0; 7];
+        let by_device = ImpedanceGains {
+            gravity_by_device: true,
+            ..g
+        };
+        operational_impedance(
+            &m, &mut d, &mut task, 0, &by_device, &target, &q, &qd, &posture, &mut less,
+        )
+        .unwrap();
+        let gravity = algo::gravity(&m, &mut d, &q).unwrap().to_vec();
+        let sum: Vec<f64> = less.iter().zip(&gravity).map(|(a, b)| a + b).collect();
+        assert_close("torques less gravity", &sum, &full, 1e-9);
+    }
+}
+
+/// The iiwa straightened through its stretched singularity (every joint 0: the tool cannot
+/// move along the arm's axis), pulled toward a target beyond reach at rest: with the
+/// singularity damping `Λ_ε` the task torques stay under `‖J‖ ‖a‖ / ε` (the bound `Λ ≤ Λ_ε⁻¹`
+/// gives) all the way, and under the effort limits; without it the law reports the singularity
+/// or its torques grow past that bound.
+#[test]
+fn through_a_singularity_the_damped_law_keeps_its_torques_bounded() {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut task = Box::new(TaskData::<16>::new());
+    let zero = [0.0; 7];
+    algo::forward_position(&m, &mut d, &zero).unwrap();
+    let stretched = algo::tool_pose(&m, &d, 0).unwrap();
+    // 5 cm beyond reach, along the arm.
+    let target = TaskTarget::at(PlueckerTransform::new(
+        stretched.rotation,
+        stretched.translation + DVec3::new(0.0, 0.0, 0.05),
+    ));
+    let damped = ImpedanceGains {
+        gravity_by_device: true,
+        limit_band: 0.0,
+        posture_stiffness: 0.0,
+        singular_damping: [0.05, 0.5],
+        ..ImpedanceGains::default()
+    };
+    let undamped = ImpedanceGains {
+        singular_damping: [0.0, 0.0],
+        ..damped
+    };
+    let a_max = (3.0f64.sqrt() * 400.0 * 0.05).hypot(300.0 * 0.3);
+    let mut worst_damped: f64 = 0.0;
+    let mut worst_undamped: f64 = 0.0;
+    let mut refused = 0;
+    for k in -200..=200 {
+        // Joints 2 and 4 (the elbows) bend through 0, down to 1e-6 rad from it.
+        let s = k as f64 / 200.0;
+        let bend = 0.3 * s.signum() * s.abs().powi(3).max(1e-6 / 0.3);
+        let q = [0.0, bend, 0.0, -2.0 * bend, 0.0, bend, 0.0];
+        let mut tau = [0.0; 7];
+        operational_impedance(
+            &m, &mut d, &mut task, 0, &damped, &target, &q, &zero, &q, &mut tau,
+        )
+        .unwrap();
+        assert!(tau.iter().all(|t| t.is_finite()), "{q:?}: {tau:?}");
+        let jn = frobenius(&task.jacobian, 7);
+        let norm = tau.iter().map(|t| t * t).sum::<f64>().sqrt();
+        let bound = jn * a_max / 0.05;
+        assert!(norm <= bound, "{q:?}: |τ| {norm} over the bound {bound}");
+        for (j, t) in tau.iter().enumerate() {
+            assert!(t.abs() <= m.limits(j).effort, "joint {j}: {t} N·m at {q:?}");
+        }
+        worst_damped = worst_damped.max(norm);
+        match operational_impedance(
+            &m, &mut d, &mut task, 0, &undamped, &target, &q, &zero, &q, &mut tau,
+        ) {
+            Ok(_) => {
+                worst_undamped = worst_undamped.max(tau.iter().map(|t| t * t).sum::<f64>().sqrt())
+            }
+            Err(TaskError::Singular) => refused += 1,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    println!(
+        "through the singularity: damped |τ| ≤ {worst_damped:.1} N·m; undamped up to \
+         {worst_undamped:.3e} N·m, refused at {refused} of 401 configurations"
+    );
+    assert!(
+        refused > 0 || worst_undamped > 100.0 * worst_damped,
+        "the undamped law met no singularity: {worst_undamped} vs {worst_damped}"
+    );
+}
+
+#[test]
+fn bad_arguments_are_refused_with_what_and_where() {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut task = Box::new(TaskData::<16>::new());
+    let q = [0.1; 7];
+    let target = TaskTarget::at(PlueckerTransform::IDENTITY);
+    let g = ImpedanceGains::default();
+    let mut tau = [0.0; 7];
+    let e = operational_impedance(
+        &m,
+        &mut d,
+        &mut task,
+        0,
+        &g,
+        &target,
+        &q[..6],
+        &q,
+        &q,
+        &mut tau,
+    )
+    .unwrap_err();
+    assert_eq!(e.to_string(), "`q` has 6 elements, the model needs 7");
+    let e = operational_impedance(&m, &mut d, &mut task, 3, &g, &target, &q, &q, &q, &mut tau)
+        .unwrap_err();
+    assert_eq!(e.to_string(), "tool 3 does not exist");
+    let mut nan = q;
+    nan[2] = f64::NAN;
+    let e = operational_impedance(
+        &m, &mut d, &mut task, 0, &g, &target, &q, &nan, &q, &mut tau,
+    )
+    .unwrap_err();
+    assert_eq!(e, TaskError::NotFinite { argument: "qd" });
+}
+
+#[test]
+fn the_torque_rate_limit_moves_each_joint_at_most_its_step() {
+    let mut r = Rng(9);
+    for _ in 0..100 {
+        let prev: Vec<f64> = (0..7).map(|_| r.range(-10.0, 10.0)).collect();
+        let want: Vec<f64> = (0..7).map(|_| r.range(-12.0, 12.0)).collect();
+        let mut tau = want.clone();
+        let n = task::limit_rate(&prev, &mut tau, 1.0);
+        let mut expect = 0;
+        for k in 0..7 {
+            assert!((tau[k] - prev[k]).abs() <= 1.0 + 1e-12);
+            if (want[k] - prev[k]).abs() <= 1.0 {
+                assert_eq!(tau[k], want[k]);
+            } else {
+                expect += 1;
+            }
+        }
+        assert_eq!(n, expect);
+    }
+}
+
+fn frobenius(j: &[[f64; 16]; 6], n: usize) -> f64 {
+    j.iter()
+        .map(|row| row[..n].iter().map(|x| x * x).sum::<f64>())
+        .sum::<f64>()
+        .sqrt()
+}
