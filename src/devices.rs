@@ -14,6 +14,7 @@
 //!     None,
 //!     None,
 //!     Supervision::default().device_failure_limit(),
+//!     false,
 //! )?;
 //! let _fake = opened.fake; // an in-process fake lives as long as this value
 //! let options = RunOptions::default().duration(Duration::from_secs(2));
@@ -637,13 +638,17 @@ impl DeviceSpec {
 
     /// Builds the device for `loaded`; `period` is the control period asked for, if any;
     /// `failure_limit` failed steps in a row fault the device. An in-process fake stands at
-    /// `home` (the start of a planned motion), else at the model's home position.
+    /// `home` (the start of a planned motion), else at the model's home position. `torque`:
+    /// the run's law commands joint torques, and a device that has several command modes is
+    /// opened in its torque mode (a Franka arm); the others are opened as always (and a run
+    /// refuses a torque law on a device that takes no torques).
     pub fn build<const B: usize>(
         &self,
         loaded: &LoadedModel<B>,
         period: Option<Duration>,
         home: Option<&[f64]>,
         failure_limit: u32,
+        torque: bool,
     ) -> Result<Opened, SpecError> {
         let model = &loaded.model;
         let home = home.map_or_else(|| loaded.home_or_neutral(), <[f64]>::to_vec);
@@ -763,13 +768,24 @@ impl DeviceSpec {
                 })
             }
             Self::Franka { server } => {
-                let mut config = rl_drivers::franka::FrankaConfig::new(server.ip());
+                let (mode, what) = if torque {
+                    (
+                        rl_drivers::franka::ControlMode::JointTorque,
+                        "joint torques",
+                    )
+                } else {
+                    (
+                        rl_drivers::franka::ControlMode::JointPosition,
+                        "joint positions",
+                    )
+                };
+                let mut config = rl_drivers::franka::FrankaConfig::new(server.ip()).with_mode(mode);
                 config.command_port = server.port();
                 let robot = rl_drivers::FrankaArm::new(config)
                     .map_err(|e| SpecError::usage(format!("--device: {e}")))?;
                 Ok(Opened {
                     robot: Box::new(robot),
-                    name: format!("Franka arm at {server} (FCI, joint positions at 1 kHz)"),
+                    name: format!("Franka arm at {server} (FCI, {what} at 1 kHz)"),
                     fake: None,
                     lag: Duration::ZERO,
                 })

@@ -129,7 +129,9 @@ fn follow(device: &str, seed: u64) -> Outcome {
     let start = loaded.home_or_neutral();
     let limits = MotionLimits::<8>::from_model(&model, SPEED).expect("limits");
     let spec = DeviceSpec::parse(device).expect("device");
-    let opened = spec.build(&loaded, None, None, 4).expect("device built");
+    let opened = spec
+        .build(&loaded, None, None, 4, false)
+        .expect("device built");
     let jobs = Arc::new(Mutex::new(Vec::new()));
     let law = Recording {
         inner: TargetFollower::new(),

@@ -13,7 +13,8 @@ use glam::{DQuat, DVec3};
 use rl_core::algo;
 use rl_core::spatial::PlueckerTransform;
 use rl_core::task::{
-    self, ImpedanceGains, Orientation, TaskData, TaskError, TaskTarget, operational_impedance,
+    self, ImpedanceGains, Orientation, Singularity, TaskData, TaskError, TaskTarget,
+    operational_impedance,
 };
 use rl_core::{Data, Model};
 use support::{Rng, assert_close, random_chain};
@@ -44,7 +45,7 @@ fn gains(r: &mut Rng, orientation: Orientation) -> ImpedanceGains {
         posture_damping_ratio: 1.0,
         limit_band: 0.3,
         limit_stiffness: 100.0,
-        singular_damping: [0.0, 0.0],
+        singularity: Singularity::Exact,
         gravity_by_device: false,
     }
 }
@@ -282,12 +283,12 @@ fn at_rest_on_target_the_law_holds_the_arm_against_gravity_and_a_device_that_add
 }
 
 /// The iiwa straightened through its stretched singularity (every joint 0: the tool cannot
-/// move along the arm's axis), pulled toward a target beyond reach at rest: with the
-/// singularity damping `Λ_ε` the task torques stay under `‖J‖ ‖a‖ / ε` (the bound `Λ ≤ Λ_ε⁻¹`
-/// gives) all the way, and under the effort limits; without it the law reports the singularity
-/// or its torques grow past that bound.
+/// move along the arm's axis), pulled toward a target beyond reach at rest: with `Λ` clamped
+/// or damped at `ε` the task torques stay under `‖J‖ ‖a‖ / ε` (the bound `Λ ≤ ε⁻¹` gives) all
+/// the way, and under the effort limits; without a bound the law reports the singularity or its
+/// torques grow far past that bound.
 #[test]
-fn through_a_singularity_the_damped_law_keeps_its_torques_bounded() {
+fn through_a_singularity_the_bounded_law_keeps_its_torques_bounded() {
     let m = iiwa();
     let mut d = Box::new(Data::<16>::new());
     let mut task = Box::new(TaskData::<16>::new());
@@ -299,58 +300,120 @@ fn through_a_singularity_the_damped_law_keeps_its_torques_bounded() {
         stretched.rotation,
         stretched.translation + DVec3::new(0.0, 0.0, 0.05),
     ));
-    let damped = ImpedanceGains {
+    let eps = [0.01, 0.1];
+    let base = ImpedanceGains {
         gravity_by_device: true,
         limit_band: 0.0,
         posture_stiffness: 0.0,
-        singular_damping: [0.05, 0.5],
         ..ImpedanceGains::default()
     };
-    let undamped = ImpedanceGains {
-        singular_damping: [0.0, 0.0],
-        ..damped
-    };
     let a_max = (3.0f64.sqrt() * 400.0 * 0.05).hypot(300.0 * 0.3);
-    let mut worst_damped: f64 = 0.0;
-    let mut worst_undamped: f64 = 0.0;
+    let mut worst_bounded: f64 = 0.0;
+    let mut worst_exact: f64 = 0.0;
     let mut refused = 0;
+    let mut clamped_at = 0;
     for k in -200..=200 {
-        // Joints 2 and 4 (the elbows) bend through 0, down to 1e-6 rad from it.
+        // Joints 2, 4 and 6 bend through 0, down to 1e-6 rad from it.
         let s = k as f64 / 200.0;
         let bend = 0.3 * s.signum() * s.abs().powi(3).max(1e-6 / 0.3);
         let q = [0.0, bend, 0.0, -2.0 * bend, 0.0, bend, 0.0];
         let mut tau = [0.0; 7];
-        operational_impedance(
-            &m, &mut d, &mut task, 0, &damped, &target, &q, &zero, &q, &mut tau,
-        )
-        .unwrap();
-        assert!(tau.iter().all(|t| t.is_finite()), "{q:?}: {tau:?}");
-        let jn = frobenius(&task.jacobian, 7);
-        let norm = tau.iter().map(|t| t * t).sum::<f64>().sqrt();
-        let bound = jn * a_max / 0.05;
-        assert!(norm <= bound, "{q:?}: |τ| {norm} over the bound {bound}");
-        for (j, t) in tau.iter().enumerate() {
-            assert!(t.abs() <= m.limits(j).effort, "joint {j}: {t} N·m at {q:?}");
-        }
-        worst_damped = worst_damped.max(norm);
-        match operational_impedance(
-            &m, &mut d, &mut task, 0, &undamped, &target, &q, &zero, &q, &mut tau,
-        ) {
-            Ok(_) => {
-                worst_undamped = worst_undamped.max(tau.iter().map(|t| t * t).sum::<f64>().sqrt())
+        for singularity in [Singularity::Clamped(eps), Singularity::Damped(eps)] {
+            let g = ImpedanceGains {
+                singularity,
+                ..base
+            };
+            let report = operational_impedance(
+                &m, &mut d, &mut task, 0, &g, &target, &q, &zero, &q, &mut tau,
+            )
+            .unwrap();
+            if matches!(singularity, Singularity::Clamped(_)) && report.bounded_directions > 0 {
+                clamped_at += 1;
             }
+            assert!(tau.iter().all(|t| t.is_finite()), "{q:?}: {tau:?}");
+            let jn = frobenius(&task.jacobian, 7);
+            let norm = tau.iter().map(|t| t * t).sum::<f64>().sqrt();
+            let bound = jn * a_max / eps[0].min(eps[1]);
+            assert!(
+                norm <= bound,
+                "{singularity:?} {q:?}: |τ| {norm} over the bound {bound}"
+            );
+            for (j, t) in tau.iter().enumerate() {
+                assert!(
+                    t.abs() <= m.limits(j).effort,
+                    "{singularity:?} joint {j}: {t} N·m at {q:?}"
+                );
+            }
+            worst_bounded = worst_bounded.max(norm);
+        }
+        let exact = ImpedanceGains {
+            singularity: Singularity::Exact,
+            ..base
+        };
+        match operational_impedance(
+            &m, &mut d, &mut task, 0, &exact, &target, &q, &zero, &q, &mut tau,
+        ) {
+            Ok(_) => worst_exact = worst_exact.max(tau.iter().map(|t| t * t).sum::<f64>().sqrt()),
             Err(TaskError::Singular) => refused += 1,
             Err(e) => panic!("{e}"),
         }
     }
     println!(
-        "through the singularity: damped |τ| ≤ {worst_damped:.1} N·m; undamped up to \
-         {worst_undamped:.3e} N·m, refused at {refused} of 401 configurations"
+        "through the singularity: bounded |τ| ≤ {worst_bounded:.1} N·m (the clamp acted at \
+         {clamped_at} of 401 configurations); unbounded up to {worst_exact:.3e} N·m, refused at \
+         {refused}"
     );
+    assert!(clamped_at > 0 && clamped_at < 401, "{clamped_at}");
     assert!(
-        refused > 0 || worst_undamped > 100.0 * worst_damped,
-        "the undamped law met no singularity: {worst_undamped} vs {worst_damped}"
+        refused > 0 || worst_exact > 100.0 * worst_bounded,
+        "the unbounded law met no singularity: {worst_exact} vs {worst_bounded}"
     );
+}
+
+/// Where the clamp does not act, the clamped law is the exact one; where it acts, it bounds.
+#[test]
+fn the_clamped_law_is_exact_wherever_its_clamp_does_not_act() {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut task = Box::new(TaskData::<16>::new());
+    let mut r = Rng(21);
+    let (mut exact_cases, mut clamped_cases) = (0, 0);
+    for _ in 0..200 {
+        let (q, qd, target, posture) = scene(&m, &mut d, &mut r);
+        let g = gains(&mut r, Orientation::Held);
+        let mut exact = [0.0; 7];
+        operational_impedance(
+            &m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut exact,
+        )
+        .unwrap();
+        let clamped_gains = ImpedanceGains {
+            singularity: Singularity::Clamped([0.01, 0.1]),
+            ..g
+        };
+        let mut clamped = [0.0; 7];
+        let report = operational_impedance(
+            &m,
+            &mut d,
+            &mut task,
+            0,
+            &clamped_gains,
+            &target,
+            &q,
+            &qd,
+            &posture,
+            &mut clamped,
+        )
+        .unwrap();
+        if report.bounded_directions == 0 {
+            exact_cases += 1;
+            let scale = 1.0 + exact.iter().map(|t| t.abs()).fold(0.0, f64::max);
+            assert_close("clamp not acting", &clamped, &exact, 1e-9 * scale);
+        } else {
+            clamped_cases += 1;
+        }
+    }
+    println!("{exact_cases} states without a clamp, {clamped_cases} with");
+    assert!(exact_cases > 20, "{exact_cases}");
 }
 
 #[test]

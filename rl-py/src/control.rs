@@ -260,6 +260,7 @@ fn start<const N: usize>(
             period,
             None,
             options.supervision.device_failure_limit(),
+            false,
         )
         .map_err(|e| {
             if e.is_input() {

@@ -37,6 +37,7 @@ use rl::controller::plan::joint_name;
 use rl::controller::planned::{PathExecution, PlannedMotion, PlannedMotionError, plan_motion_with};
 use rl::controller::runtime::DEFAULT_SPEED;
 use rl::controller::stream::{self, TargetSource};
+use rl::controller::task_space::{CartesianImpedance, TaskMotion};
 use rl::controller::{
     ControlLaw, ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions,
     Supervision, TargetFollower, TelemetryFile, ViewHook,
@@ -222,6 +223,38 @@ pub struct RunArgs {
     /// run (a failure) [default: 2s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "follow", help_heading = "Streamed targets")]
     pub input_timeout: Option<Duration>,
+    /// Run a task-space law instead of a tour: `cartesian-impedance` (operational-space
+    /// impedance of the model's first tool, torque control; the device must take joint
+    /// torques, e.g. franka://HOST). The tool does what --task says.
+    #[arg(
+        long,
+        value_name = "LAW",
+        value_enum,
+        help_heading = "Task-space control"
+    )]
+    pub law: Option<LawArg>,
+    /// With --law: `figure-eight` (a figure-eight in the world's y-z plane through the tool's
+    /// start, --task-size wide, once every --task-period, at constant orientation) or `hold`
+    /// (the start pose) [default: hold].
+    #[arg(
+        long,
+        value_name = "TASK",
+        value_enum,
+        requires = "law",
+        help_heading = "Task-space control"
+    )]
+    pub task: Option<TaskArg>,
+    /// With --task figure-eight: its width, m [default: 0.2].
+    #[arg(
+        long,
+        value_name = "M",
+        requires = "law",
+        help_heading = "Task-space control"
+    )]
+    pub task_size: Option<f64>,
+    /// With --task figure-eight: the time for one figure [default: 4s].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "law", help_heading = "Task-space control")]
+    pub task_period: Option<Duration>,
     /// The emergency-stop input, a GPIO line CHIP:OFFSET (e.g. gpiochip0:17), normally closed:
     /// it reads high while the chain is closed; low (pressed, or a broken wire) stops the arm.
     /// The run does not start with it open; a stop latches: closing it again restarts nothing.
@@ -315,6 +348,34 @@ pub enum Follow {
     Lines(TargetSource),
     /// The cell's streamed targets (Zenoh).
     Cell,
+}
+
+/// `--law`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LawArg {
+    /// Operational-space impedance (rl::controller::task_space::CartesianImpedance).
+    CartesianImpedance,
+}
+
+/// `--task`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum TaskArg {
+    /// A figure-eight through the start pose.
+    FigureEight,
+    /// The start pose, held.
+    Hold,
+}
+
+/// The task-space law `--law` asks for.
+fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedance<B, J> {
+    let motion = match args.task.unwrap_or(TaskArg::Hold) {
+        TaskArg::Hold => TaskMotion::Hold,
+        TaskArg::FigureEight => TaskMotion::FigureEight {
+            size_m: args.task_size.unwrap_or(0.2),
+            period_s: args.task_period.map_or(4.0, |d| d.as_secs_f64()),
+        },
+    };
+    CartesianImpedance::new(0, motion)
 }
 
 /// `--follow`'s value.
@@ -466,6 +527,19 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
             &["waypoints", "plan"],
             "with --follow: the run follows streamed targets, not a tour or a planned path",
         )?;
+    }
+    if args.law.is_some() {
+        refuse_given(
+            &["waypoints", "plan", "follow"],
+            "with --law: the run's law is the task-space one, not a tour, a planned path or \
+             streamed joint targets",
+        )?;
+        if args.task_size.is_some_and(|s| !(s.is_finite() && s >= 0.0)) {
+            return Err(CliError::usage("--task-size: give a width in m, 0 or more"));
+        }
+        if args.task_period.is_some_and(|p| p.is_zero()) {
+            return Err(CliError::usage("--task-period: give a time above 0"));
+        }
     }
     if matches!(args.follow, Some(Follow::Cell)) && !args.zenoh.wanted() {
         return Err(CliError::usage(
@@ -783,6 +857,7 @@ fn drive<const B: usize, const J: usize>(
         setup.period,
         home.as_deref(),
         supervision.device_failure_limit(),
+        args.law.is_some(),
     )?;
     let fake = opened.fake;
     let cycle = opened.robot.update_period();
@@ -842,6 +917,26 @@ fn drive<const B: usize, const J: usize>(
         RunError::Options(why) => Err(CliError::usage(why)),
         e => Err(CliError::failed(setup.device.explain(&e))),
     };
+    if args.law.is_some() {
+        let run = match ControlRun::<_, B, J, _>::start_law(
+            robot,
+            loaded,
+            options,
+            task_law::<B, J>(args),
+        ) {
+            Ok(run) => run,
+            Err(e) => return refused(e),
+        };
+        let after = After {
+            cell,
+            view,
+            fake,
+            plan_note,
+            plan_json,
+            stream: None,
+        };
+        return supervise(args, setup, run, after, &stop);
+    }
     if let Some(follow) = &args.follow {
         if options.input_timeout.is_none() {
             options.input_timeout = Some(args.input_timeout.unwrap_or(DEFAULT_INPUT_TIMEOUT));

@@ -196,6 +196,9 @@ pub struct Start<'a, const B: usize, const J: usize> {
     pub period_s: f64,
     /// The device's cycle, s.
     pub device_period_s: f64,
+    /// The device adds the gravity torque to the torques it is given (rl-drivers'
+    /// `JointTorqueActuator::adds_gravity`, e.g. a Franka arm): a torque law leaves it out.
+    pub device_adds_gravity: bool,
 }
 
 /// The measured state of one cycle (`dof` values each).

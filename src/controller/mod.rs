@@ -75,6 +75,7 @@ pub mod safety;
 pub mod stream;
 pub mod supervise;
 mod target_follower;
+pub mod task_space;
 pub mod telemetry;
 pub mod tracking;
 #[cfg(feature = "view")]

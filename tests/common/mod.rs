@@ -175,6 +175,7 @@ pub fn law_on_h7<L: rl::controller::ControlLaw<16, 8>>(
         limits: &limits,
         period_s: PERIOD.as_secs_f64(),
         device_period_s: PERIOD.as_secs_f64(),
+        device_adds_gravity: false,
     })
     .expect("law starts");
     let mut control = Box::new(

@@ -7,19 +7,29 @@
 //!
 //! ```text
 //! a   = ẍ_d + K_d (ẋ_d − ẋ) + K_p e                 e = [p_d − p; log(R_d Rᵀ)]   (world)
-//! Λ   = (J M⁻¹ Jᵀ + Λ_ε)⁻¹                            Λ_ε: singularity damping (diagonal)
+//! Λ   = (J M⁻¹ Jᵀ)⁻¹, clamped or damped near singularities (below)
 //! τ   = Jᵀ Λ (a − J̇ q̇) + Nᵀ M a₀ + C(q, q̇) + G(q)     Nᵀ = I − Jᵀ Λ J M⁻¹
 //! a₀  = K_q (q_r − q) − D_q q̇ + a_lim                (posture and joint-limit avoidance)
 //! ```
 //!
-//! With `Λ_ε = 0` away from singularities the closed loop is exactly `ë + K_d ė + K_p e = 0`
-//! in every task direction, decoupled, whatever the arm's inertia (`J M⁻¹ Nᵀ = 0`: the
-//! nullspace torque moves no task coordinate), and `K_d = 2ζ√K_p` makes it critically damped
-//! for `ζ = 1`. Near a singularity `J M⁻¹ Jᵀ` loses rank; the damping `Λ_ε` (damped least
-//! squares in the operational space, Nakamura & Hanafusa 1986) bounds `Λ` by `Λ_ε⁻¹`, so the
-//! torques stay bounded, at the price of a task error in the singular direction. `J`: the
+//! Away from singularities the closed loop is exactly `ë + K_d ė + K_p e = 0` in every task
+//! direction, decoupled, whatever the arm's inertia (`J M⁻¹ Nᵀ = 0`: the nullspace torque
+//! moves no task coordinate), and `K_d = 2ζ√K_p` makes it critically damped for `ζ = 1`. Near
+//! a singularity `J M⁻¹ Jᵀ` loses rank and `Λ` grows without bound; [`Singularity`] chooses
+//! what bounds it by `ε⁻¹` (`ε = diag(ε_lin I₃, ε_ang I₃)`), so that the torques stay bounded at
+//! the price of a task error in the singular direction:
+//!
+//! - [`Singularity::Clamped`] (the default): the eigenvalues of `ε^{-1/2} J M⁻¹ Jᵀ ε^{-1/2}`
+//!   are clamped from below at 1 (a symmetric eigen-decomposition,
+//!   [`crate::math::symmetric_eigen`]): directions farther than that from singular are
+//!   inverted exactly, so the task is exact wherever no clamp acts.
+//! - [`Singularity::Damped`]: `Λ = (J M⁻¹ Jᵀ + ε)⁻¹` (damped least squares in the operational
+//!   space, Nakamura & Hanafusa 1986): cheaper, but every direction is softened a little.
+//! - [`Singularity::Exact`]: no bound; a singular task is an error.
+//!
+//! `J`: the
 //! tool's world Jacobian at its origin, rows `[linear; angular]` (RL's convention,
-//! [`crate::algo::jacobian`]); only the rows [`ImpedanceGains::axes`] selects form the task
+//! [`crate::algo::jacobian`]); only the rows [`ImpedanceGains::orientation`] selects form the task
 //! (e.g. position only, leaving the tool's orientation to the nullspace). The orientation
 //! error is the rotation vector of `R_d Rᵀ` (the shortest way, `|e_o| ≤ π`); its derivative is
 //! the angular velocity error for small errors, as is usual.
@@ -37,7 +47,7 @@ use crate::algo::{
     nonlinear_effects, solve_mass_matrix, tool_pose,
 };
 use crate::error::{Error, check_len};
-use crate::math::invert_spd;
+use crate::math::{invert_spd, symmetric_eigen};
 use crate::model::{Data, Model};
 use crate::rotation::quaternion;
 use crate::spatial::PlueckerTransform;
@@ -76,9 +86,8 @@ pub struct ImpedanceGains {
     pub limit_band: f64,
     /// The joint-limit push per unit of intrusion into the band, 1/s².
     pub limit_stiffness: f64,
-    /// Singularity damping `Λ_ε` added to `J M⁻¹ Jᵀ`'s diagonal before it is inverted:
-    /// `[linear (1/kg), angular (1/(kg·m²))]`. 0 inverts exactly (and fails at a singularity).
-    pub singular_damping: [f64; 2],
+    /// How `Λ` is kept bounded near singularities.
+    pub singularity: Singularity,
     /// The device adds the gravity torque itself (a Franka arm): `G(q)` is left out of `τ`.
     pub gravity_by_device: bool,
 }
@@ -98,10 +107,22 @@ impl Default for ImpedanceGains {
             posture_damping_ratio: 1.0,
             limit_band: 0.1,
             limit_stiffness: 200.0,
-            singular_damping: [1e-3, 1e-3],
+            singularity: Singularity::Clamped([0.01, 0.1]),
             gravity_by_device: false,
         }
     }
+}
+
+/// How [`operational_impedance`] bounds the operational inertia `Λ` near singularities (module
+/// doc); `ε = [linear (1/kg), angular (1/(kg·m²))]`, each > 0, and `Λ ≤ ε⁻¹`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Singularity {
+    /// `Λ = (J M⁻¹ Jᵀ)⁻¹`; a singular task is [`TaskError::Singular`].
+    Exact,
+    /// `Λ = (J M⁻¹ Jᵀ + ε)⁻¹`.
+    Damped([f64; 2]),
+    /// The eigenvalues of `ε^{-1/2} J M⁻¹ Jᵀ ε^{-1/2}` clamped from below at 1.
+    Clamped([f64; 2]),
 }
 
 /// Where the tool should be: its pose in the world, and the velocity and acceleration along
@@ -176,6 +197,9 @@ pub struct TaskReport {
     pub tool_pose: PlueckerTransform,
     /// Joints inside their limit band (pushed away by the nullspace).
     pub joints_near_limits: usize,
+    /// Task directions whose operational inertia was bounded ([`Singularity::Clamped`]: the
+    /// clamped eigenvalues; [`Singularity::Damped`]: all of them).
+    pub bounded_directions: usize,
 }
 
 /// Why [`operational_impedance`] gave no torques.
@@ -194,6 +218,8 @@ pub enum TaskError {
     /// `J M⁻¹ Jᵀ + Λ_ε` is not positive definite: the arm is at a singularity of the task and
     /// no damping was given.
     Singular,
+    /// A singularity bound `ε` that is not positive.
+    Bound,
     /// A gain, target or state is not finite.
     NotFinite {
         /// Which argument.
@@ -218,8 +244,9 @@ impl fmt::Display for TaskError {
             ),
             Self::Singular => f.write_str(
                 "the task's operational inverse inertia J M⁻¹ Jᵀ is singular (the arm is at a \
-                 singularity) and no singularity damping was given",
+                 singularity) and no bound was asked for (Singularity::Exact)",
             ),
+            Self::Bound => f.write_str("the singularity bound ε must be positive"),
             Self::NotFinite { argument } => write!(f, "`{argument}` is not finite"),
         }
     }
@@ -325,11 +352,9 @@ pub fn operational_impedance<const N: usize>(
             lambda_inv[r][c] = v;
             lambda_inv[c][r] = v;
         }
-        lambda_inv[r][r] += gains.singular_damping[r / 3];
     }
-    if !invert_spd(&lambda_inv, m, &mut task.lambda) {
-        return Err(TaskError::Singular);
-    }
+    let bounded_directions =
+        operational_inertia(&lambda_inv, m, gains.singularity, &mut task.lambda)?;
     let lambda = &task.lambda;
 
     // The task force F = Λ (a − J̇ q̇) and τ = Jᵀ F.
@@ -385,7 +410,74 @@ pub fn operational_impedance<const N: usize>(
         tool_velocity,
         tool_pose: pose,
         joints_near_limits: near,
+        bounded_directions,
     })
+}
+
+/// `Λ` from `Λ⁻¹` (`m × m`) as `singularity` says; returns the directions it bounded.
+fn operational_inertia(
+    lambda_inv: &[[f64; 6]; 6],
+    m: usize,
+    singularity: Singularity,
+    lambda: &mut [[f64; 6]; 6],
+) -> Result<usize, TaskError> {
+    let eps = match singularity {
+        Singularity::Exact => [0.0; 2],
+        Singularity::Damped(e) | Singularity::Clamped(e) => {
+            if !(e[0] > 0.0 && e[1] > 0.0 && e[0].is_finite() && e[1].is_finite()) {
+                return Err(TaskError::Bound);
+            }
+            e
+        }
+    };
+    match singularity {
+        Singularity::Exact => {
+            if !invert_spd(lambda_inv, m, lambda) {
+                return Err(TaskError::Singular);
+            }
+            Ok(0)
+        }
+        Singularity::Damped(_) => {
+            let mut a = *lambda_inv;
+            for r in 0..m {
+                a[r][r] += eps[r / 3];
+            }
+            if !invert_spd(&a, m, lambda) {
+                return Err(TaskError::Singular);
+            }
+            Ok(m)
+        }
+        Singularity::Clamped(_) => {
+            // W = ε^{-1/2}; A = W Λ⁻¹ W = V diag(σ) Vᵀ; Λ = W V diag(1/max(σ, 1)) Vᵀ W.
+            let w = |r: usize| 1.0 / libm::sqrt(eps[r / 3]);
+            let mut a = [[0.0; 6]; 6];
+            for r in 0..m {
+                for c in 0..m {
+                    a[r][c] = w(r) * lambda_inv[r][c] * w(c);
+                }
+            }
+            let (mut sigma, mut v) = ([0.0; 6], [[0.0; 6]; 6]);
+            symmetric_eigen(&a, m, &mut sigma, &mut v);
+            let mut clamped = 0;
+            let mut inv = [0.0; 6];
+            for k in 0..m {
+                if !sigma[k].is_finite() {
+                    return Err(TaskError::Singular);
+                }
+                if sigma[k] < 1.0 {
+                    clamped += 1;
+                }
+                inv[k] = 1.0 / sigma[k].max(1.0);
+            }
+            for r in 0..m {
+                for c in 0..m {
+                    let x: f64 = (0..m).map(|k| v[r][k] * inv[k] * v[c][k]).sum();
+                    lambda[r][c] = w(r) * x * w(c);
+                }
+            }
+            Ok(clamped)
+        }
+    }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -4,8 +4,8 @@
 //!
 //! - [`impedance`]: operational-space impedance (Khatib) with a dynamically consistent
 //!   nullspace: the tool's acceleration is commanded, the posture and joint-limit avoidance act
-//!   only where the task leaves the arm free, and a damped operational inertia keeps the torques
-//!   bounded through singularities.
+//!   only where the task leaves the arm free, and a clamped (or damped) operational inertia
+//!   keeps the torques bounded through singularities.
 //! - [`limit_rate`]: a torque-rate limit, as a torque-controlled arm enforces on its input
 //!   (Franka: 1 N·m per ms).
 //!
@@ -16,6 +16,7 @@ pub mod impedance;
 mod rate;
 
 pub use impedance::{
-    ImpedanceGains, Orientation, TaskData, TaskError, TaskReport, TaskTarget, operational_impedance,
+    ImpedanceGains, Orientation, Singularity, TaskData, TaskError, TaskReport, TaskTarget,
+    operational_impedance,
 };
 pub use rate::limit_rate;

@@ -1174,6 +1174,10 @@ impl JointTorqueActuator for FrankaArm {
         self.command.control.tau_J_d.copy_from_slice(tau);
         Ok(())
     }
+
+    fn adds_gravity(&self) -> bool {
+        true
+    }
 }
 
 impl CartesianPositionSensor for FrankaArm {

@@ -168,7 +168,12 @@ impl<R: JointRobot, const B: usize, const J: usize> Prepared<R, B, J> {
 
     /// A user's law, prepared from where the arm stands ([`ControlLaw::start`]).
     pub(super) fn start_law<L: ControlLaw<B, J>>(&mut self, mut law: L) -> Result<L, RunError> {
+        let device_adds_gravity = self
+            .robot
+            .joint_torque_actuator()
+            .is_some_and(|a| a.adds_gravity());
         law.start(&Start {
+            device_adds_gravity,
             position: &self.start,
             model: &self.model,
             limits: &self.limits,

@@ -1,0 +1,302 @@
+//! The task-space law (`rl::controller::task_space::CartesianImpedance`) on the fake FR3 in
+//! torque mode at its 1 kHz (FCI on loopback; the fake integrates the arm's dynamics from the
+//! same URDF with rl-core's ABA and adds gravity itself, as the robot does): a streamed tool
+//! pose is reached and held at the start orientation, a figure-eight is followed, and the
+//! robot never raises a reflex — in particular not its torque-rate reflex (1 N·m per ms),
+//! which the law's rate limit keeps.
+
+mod common;
+mod late;
+
+use std::net::{IpAddr, Ipv4Addr};
+use std::time::{Duration, Instant};
+
+use rl::controller::task_space::{CartesianImpedance, DEFAULT_TORQUE_RATE, TaskInput, TaskMotion};
+use rl::controller::{ControlRun, RunEnd, RunOptions, RunReport};
+use rl::core::loader::{LoadedModel, UrdfOptions, load_urdf_str};
+use rl::core::spatial::PlueckerTransform;
+use rl::core::{Data, Model, algo};
+use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
+use rl::drivers::franka::{ControlMode as FrankaMode, FrankaArm, FrankaConfig};
+
+fn options(duration: Duration) -> RunOptions {
+    RunOptions {
+        lock_memory: false,
+        priority: 50,
+        telemetry: false,
+        ..RunOptions::default()
+    }
+    .duration(duration)
+}
+
+fn one_run_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static RUNS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    RUNS.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+fn model(urdf: &str) -> LoadedModel<16> {
+    load_urdf_str::<16>(urdf, &UrdfOptions::default()).expect("model")
+}
+
+/// The tool's pose at `q`.
+fn tool_at(m: &Model<16>, q: &[f64]) -> PlueckerTransform {
+    let mut d = Box::new(Data::<16>::new());
+    algo::forward_position(m, &mut d, q).expect("fk");
+    algo::tool_pose(m, &d, 0).expect("tool")
+}
+
+/// The fake FR3 with the arm's dynamics, and a Franka device for it in torque mode.
+fn fake_and_arm(urdf: &str) -> (FakeFranka, FrankaArm) {
+    let fake = FakeFranka::spawn(FakeFrankaConfig {
+        command_port: 0,
+        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
+        ..FakeFrankaConfig::loopback().with_urdf(urdf.to_owned())
+    })
+    .expect("fake FR3");
+    let mut config =
+        FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(FrankaMode::JointTorque);
+    config.command_port = fake.addr().port();
+    (fake, FrankaArm::new(config).expect("device"))
+}
+
+/// A run that failed while the loop or the fake was late (its clock slipped, or it woke a
+/// quarter cycle late) goes again, as the computed-torque law's run on the fake does.
+fn failed_late(r: &RunReport, fake: &FakeFranka) -> Option<String> {
+    let f = fake.status();
+    (r.exit_code() != 0
+        && (r.stats.overruns > 0
+            || r.stats.missed_deadlines > 0
+            || f.slips > 0
+            || f.max_lateness_us > 250))
+        .then(|| {
+            format!(
+                "{r}\nthe fake: {} slips, {} µs late at most",
+                f.slips, f.max_lateness_us
+            )
+        })
+}
+
+fn run_to_end<L>(mut run: ControlRun<FrankaArm, 16, 8, L>) -> RunReport
+where
+    L: rl::controller::ControlLaw<16, 8> + 'static,
+{
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while run.poll(Duration::from_millis(10)).is_some() {
+        assert!(Instant::now() < deadline, "the run did not end within 60 s");
+    }
+    run.join()
+}
+
+fn law_json(report: &RunReport) -> serde_json::Value {
+    report.law.clone().expect("the law's summary")
+}
+
+fn assert_no_reflex(fake: &FakeFranka) {
+    let status = fake.status();
+    assert!(
+        status.raised.is_empty(),
+        "the robot raised {:?}",
+        status.raised
+    );
+}
+
+/// Torque changes at most the law's rate (half the robot's 1 N·m per ms, so that a lost
+/// command leaves the next within the robot's limit).
+fn assert_rate(law: &serde_json::Value) {
+    let rate = law["torque_rate_max"].as_f64().expect("rate");
+    assert!(rate <= DEFAULT_TORQUE_RATE * (1.0 + 1e-9), "{law}");
+}
+
+#[test]
+fn a_streamed_tool_pose_is_reached_and_held_at_the_start_orientation() {
+    let urdf = fr3_shaped_urdf();
+    let m = model(&urdf);
+    let attempt = || {
+        let _one = one_run_at_a_time();
+        let (fake, arm) = fake_and_arm(&urdf);
+        let start_q = fake.status().q;
+        let start = tool_at(&m.model, &start_q);
+        let goal = PlueckerTransform::new(
+            start.rotation,
+            start.translation + glam::DVec3::new(0.0, 0.08, -0.05),
+        );
+        // The Franka device says it adds gravity: the law leaves it out by itself.
+        let law = CartesianImpedance::<16, 8>::new(0, TaskMotion::Streamed);
+        let mut run = ControlRun::start_law(arm, m.clone(), options(Duration::from_secs(3)), law)
+            .expect("starts");
+        // The pose comes while the arm is held, 0.3 s into the run (as a tracker's would).
+        while run
+            .poll(Duration::from_millis(5))
+            .is_some_and(|p| p.time_s < 0.3)
+        {}
+        run.inputs()
+            .send(TaskInput::Pose(goal))
+            .expect("the pose is queued");
+        let report = run_to_end(run);
+        (report, (fake, start, goal))
+    };
+    let Some((report, (fake, start, goal))) = late::while_late(
+        "a streamed pose on the fake FR3",
+        attempt,
+        |(r, (fake, _, _))| failed_late(r, fake),
+    ) else {
+        return;
+    };
+    println!("{report}");
+    assert!(matches!(report.end, Some(RunEnd::CycleLimit)), "{report}");
+    assert_eq!(report.exit_code(), 0, "{report}");
+    assert_no_reflex(&fake);
+    let law = law_json(&report);
+    assert_eq!(law["poses"], 1, "{law}");
+    assert_eq!(law["failed_cycles"], 0, "{law}");
+    assert_rate(&law);
+    // The goal 9.4 cm away was approached through the law's filter, whose velocity and
+    // acceleration the task feeds forward: the tool followed its target within a millimetre.
+    let max = law["task_error_max_m"].as_f64().expect("max");
+    println!("streamed pose: the tool trailed its target by {max} m at most");
+    assert!(max < 1e-3, "{law}");
+    // At rest there, at the start orientation (the robot's own state, through the model's FK).
+    let status = fake.status();
+    let end = tool_at(&m.model, &status.q);
+    let off = (end.translation - goal.translation).length();
+    assert!(off < 1e-3, "the tool ended {off} m from its target");
+    let turn = glam::DQuat::from_mat3(&(end.rotation * start.rotation.transpose()));
+    let angle = turn.to_axis_angle().1;
+    let angle = angle.min(2.0 * std::f64::consts::PI - angle);
+    assert!(angle < 2e-3, "the tool turned {angle} rad");
+    assert!(status.dq.iter().all(|v| v.abs() < 1e-2), "{:?}", status.dq);
+}
+
+#[test]
+fn the_tool_follows_a_figure_eight_at_constant_orientation() {
+    let urdf = fr3_shaped_urdf();
+    let m = model(&urdf);
+    let attempt = || {
+        let _one = one_run_at_a_time();
+        let (fake, arm) = fake_and_arm(&urdf);
+        let law = CartesianImpedance::<16, 8>::new(
+            0,
+            TaskMotion::FigureEight {
+                size_m: 0.2,
+                period_s: 2.0,
+            },
+        )
+        .gravity_by_device(true);
+        let run = ControlRun::start_law(arm, m.clone(), options(Duration::from_secs(5)), law)
+            .expect("starts");
+        (run_to_end(run), fake)
+    };
+    let Some((report, fake)) =
+        late::while_late("a figure-eight on the fake FR3", attempt, |(r, fake)| {
+            failed_late(r, fake)
+        })
+    else {
+        return;
+    };
+    println!("{report}");
+    assert_eq!(report.exit_code(), 0, "{report}");
+    assert_no_reflex(&fake);
+    let law = law_json(&report);
+    assert_eq!(law["failed_cycles"], 0, "{law}");
+    assert_rate(&law);
+    let max = law["task_error_max_m"].as_f64().expect("max");
+    let rms = law["task_error_rms_m"].as_f64().expect("rms");
+    let ori = law["orientation_error_max_rad"]
+        .as_f64()
+        .expect("orientation");
+    println!("figure-eight: task error max {max} m, rms {rms} m, orientation {ori} rad");
+    assert!(max < 1e-3 && rms < 5e-4 && ori < 5e-3, "{law}");
+}
+
+/// `rl run --device franka://… --law cartesian-impedance --task figure-eight` against
+/// `rl fake-robot franka --model` (the arm's dynamics integrated from the same URDF), as a user
+/// runs it: the device is opened in torque mode, the tool follows the figure-eight, the robot
+/// raises no reflex, and the JSON report carries the law's numbers.
+#[test]
+fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
+    let dir = std::env::temp_dir().join(format!("rl-task-space-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let urdf = dir.join("fr3.urdf");
+    std::fs::write(&urdf, fr3_shaped_urdf()).expect("URDF written");
+    let attempt = || {
+        let _one = one_run_at_a_time();
+        let mut fake = std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
+            .args([
+                "fake-robot",
+                "franka",
+                "--port",
+                "0",
+                "--duration",
+                "60",
+                "--model",
+            ])
+            .arg(&urdf)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("the fake starts");
+        let mut first = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(fake.stdout.as_mut().expect("stdout")),
+            &mut first,
+        )
+        .expect("the fake's first line");
+        let addr = first
+            .split(" on ")
+            .nth(1)
+            .and_then(|s| s.split(',').next())
+            .unwrap_or_else(|| panic!("no address in {first:?}"))
+            .to_owned();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
+            .args(["run", "--device", &format!("franka://{addr}"), "--model"])
+            .arg(&urdf)
+            .args(["--law", "cartesian-impedance", "--task", "figure-eight"])
+            .args([
+                "--task-size",
+                "0.1",
+                "--task-period",
+                "2s",
+                "--duration",
+                "4s",
+            ])
+            .args(["--json", "--no-mlock"])
+            .output()
+            .expect("rl run");
+        let _ = fake.kill();
+        let _ = fake.wait();
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+            panic!(
+                "no JSON report ({e}): {}\n{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+        (out.status.code(), report)
+    };
+    let Some((code, report)) = late::while_late(
+        "rl run --law cartesian-impedance",
+        attempt,
+        |(_, report)| late::json_late(report),
+    ) else {
+        let _ = std::fs::remove_dir_all(&dir);
+        return;
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, Some(0), "{report}");
+    assert_eq!(
+        report["trajectory_source"], "cartesian-impedance",
+        "{report}"
+    );
+    assert!(
+        report["device"]
+            .as_str()
+            .is_some_and(|d| d.contains("joint torques")),
+        "{report}"
+    );
+    let law = &report["law"];
+    assert_eq!(law["failed_cycles"], 0, "{law}");
+    assert!(law["cycles"].as_u64() >= Some(3900), "{law}");
+    assert_rate(law);
+    let max = law["task_error_max_m"].as_f64().expect("max");
+    assert!(max < 1e-3, "{law}");
+}
