@@ -10,7 +10,6 @@
 mod common;
 mod late;
 
-use std::net::{IpAddr, Ipv4Addr};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -27,8 +26,7 @@ use rl::controller::{
 use rl::core::algo::rnea;
 use rl::core::loader::{UrdfOptions, load_urdf_str};
 use rl::core::traj::{JerkLimited, Limits, Trajectory};
-use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
-use rl::drivers::franka::{ControlMode as FrankaMode, FrankaArm, FrankaConfig};
+use rl::drivers::fake::franka_controller::{FakeFranka, fr3_shaped_urdf};
 
 const PERIOD: Duration = Duration::from_millis(2);
 
@@ -645,30 +643,10 @@ fn a_torque_law_takes_the_fake_franka_to_a_streamed_target() {
     // that failed with the loop or the fake late (its clock slipped or woke a quarter cycle
     // late) is tried again. Lost commands with both on time fail the test.
     let failed_late = |r: &RunReport, (_, fake): &(Vec<CycleRecord<8>>, FakeFranka)| {
-        let f = fake.status();
-        (r.exit_code() != 0
-            && (r.stats.overruns > 0
-                || r.stats.missed_deadlines > 0
-                || f.slips > 0
-                || f.max_lateness_us > 250))
-            .then(|| {
-                format!(
-                    "{r}\nthe fake: {} slips, {} µs late at most",
-                    f.slips, f.max_lateness_us
-                )
-            })
+        common::franka_run_failed_late(r, fake)
     };
     let attempt = || {
-        let fake = FakeFranka::spawn(FakeFrankaConfig {
-            command_port: 0,
-            on_thread_start: Some(rl::devices::fake_process_thread_realtime),
-            ..FakeFrankaConfig::loopback().with_urdf(urdf.clone())
-        })
-        .expect("fake FR3");
-        let mut config =
-            FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(FrankaMode::JointTorque);
-        config.command_port = fake.addr().port();
-        let robot = FrankaArm::new(config).expect("device");
+        let (fake, robot) = common::fake_franka_in_torque_mode(&urdf);
         let model = load_urdf_str::<16>(&urdf, &UrdfOptions::default()).expect("model");
         let run = ControlRun::start_law(
             robot,

@@ -428,23 +428,12 @@ fn the_task_space_law_on_a_franka_arm_allocates_nothing() {
     use rl::controller::task_space::{CartesianImpedance, TaskInput, TaskMotion};
     use rl::controller::{ControlLaw, MotionLimits, Supervision, input};
     use rl::core::loader::{UrdfOptions, load_urdf_str};
-    use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
-    use rl::drivers::franka::{ControlMode, FrankaArm, FrankaConfig};
+    use rl::drivers::fake::franka_controller::fr3_shaped_urdf;
     use rl::drivers::{CyclicDevice, JointPositionSensor};
-    use std::net::{IpAddr, Ipv4Addr};
     use std::time::Duration;
 
     let urdf = fr3_shaped_urdf();
-    let fake = FakeFranka::spawn(FakeFrankaConfig {
-        command_port: 0,
-        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
-        ..FakeFrankaConfig::loopback().with_urdf(urdf.clone())
-    })
-    .expect("fake FR3");
-    let mut config =
-        FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(ControlMode::JointTorque);
-    config.command_port = fake.addr().port();
-    let mut robot = FrankaArm::new(config).expect("device");
+    let (_fake, mut robot) = common::fake_franka_in_torque_mode(&urdf);
     robot.open().expect("open");
     robot.start().expect("start");
     robot.step().expect("first exchange");

@@ -8,7 +8,6 @@
 mod common;
 mod late;
 
-use std::net::{IpAddr, Ipv4Addr};
 use std::time::{Duration, Instant};
 
 use rl::controller::task_space::{CartesianImpedance, DEFAULT_TORQUE_RATE, TaskInput, TaskMotion};
@@ -16,8 +15,8 @@ use rl::controller::{ControlRun, RunEnd, RunOptions, RunReport};
 use rl::core::loader::{LoadedModel, UrdfOptions, load_urdf_str};
 use rl::core::spatial::PlueckerTransform;
 use rl::core::{Data, Model, algo};
-use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig, fr3_shaped_urdf};
-use rl::drivers::franka::{ControlMode as FrankaMode, FrankaArm, FrankaConfig};
+use rl::drivers::fake::franka_controller::{FakeFranka, fr3_shaped_urdf};
+use rl::drivers::franka::FrankaArm;
 
 fn options(duration: Duration) -> RunOptions {
     RunOptions {
@@ -45,36 +44,7 @@ fn tool_at(m: &Model<16>, q: &[f64]) -> PlueckerTransform {
     algo::tool_pose(m, &d, 0).expect("tool")
 }
 
-/// The fake FR3 with the arm's dynamics, and a Franka device for it in torque mode.
-fn fake_and_arm(urdf: &str) -> (FakeFranka, FrankaArm) {
-    let fake = FakeFranka::spawn(FakeFrankaConfig {
-        command_port: 0,
-        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
-        ..FakeFrankaConfig::loopback().with_urdf(urdf.to_owned())
-    })
-    .expect("fake FR3");
-    let mut config =
-        FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(FrankaMode::JointTorque);
-    config.command_port = fake.addr().port();
-    (fake, FrankaArm::new(config).expect("device"))
-}
-
-/// A run that failed while the loop or the fake was late (its clock slipped, or it woke a
-/// quarter cycle late) goes again, as the computed-torque law's run on the fake does.
-fn failed_late(r: &RunReport, fake: &FakeFranka) -> Option<String> {
-    let f = fake.status();
-    (r.exit_code() != 0
-        && (r.stats.overruns > 0
-            || r.stats.missed_deadlines > 0
-            || f.slips > 0
-            || f.max_lateness_us > 250))
-        .then(|| {
-            format!(
-                "{r}\nthe fake: {} slips, {} µs late at most",
-                f.slips, f.max_lateness_us
-            )
-        })
-}
+use common::{fake_franka_in_torque_mode as fake_and_arm, franka_run_failed_late as failed_late};
 
 fn run_to_end<L>(mut run: ControlRun<FrankaArm, 16, 8, L>) -> RunReport
 where

@@ -258,3 +258,48 @@ pub fn tour_as_planned_path<const N: usize>(
     let retimed = jerk_limited(path, &rests, execution.limits(), 1000, 1e-3).expect("retimed");
     PlanTrajectory::Retimed(Box::new(retimed))
 }
+
+/// The fake FR3 on loopback with the arm's dynamics integrated from `urdf` (its robot thread
+/// at a real-time priority where allowed), and a Franka device for it in joint torque mode (not
+/// opened).
+pub fn fake_franka_in_torque_mode(
+    urdf: &str,
+) -> (
+    rl::drivers::fake::franka_controller::FakeFranka,
+    rl::drivers::franka::FrankaArm,
+) {
+    use rl::drivers::fake::franka_controller::{FakeFranka, FakeFrankaConfig};
+    use rl::drivers::franka::{ControlMode, FrankaArm, FrankaConfig};
+    use std::net::{IpAddr, Ipv4Addr};
+    let fake = FakeFranka::spawn(FakeFrankaConfig {
+        command_port: 0,
+        on_thread_start: Some(rl::devices::fake_process_thread_realtime),
+        ..FakeFrankaConfig::loopback().with_urdf(urdf.to_owned())
+    })
+    .expect("fake FR3");
+    let mut config =
+        FrankaConfig::new(IpAddr::V4(Ipv4Addr::LOCALHOST)).with_mode(ControlMode::JointTorque);
+    config.command_port = fake.addr().port();
+    (fake, FrankaArm::new(config).expect("device"))
+}
+
+/// A run on the fake FR3 that failed while the loop or the fake was late (the loop overran or
+/// missed deadlines, the fake's clock slipped or woke a quarter cycle late): the reason, for
+/// `late::while_late`. Lost commands with both on time are the run's own failure (`None`).
+pub fn franka_run_failed_late(
+    r: &rl::controller::RunReport,
+    fake: &rl::drivers::fake::franka_controller::FakeFranka,
+) -> Option<String> {
+    let f = fake.status();
+    (r.exit_code() != 0
+        && (r.stats.overruns > 0
+            || r.stats.missed_deadlines > 0
+            || f.slips > 0
+            || f.max_lateness_us > 250))
+        .then(|| {
+            format!(
+                "{r}\nthe fake: {} slips, {} µs late at most",
+                f.slips, f.max_lateness_us
+            )
+        })
+}

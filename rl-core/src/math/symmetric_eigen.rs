@@ -1,47 +1,23 @@
 //! Eigenvalues of a symmetric 3×3 matrix (the principal moments of an inertia tensor).
 //!
-//! Cyclic Jacobi rotations (Golub & Van Loan, *Matrix Computations*, §8.5): each rotation zeroes
-//! one off-diagonal entry; a few sweeps bring them below rounding. Accurate to a few ulps of the
-//! largest eigenvalue also for repeated eigenvalues (where the closed-form trigonometric
-//! solution loses half the digits). No allocation.
+//! The cyclic Jacobi rotations of [`super::symmetric_eigen`] (Golub & Van Loan, *Matrix
+//! Computations*, §8.5): accurate to a few ulps of the largest eigenvalue also for repeated
+//! eigenvalues (where the closed-form trigonometric solution loses half the digits). No
+//! allocation.
 
 use glam::DMat3;
 
+use super::jacobi::symmetric_eigen;
+
 /// The eigenvalues of the symmetric `a` (its upper triangle is read), ascending.
 pub fn symmetric_eigenvalues(a: &DMat3) -> [f64; 3] {
-    let mut m = [
-        [a.x_axis.x, a.y_axis.x, a.z_axis.x],
-        [a.y_axis.x, a.y_axis.y, a.z_axis.y],
-        [a.z_axis.x, a.z_axis.y, a.z_axis.z],
-    ];
-    for _ in 0..32 {
-        let off = m[0][1] * m[0][1] + m[0][2] * m[0][2] + m[1][2] * m[1][2];
-        let diag = m[0][0] * m[0][0] + m[1][1] * m[1][1] + m[2][2] * m[2][2];
-        if off <= 1e-36 * diag || off == 0.0 {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if m[p][q] == 0.0 {
-                continue;
-            }
-            // The rotation in the (p, q) plane that zeroes m[p][q].
-            let theta = (m[q][q] - m[p][p]) / (2.0 * m[p][q]);
-            let t = theta.signum() / (theta.abs() + libm::sqrt(theta * theta + 1.0));
-            let c = 1.0 / libm::sqrt(t * t + 1.0);
-            let s = t * c;
-            for k in 0..3 {
-                let (mkp, mkq) = (m[k][p], m[k][q]);
-                m[k][p] = c * mkp - s * mkq;
-                m[k][q] = s * mkp + c * mkq;
-            }
-            for k in 0..3 {
-                let (mpk, mqk) = (m[p][k], m[q][k]);
-                m[p][k] = c * mpk - s * mqk;
-                m[q][k] = s * mpk + c * mqk;
-            }
-        }
-    }
-    let mut out = [m[0][0], m[1][1], m[2][2]];
+    let mut m = [[0.0; 6]; 6];
+    m[0][..3].copy_from_slice(&[a.x_axis.x, a.y_axis.x, a.z_axis.x]);
+    m[1][1..3].copy_from_slice(&[a.y_axis.y, a.z_axis.y]);
+    m[2][2] = a.z_axis.z;
+    let (mut values, mut vectors) = ([0.0; 6], [[0.0; 6]; 6]);
+    symmetric_eigen(&m, 3, &mut values, &mut vectors);
+    let mut out = [values[0], values[1], values[2]];
     out.sort_unstable_by(f64::total_cmp); // core (no_std): `sort_by` needs alloc
     out
 }
