@@ -21,8 +21,9 @@
 //!
 //! - [`Singularity::Clamped`] (the default): the eigenvalues of `ε^{-1/2} J M⁻¹ Jᵀ ε^{-1/2}`
 //!   are clamped from below at 1 (a symmetric eigen-decomposition,
-//!   [`crate::math::symmetric_eigen`]): directions farther than that from singular are
-//!   inverted exactly, so the task is exact wherever no clamp acts.
+//!   [`crate::math::symmetric_eigen`], made only when a Cholesky factorisation of the weighted
+//!   matrix less the identity finds an eigenvalue under 1): directions farther than that from
+//!   singular are inverted exactly, so the task is exact wherever no clamp acts.
 //! - [`Singularity::Damped`]: `Λ = (J M⁻¹ Jᵀ + ε)⁻¹` (damped least squares in the operational
 //!   space, Nakamura & Hanafusa 1986): cheaper, but every direction is softened a little.
 //! - [`Singularity::Exact`]: no bound; a singular task is an error.
@@ -455,6 +456,21 @@ fn operational_inertia(
                 for c in 0..m {
                     a[r][c] = w(r) * lambda_inv[r][c] * w(c);
                 }
+            }
+            // Away from singularities every σ > 1: A − I is positive definite (one Cholesky
+            // tells), and Λ = W A⁻¹ W without the eigen-decomposition.
+            let mut shifted = a;
+            for (k, row) in shifted.iter_mut().enumerate().take(m) {
+                row[k] -= 1.0;
+            }
+            let mut inv_a = [[0.0; 6]; 6];
+            if invert_spd(&shifted, m, &mut inv_a) && invert_spd(&a, m, &mut inv_a) {
+                for r in 0..m {
+                    for c in 0..m {
+                        lambda[r][c] = w(r) * inv_a[r][c] * w(c);
+                    }
+                }
+                return Ok(0);
             }
             let (mut sigma, mut v) = ([0.0; 6], [[0.0; 6]; 6]);
             symmetric_eigen(&a, m, &mut sigma, &mut v);
