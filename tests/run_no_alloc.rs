@@ -21,6 +21,29 @@ fn allocations(f: impl FnOnce()) -> u64 {
     rl_testkit::allocations(f).0
 }
 
+/// Runs `cycle` `cycles` times, counting allocations, each cycle `k` first waiting (yielding
+/// its CPU, without allocating) until another thread has counted `min(k / per_send, sends)`
+/// sends in `sent`: the inputs arrive across the cycles however the machine schedules the two
+/// threads. The allocations, and whether a cycle said the run finished.
+fn cycles_in_lockstep(
+    cycles: u32,
+    sent: &std::sync::atomic::AtomicU32,
+    per_send: u32,
+    sends: u32,
+    mut cycle: impl FnMut() -> bool,
+) -> (u64, bool) {
+    let mut finished = false;
+    let counted = allocations(|| {
+        for k in 0..cycles {
+            while sent.load(std::sync::atomic::Ordering::Acquire) < (k / per_send).min(sends) {
+                std::thread::yield_now();
+            }
+            finished |= cycle();
+        }
+    });
+    (counted, finished)
+}
+
 #[test]
 fn steady_state_control_cycle_allocates_nothing() {
     // The counter sees allocations (so a zero below means something).
@@ -216,15 +239,7 @@ fn steady_state_cycle_with_a_users_law_and_streamed_targets_allocates_nothing() 
             std::thread::sleep(std::time::Duration::from_micros(200));
         }
     });
-    let mut finished = false;
-    let counted = allocations(|| {
-        for k in 0..400u32 {
-            while sent.load(std::sync::atomic::Ordering::Acquire) < (k / 2).min(200) {
-                std::thread::yield_now();
-            }
-            finished |= control.cycle().finished;
-        }
-    });
+    let (counted, finished) = cycles_in_lockstep(400, &sent, 2, 200, || control.cycle().finished);
     sender.join().expect("sender");
     assert!(!finished);
     assert_eq!(
@@ -489,15 +504,7 @@ fn the_task_space_law_on_a_franka_arm_allocates_nothing() {
             std::thread::sleep(Duration::from_micros(500));
         }
     });
-    let mut finished = false;
-    let counted = allocations(|| {
-        for k in 0..500u32 {
-            while sent.load(std::sync::atomic::Ordering::Acquire) < (k / 5).min(100) {
-                std::thread::yield_now();
-            }
-            finished |= control.cycle().finished;
-        }
-    });
+    let (counted, finished) = cycles_in_lockstep(500, &sent, 5, 100, || control.cycle().finished);
     sender.join().expect("sender");
     assert!(!finished);
     assert_eq!(
