@@ -261,7 +261,7 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     // The run's own rule (the loop late), and the fake's: a run that failed while the fake (a
     // process of its own, whose lateness the run cannot see) slipped or woke a quarter cycle
     // late, by its status line.
-    let Some((code, report, _)) = late::while_late(
+    let Some((code, report, status)) = late::while_late(
         "rl run --law cartesian-impedance",
         attempt,
         |(code, report, status)| {
@@ -293,10 +293,66 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
             .is_some_and(|d| d.contains("joint torques")),
         "{report}"
     );
+    // The fake's last status line: the robot raised no reflex.
+    assert!(status.contains(" reflexes=0 "), "{status}");
     let law = &report["law"];
     assert_eq!(law["failed_cycles"], 0, "{law}");
     assert!(law["cycles"].as_u64() >= Some(3900), "{law}");
     assert_rate(law);
     let max = law["task_error_max_m"].as_f64().expect("max");
     assert!(max < 1e-3, "{law}");
+}
+
+/// What the law refuses before anything moves: a figure-eight faster than it takes, gains that
+/// are not gains, a torque-rate limit that is not one, a tool the model does not have.
+#[test]
+fn the_law_refuses_what_it_cannot_do_before_the_start() {
+    use rl::controller::law::Start;
+    use rl::controller::{ControlLaw, MotionLimits};
+    let m = model(&fr3_shaped_urdf()).model;
+    let q = [0.0, -0.7, 0.0, -2.3, 0.0, 1.6, 0.8];
+    let limits = MotionLimits::<8>::from_model(&m, 0.25).expect("limits");
+    let start = Start {
+        position: &q,
+        model: &m,
+        limits: &limits,
+        period_s: 1e-3,
+        device_period_s: 1e-3,
+        device_adds_gravity: true,
+    };
+    let refused = |mut law: CartesianImpedance<16, 8>| {
+        ControlLaw::<16, 8>::start(&mut law, &start)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let fast = CartesianImpedance::new(
+        0,
+        TaskMotion::FigureEight {
+            size_m: 0.2,
+            period_s: 0.2,
+        },
+    );
+    assert!(refused(fast).contains("at most 1 m/s and 10 m/s²"));
+    let bad = CartesianImpedance::new(0, TaskMotion::Hold).gains(rl::core::task::ImpedanceGains {
+        damping_ratio: -1.0,
+        ..Default::default()
+    });
+    assert_eq!(
+        refused(bad),
+        "the gain `damping_ratio` must be finite and ≥ 0"
+    );
+    let no_rate = CartesianImpedance::new(0, TaskMotion::Hold).torque_rate(f64::NAN);
+    assert!(refused(no_rate).contains("torque-rate limit"));
+    let no_tool = CartesianImpedance::new(5, TaskMotion::Hold);
+    assert!(refused(no_tool).contains("no tool 5"));
+    // And one it takes: 0.2 m every 4 s (0.16 m/s, 0.49 m/s²).
+    let fine = CartesianImpedance::new(
+        0,
+        TaskMotion::FigureEight {
+            size_m: 0.2,
+            period_s: 4.0,
+        },
+    );
+    assert_eq!(refused(fine), "");
 }

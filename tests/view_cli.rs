@@ -165,12 +165,12 @@ fn rl_run_over_coach_moves_the_robot_in_rl_view_as_it_happens() {
             .collect();
         (q, s)
     };
-    let (q0, _) = q_now(&url);
-
-    // A run the machine made late runs again by the shared rule (`late::json_late`).
+    // A run the machine made late runs again by the shared rule (`late::json_late`); each run
+    // counts the configurations it moved the viewer to from where the viewer stood before it.
     let Some((status, out, seen)) = late::while_late(
         "a run over Coach",
         || {
+            let (q0, _) = q_now(&url);
             let mut run = Command::new(env!("CARGO_BIN_EXE_rl"))
                 .args([
                     "run",

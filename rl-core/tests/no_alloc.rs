@@ -112,20 +112,30 @@ fn the_operational_impedance_allocates_nothing() {
     let mut r = Rng(2);
     let states: Vec<_> = (0..20).map(|_| random_state(&model, &mut r)).collect();
     let target = TaskTarget::at(r.pose());
+    // The default bound, and one so large that the clamp acts (its eigen-decomposition runs).
     let gains = ImpedanceGains::default();
+    let clamping = ImpedanceGains {
+        singularity: rl_core::task::Singularity::Clamped([1e3, 1e3]),
+        ..gains
+    };
     let mut tau = [0.0; 7];
     let mut previous = [0.0; 7];
     let mut sink = 0.0;
+    let mut clamped = 0;
     let (n, ()) = allocations(|| {
         for (q, qd, posture) in &states {
-            let report = operational_impedance(
-                &model, &mut data, &mut task, 0, &gains, &target, q, qd, posture, &mut tau,
-            )
-            .unwrap();
-            sink += report.position_error + limit_rate(&previous, &mut tau, 1.0) as f64;
-            previous = tau;
+            for g in [&gains, &clamping] {
+                let report = operational_impedance(
+                    &model, &mut data, &mut task, 0, g, &target, q, qd, posture, &mut tau,
+                )
+                .unwrap();
+                clamped += report.bounded_directions;
+                sink += report.position_error + limit_rate(&previous, &mut tau, 1.0) as f64;
+                previous = tau;
+            }
         }
     });
+    assert!(clamped > 0, "the clamp never acted");
     assert!(sink.is_finite() && previous.iter().any(|t| *t != 0.0));
     assert_eq!(n, 0, "the task-space law allocated");
 }

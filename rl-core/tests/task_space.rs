@@ -472,6 +472,17 @@ fn the_torque_rate_limit_moves_each_joint_at_most_its_step() {
     }
 }
 
+/// A bad step (negative, NaN) limits to no change, a NaN torque is the previous one: no panic.
+#[test]
+fn the_torque_rate_limit_takes_bad_steps_without_panicking() {
+    let mut tau = [3.0, f64::NAN, -2.0];
+    assert_eq!(task::limit_rate(&[1.0, 1.0, 1.0], &mut tau, -1.0), 3);
+    assert_eq!(tau, [1.0, 1.0, 1.0]);
+    let mut tau = [3.0, 0.5];
+    assert_eq!(task::limit_rate(&[1.0, 0.5], &mut tau, f64::NAN), 1);
+    assert_eq!(tau, [1.0, 0.5]);
+}
+
 fn frobenius(j: &[[f64; 16]; 6], n: usize) -> f64 {
     j.iter()
         .map(|row| row[..n].iter().map(|x| x * x).sum::<f64>())

@@ -334,4 +334,7 @@ pub struct LawSummary {
     pub lines: Vec<String>,
     /// An object for the JSON report's `law` key.
     pub json: serde_json::Value,
+    /// The law's own failure, if it had one (e.g. cycles it could not compute): the run fails
+    /// with it (exit 1) unless it failed already.
+    pub failure: Option<String>,
 }

@@ -316,15 +316,16 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for TargetFollower<J> {
         Some(LawSummary {
             lines: vec![line],
             json: serde_json::json!({
-                "law": "follow",
-                "targets": c.targets,
-                "unreachable": c.unreachable,
-                "first_unreachable": c.first_unreachable.map(|e| e.to_string()),
-                "limit_stops": c.limit_stops,
-                "last_reach_s": c.last_reach_s,
-                "apply_delay_max_s": c.apply_delay_max_s,
-                "apply_delay_mean_s": (c.targets > 0).then_some(mean_delay_s),
+                    "law": "follow",
+                    "targets": c.targets,
+                    "unreachable": c.unreachable,
+                    "first_unreachable": c.first_unreachable.map(|e| e.to_string()),
+                    "limit_stops": c.limit_stops,
+                    "last_reach_s": c.last_reach_s,
+                    "apply_delay_max_s": c.apply_delay_max_s,
+                    "apply_delay_mean_s": (c.targets > 0).then_some(mean_delay_s),
             }),
+            failure: None,
         })
     }
 

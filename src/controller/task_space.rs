@@ -22,8 +22,13 @@
 //! it through a critically damped second-order filter (time constant [`STREAM_FILTER_S`];
 //! Franka's own Cartesian impedance example uses a first-order one), whose velocity and
 //! acceleration are the task's feed-forward: the target moves without a step in velocity when
-//! a goal jumps, and the impedance's error saturation ([`ImpedanceGains::max_position_error`])
-//! bounds how hard a far goal pulls.
+//! a goal jumps, and the filter's error is saturated as the impedance's is
+//! ([`ImpedanceGains::max_position_error`], [`ImpedanceGains::max_orientation_error`]), so a
+//! far goal is approached at a bounded speed and acceleration. A figure-eight faster than
+//! [`MAX_FIGURE_SPEED`] or [`MAX_FIGURE_ACCELERATION`] is refused at the start.
+//!
+//! A cycle the law cannot compute (counted in its report) moves the torque toward the one that
+//! holds the arm; [`FAILURES_TO_BRAKE`] in a row bring it to rest.
 //!
 //! The torque-rate limit grows from 0 over the run's first [`SOFT_START_S`].
 //!
@@ -55,6 +60,15 @@ use super::law::{
 pub const REST_SPEED: f64 = 0.01;
 /// Cycles in a row every joint must stay under [`REST_SPEED`] to be at rest.
 pub const REST_CYCLES: u32 = 50;
+/// Cycles in a row the law may fail to compute (e.g. a mass matrix that is not positive
+/// definite) before it brakes on its own; meanwhile it moves toward the torque that holds the
+/// arm.
+pub const FAILURES_TO_BRAKE: u32 = 10;
+/// The fastest figure-eight the law takes: peak tool speed, m/s.
+pub const MAX_FIGURE_SPEED: f64 = 1.0;
+/// The fastest figure-eight the law takes: peak tool acceleration, m/s² (Franka's Cartesian
+/// limits are 1.7 m/s and 13 m/s²).
+pub const MAX_FIGURE_ACCELERATION: f64 = 10.0;
 /// Time constant of the filter between a streamed pose and the tool's target, s.
 pub const STREAM_FILTER_S: f64 = 0.2;
 /// Over the run's first `SOFT_START_S` the torque-rate limit grows from 0 to its value: the
@@ -116,6 +130,7 @@ pub struct CartesianImpedance<const B: usize, const J: usize> {
     last_torque: [f64; J],
     braking: Option<(BrakeReason, PlueckerTransform)>,
     still_cycles: u32,
+    failures_in_a_row: u32,
     stats: TaskStats,
 }
 
@@ -128,6 +143,8 @@ pub struct TaskStats {
     pub task_error_max_m: f64,
     /// Sum of squared distances, for the RMS.
     task_error_sq_sum: f64,
+    /// Cycles in the RMS (computed, not braking).
+    task_error_cycles: u64,
     /// The largest angle between the tool's orientation and its target's, rad (not braking).
     pub orientation_error_max_rad: f64,
     /// The largest torque change between two commands, N·m/s.
@@ -148,10 +165,10 @@ pub struct TaskStats {
 impl TaskStats {
     /// The RMS distance between the tool and its target, m.
     pub fn task_error_rms_m(&self) -> f64 {
-        if self.cycles == 0 {
+        if self.task_error_cycles == 0 {
             0.0
         } else {
-            (self.task_error_sq_sum / self.cycles as f64).sqrt()
+            (self.task_error_sq_sum / self.task_error_cycles as f64).sqrt()
         }
     }
 }
@@ -181,6 +198,7 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
             last_torque: [0.0; J],
             braking: None,
             still_cycles: 0,
+            failures_in_a_row: 0,
             stats: TaskStats::default(),
         }
     }
@@ -216,6 +234,14 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
             turn = -turn;
         }
         let dr = turn.normalize().to_scaled_axis();
+        // The errors saturated as the impedance's are: a far goal is approached at a bounded
+        // speed and acceleration (ω·e_max/e and ω²·e_max).
+        let sat = |v: DVec3, max: f64| {
+            let l = v.length();
+            if l > max { v * (max / l) } else { v }
+        };
+        let dp = sat(dp, self.gains.max_position_error);
+        let dr = sat(dr, self.gains.max_orientation_error);
         let e = [dp.x, dp.y, dp.z, dr.x, dr.y, dr.z];
         let (v, a) = (&mut self.filtered_velocity, &mut self.filtered_acceleration);
         for k in 0..6 {
@@ -327,11 +353,32 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             )
             .into());
         }
-        if let TaskMotion::FigureEight { size_m, period_s } = self.motion
-            && !(size_m.is_finite() && size_m >= 0.0 && period_s.is_finite() && period_s > 0.0)
-        {
+        if let TaskMotion::FigureEight { size_m, period_s } = self.motion {
+            if !(size_m.is_finite() && size_m >= 0.0 && period_s.is_finite() && period_s > 0.0) {
+                return Err(format!(
+                    "a figure-eight needs a size ≥ 0 and a period > 0 (given {size_m} m, \
+                     {period_s} s)"
+                )
+                .into());
+            }
+            // Half the width a, ω = 2π/T: peak speed aω (both axes), acceleration 2aω² (z).
+            let (a, w) = (0.5 * size_m, 2.0 * PI / period_s);
+            if a * w > MAX_FIGURE_SPEED || 2.0 * a * w * w > MAX_FIGURE_ACCELERATION {
+                return Err(format!(
+                    "a figure-eight {size_m} m wide every {period_s} s moves the tool at up to \
+                     {:.2} m/s and {:.1} m/s²; the law takes at most {MAX_FIGURE_SPEED} m/s and \
+                     {MAX_FIGURE_ACCELERATION} m/s² (a smaller figure or a longer period)",
+                    a * w,
+                    2.0 * a * w * w
+                )
+                .into());
+            }
+        }
+        self.gains.check()?;
+        if !(self.torque_rate > 0.0) {
             return Err(format!(
-                "a figure-eight needs a size ≥ 0 and a period > 0 (given {size_m} m, {period_s} s)"
+                "the torque-rate limit must be above 0 N·m/s (given {})",
+                self.torque_rate
             )
             .into());
         }
@@ -352,6 +399,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
         self.filtered_acceleration = [0.0; 6];
         self.braking = None;
         self.still_cycles = 0;
+        self.failures_in_a_row = 0;
         self.stats = TaskStats::default();
         Ok(())
     }
@@ -384,6 +432,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
         // The first exchange holds the arm: gravity, unless the device adds it.
         if !self.gains.gravity_by_device
             && let Ok(g) = algo::gravity(cx.model, cx.data, cx.measured.position)
+            && g.iter().all(|t| t.is_finite())
         {
             out.torque[..g.len()].copy_from_slice(g);
         }
@@ -428,6 +477,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                     let s = &mut self.stats;
                     s.task_error_max_m = s.task_error_max_m.max(report.position_error);
                     s.task_error_sq_sum += report.position_error * report.position_error;
+                    s.task_error_cycles += 1;
                     s.orientation_error_max_rad =
                         s.orientation_error_max_rad.max(report.orientation_error);
                 }
@@ -436,11 +486,25 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                 }
             }
             Err(e) => {
-                // Hold the last torques (their rate limit brings them nowhere new).
+                // Toward the torque that holds the arm (gravity, unless the device adds it; the
+                // rate limit below makes the way there continuous), and after
+                // `FAILURES_TO_BRAKE` in a row, brake: the target freezes where the tool was.
                 self.stats.failed_cycles += 1;
                 self.stats.first_failure.get_or_insert(e);
-                tau[..dof].copy_from_slice(&self.last_torque[..dof]);
+                self.failures_in_a_row += 1;
+                if !self.gains.gravity_by_device
+                    && let Ok(g) = algo::gravity(cx.model, cx.data, q)
+                    && g.iter().all(|t| t.is_finite())
+                {
+                    tau[..dof].copy_from_slice(&g[..dof]);
+                }
+                if self.failures_in_a_row >= FAILURES_TO_BRAKE && self.braking.is_none() {
+                    self.brake(BrakeReason::Fault);
+                }
             }
+        }
+        if computed.is_ok() {
+            self.failures_in_a_row = 0;
         }
         let ramp = ((cx.time_s + cx.period_s) / SOFT_START_S).min(1.0);
         let step = self.torque_rate * cx.period_s * ramp;
@@ -499,17 +563,23 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
         Some(LawSummary {
             lines,
             json: json!({
-                "law": "cartesian-impedance",
-                "cycles": s.cycles,
-                "task_error_max_m": s.task_error_max_m,
-                "task_error_rms_m": s.task_error_rms_m(),
-                "orientation_error_max_rad": s.orientation_error_max_rad,
-                "torque_rate_max": s.torque_rate_max,
-                "rate_limited_cycles": s.rate_limited_cycles,
-                "near_limit_cycles": s.near_limit_cycles,
-                "failed_cycles": s.failed_cycles,
-                "first_failure": s.first_failure.map(|e| e.to_string()),
-                "poses": s.poses,
+                    "law": "cartesian-impedance",
+                    "cycles": s.cycles,
+                    "task_error_max_m": s.task_error_max_m,
+                    "task_error_rms_m": s.task_error_rms_m(),
+                    "orientation_error_max_rad": s.orientation_error_max_rad,
+                    "torque_rate_max": s.torque_rate_max,
+                    "rate_limited_cycles": s.rate_limited_cycles,
+                    "near_limit_cycles": s.near_limit_cycles,
+                    "failed_cycles": s.failed_cycles,
+                    "first_failure": s.first_failure.map(|e| e.to_string()),
+                    "poses": s.poses,
+            }),
+            failure: s.first_failure.map(|e| {
+                format!(
+                    "the task-space law could not compute {} cycles (the first: {e})",
+                    s.failed_cycles
+                )
             }),
         })
     }

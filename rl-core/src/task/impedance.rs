@@ -12,8 +12,10 @@
 //! a₀  = K_q (q_r − q) − D_q q̇ + a_lim                (posture and joint-limit avoidance)
 //! ```
 //!
-//! Away from singularities the closed loop is exactly `ë + K_d ė + K_p e = 0` in every task
-//! direction, decoupled, whatever the arm's inertia (`J M⁻¹ Nᵀ = 0`: the nullspace torque
+//! Away from singularities, with the errors under their saturation, the closed loop is
+//! `ë + K_d ė + K_p e = 0` in every task direction (exactly for the position; for the
+//! orientation to first order in the error, as `ė_o` is the angular velocity error only for
+//! small errors), decoupled, whatever the arm's inertia (`J M⁻¹ Nᵀ = 0`: the nullspace torque
 //! moves no task coordinate), and `K_d = 2ζ√K_p` makes it critically damped for `ζ = 1`. Near
 //! a singularity `J M⁻¹ Jᵀ` loses rank and `Λ` grows without bound; [`Singularity`] chooses
 //! what bounds it by `ε⁻¹` (`ε = diag(ε_lin I₃, ε_ang I₃)`), so that the torques stay bounded at
@@ -37,7 +39,9 @@
 //!
 //! `q`, `q_r`: `nq` (= `nv`: fixed-base models without quaternion joints); `q̇`, `τ`: `nv`.
 //! Cost: one CRBA, its sparse factorisation and `m ≤ 6` solves, one Jacobian, one forward
-//! acceleration sweep (`J̇ q̇`) and one RNEA. Does not allocate.
+//! acceleration sweep (`J̇ q̇`), one RNEA (and a gravity sweep when the device adds gravity),
+//! two `m × m` Cholesky factorisations, and a Jacobi eigen-decomposition when the clamp acts.
+//! The gains are checked at every call ([`ImpedanceGains::check`]). Does not allocate.
 
 use core::fmt;
 
@@ -124,6 +128,37 @@ pub enum Singularity {
     Damped([f64; 2]),
     /// The eigenvalues of `ε^{-1/2} J M⁻¹ Jᵀ ε^{-1/2}` clamped from below at 1.
     Clamped([f64; 2]),
+}
+
+impl ImpedanceGains {
+    /// Checks that every gain is finite and ≥ 0 (the saturations may be infinite) and the
+    /// singularity bound, if any, positive.
+    pub fn check(&self) -> Result<(), TaskError> {
+        let ok = |x: f64| x.is_finite() && x >= 0.0;
+        let checks = [
+            ("stiffness", self.stiffness.iter().all(|k| ok(*k))),
+            ("damping_ratio", ok(self.damping_ratio)),
+            ("max_position_error", self.max_position_error >= 0.0),
+            ("max_orientation_error", self.max_orientation_error >= 0.0),
+            ("posture_stiffness", ok(self.posture_stiffness)),
+            ("posture_damping_ratio", ok(self.posture_damping_ratio)),
+            ("limit_band", ok(self.limit_band)),
+            ("limit_stiffness", ok(self.limit_stiffness)),
+        ];
+        if let Some((gain, _)) = checks.iter().find(|(_, good)| !good) {
+            return Err(TaskError::Gain { gain });
+        }
+        match self.singularity {
+            Singularity::Exact => Ok(()),
+            Singularity::Damped(e) | Singularity::Clamped(e) => {
+                if e.iter().all(|x| x.is_finite() && *x > 0.0) {
+                    Ok(())
+                } else {
+                    Err(TaskError::Bound)
+                }
+            }
+        }
+    }
 }
 
 /// Where the tool should be: its pose in the world, and the velocity and acceleration along
@@ -221,7 +256,12 @@ pub enum TaskError {
     Singular,
     /// A singularity bound `ε` that is not positive.
     Bound,
-    /// A gain, target or state is not finite.
+    /// A gain that is negative or not finite (the saturations may be `f64::INFINITY`).
+    Gain {
+        /// Which gain.
+        gain: &'static str,
+    },
+    /// A target or state that is not finite.
     NotFinite {
         /// Which argument.
         argument: &'static str,
@@ -244,10 +284,12 @@ impl fmt::Display for TaskError {
                  model has nq = {nq}, nv = {nv}"
             ),
             Self::Singular => f.write_str(
-                "the task's operational inverse inertia J M⁻¹ Jᵀ is singular (the arm is at a \
-                 singularity) and no bound was asked for (Singularity::Exact)",
+                "the task's operational inverse inertia J M⁻¹ Jᵀ (bounded as asked) is not \
+                 positive definite: the arm is at a singularity and Singularity::Exact was \
+                 asked for, or the model's inertias are not physical",
             ),
             Self::Bound => f.write_str("the singularity bound ε must be positive"),
+            Self::Gain { gain } => write!(f, "the gain `{gain}` must be finite and ≥ 0"),
             Self::NotFinite { argument } => write!(f, "`{argument}` is not finite"),
         }
     }
@@ -270,6 +312,7 @@ pub fn operational_impedance<const N: usize>(
     posture: &[f64],
     tau: &mut [f64],
 ) -> Result<TaskReport, TaskError> {
+    gains.check()?;
     let n = model.nv;
     if model.nq != n {
         return Err(TaskError::NotFixedBase {

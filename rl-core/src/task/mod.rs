@@ -10,7 +10,8 @@
 //!   (Franka: 1 N·m per ms).
 //!
 //! Like the algorithms, these write into a [`Data`](crate::Data) (and the task's own
-//! [`TaskData`]), allocate nothing and check their arguments' lengths.
+//! [`TaskData`]), allocate nothing and never panic; [`operational_impedance`] checks its
+//! arguments' lengths and values.
 
 pub mod impedance;
 mod rate;

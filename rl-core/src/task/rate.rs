@@ -1,8 +1,9 @@
 //! A torque-rate limit: each joint's command moves at most `max_step` from the previous one.
 
-/// Limits `tau` to within `max_step` (N·m, ≥ 0) of `previous`, joint by joint; returns how many
-/// joints were limited. A non-finite `tau[k]` is replaced by `previous[k]` (and counted). The
-/// slices must have the same length (the shorter one decides otherwise).
+/// Limits `tau` to within `max_step` (N·m) of `previous`, joint by joint; returns how many
+/// joints were limited. A non-finite `tau[k]` is replaced by `previous[k]` (and counted); a
+/// `max_step` that is negative or NaN counts as 0. Never panics. The slices should have the
+/// same length (the shorter one decides otherwise).
 ///
 /// ```
 /// let mut tau = [5.0, -0.2, 1.0];
@@ -10,10 +11,12 @@
 /// assert_eq!(tau, [1.0, -0.2, 1.0]);
 /// ```
 pub fn limit_rate(previous: &[f64], tau: &mut [f64], max_step: f64) -> usize {
+    let step = if max_step >= 0.0 { max_step } else { 0.0 };
     let mut limited = 0;
     for (t, p) in tau.iter_mut().zip(previous) {
+        // max/min, not clamp: no panic whatever the bounds.
         let clamped = if t.is_finite() {
-            t.clamp(p - max_step, p + max_step)
+            t.max(p - step).min(p + step)
         } else {
             *p
         };

@@ -90,6 +90,9 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
     let bounds = controller.supervisor().bounds();
     let dof = info.joints.len();
     let summary = controller.law().summary();
+    if let Some(why) = summary.as_ref().and_then(|s| s.failure.clone()) {
+        failure.get_or_insert(why);
+    }
     let assumed = (!info.assumed_speed.is_empty()).then_some((UNKNOWN_SPEED, info.assumed_speed));
     RunReport {
         model: info.model,
