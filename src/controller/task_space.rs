@@ -375,7 +375,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             }
         }
         self.gains.check()?;
-        if !(self.torque_rate > 0.0) {
+        if self.torque_rate.is_nan() || self.torque_rate <= 0.0 {
             return Err(format!(
                 "the torque-rate limit must be above 0 N·m/s (given {})",
                 self.torque_rate
