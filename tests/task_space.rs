@@ -99,9 +99,9 @@ fn a_streamed_tool_pose_is_reached_and_held_at_the_start_orientation() {
             .poll(Duration::from_millis(5))
             .is_some_and(|p| p.time_s < 0.3)
         {}
-        run.inputs()
-            .send(TaskInput::Pose(goal))
-            .expect("the pose is queued");
+        // A run that already ended (the machine made it late: the rule below judges) takes no
+        // pose; the checks count the poses taken.
+        let _ = run.inputs().send(TaskInput::Pose(goal));
         let report = run_to_end(run);
         (report, (fake, start, goal))
     };
