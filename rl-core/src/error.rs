@@ -19,6 +19,11 @@ pub enum Error {
         /// The index given.
         tool: usize,
     },
+    /// A body index beyond the model's bodies.
+    UnknownBody {
+        /// The index given.
+        body: usize,
+    },
     /// The mass matrix (or a joint's block of the articulated inertia) is not positive
     /// definite at DOF `dof`: the bodies that DOF's joint moves have no mass or inertia along
     /// it (a massless subtree), or an inertia in the model is not physical.
@@ -42,6 +47,7 @@ impl fmt::Display for Error {
                 )
             }
             Error::UnknownTool { tool } => write!(f, "tool {tool} does not exist"),
+            Error::UnknownBody { body } => write!(f, "body {body} does not exist"),
             Error::NotPositiveDefinite { dof } => write!(
                 f,
                 "the mass matrix is singular at degree of freedom {dof}: the bodies its joint \

@@ -118,24 +118,38 @@ fn the_operational_impedance_allocates_nothing() {
         singularity: rl_core::task::Singularity::Clamped([1e3, 1e3]),
         ..gains
     };
+    // Two levels with obstacles near two links (their point Jacobians and solves).
+    let levels = ImpedanceGains {
+        priority: rl_core::task::Priority::OrientationFirst,
+        ..gains
+    };
+    let near = [
+        rl_core::task::Proximity::at_rest(3, r.vec3(0.3), glam::DVec3::Z, 0.08),
+        rl_core::task::Proximity::at_rest(6, r.vec3(0.3), glam::DVec3::X, 0.12),
+    ];
     let mut tau = [0.0; 7];
     let mut previous = [0.0; 7];
     let mut sink = 0.0;
     let mut clamped = 0;
+    let mut repelled = 0;
     let (n, ()) = allocations(|| {
         for (q, qd, posture) in &states {
-            for g in [&gains, &clamping] {
+            for g in [&gains, &clamping, &levels] {
+                let obstacles = if *g == levels { &near[..] } else { &[] };
+                task.set_proximities(obstacles).unwrap();
                 let report = operational_impedance(
                     &model, &mut data, &mut task, 0, g, &target, q, qd, posture, &mut tau,
                 )
                 .unwrap();
                 clamped += report.bounded_directions;
+                repelled += report.repelling;
                 sink += report.position_error + limit_rate(&previous, &mut tau, 1.0) as f64;
                 previous = tau;
             }
         }
     });
     assert!(clamped > 0, "the clamp never acted");
+    assert!(repelled > 0, "no obstacle repelled");
     assert!(sink.is_finite() && previous.iter().any(|t| *t != 0.0));
     assert_eq!(n, 0, "the task-space law allocated");
 }

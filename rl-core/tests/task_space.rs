@@ -13,7 +13,8 @@ use glam::{DQuat, DVec3};
 use rl_core::algo;
 use rl_core::spatial::PlueckerTransform;
 use rl_core::task::{
-    self, ImpedanceGains, Orientation, Singularity, TaskData, TaskError, TaskTarget,
+    self, ImpedanceGains, Orientation, Priority, Proximity, Repulsion, Singularity, TaskData,
+    TaskError, TaskTarget,
     operational_impedance,
 };
 use rl_core::{Data, Model};
@@ -46,7 +47,7 @@ fn gains(r: &mut Rng, orientation: Orientation) -> ImpedanceGains {
         limit_band: 0.3,
         limit_stiffness: 100.0,
         singularity: Singularity::Exact,
-        gravity_by_device: false,
+        ..ImpedanceGains::default()
     }
 }
 
@@ -542,6 +543,7 @@ fn the_law_agrees_with_the_same_law_on_pinocchio() {
             limit_stiffness: gj["limit_stiffness"].as_f64().unwrap(),
             singularity,
             gravity_by_device: gj["gravity_by_device"].as_bool().unwrap(),
+            ..ImpedanceGains::default()
         };
         let t = &c["target"];
         let r = f64s(&t["rotation"]);
@@ -586,4 +588,257 @@ fn f64s(v: &serde_json::Value) -> Vec<f64> {
         .iter()
         .map(|x| x.as_f64().expect("number"))
         .collect()
+}
+
+/// A point of body `b` (world) from a point in its frame.
+fn body_point<const N: usize>(d: &Data<N>, b: usize, local: DVec3) -> DVec3 {
+    d.world_pose(b).transform_point(local)
+}
+
+#[test]
+fn a_point_jacobian_is_the_derivative_of_the_point_and_the_tool_jacobian_at_the_tool() {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut r = Rng(21);
+    let n = m.dof();
+    let mut jac = [[0.0; 16]; 6];
+    for _ in 0..20 {
+        let q: Vec<f64> = (0..n).map(|_| r.range(-1.5, 1.5)).collect();
+        let b = 1 + (r.range(0.0, 0.999) * (m.body_count() - 1) as f64) as usize;
+        let local = r.vec3(0.2);
+        algo::forward_position(&m, &mut d, &q).unwrap();
+        let p = body_point(&d, b, local);
+        algo::point_jacobian(&m, &d, b, p, &mut jac).unwrap();
+        for k in 0..n {
+            let h = 1e-6;
+            let mut qp = q.clone();
+            qp[k] += h;
+            algo::forward_position(&m, &mut d, &qp).unwrap();
+            let up = body_point(&d, b, local);
+            qp[k] -= 2.0 * h;
+            algo::forward_position(&m, &mut d, &qp).unwrap();
+            let down = body_point(&d, b, local);
+            let fd = (up - down) / (2.0 * h);
+            let col = DVec3::new(jac[0][k], jac[1][k], jac[2][k]);
+            assert!((fd - col).length() < 1e-8, "body {b} column {k}: {fd} vs {col}");
+        }
+        // At the tool's origin on the tool's body: the tool Jacobian.
+        let mut tool = [[0.0; 16]; 6];
+        algo::jacobian(&m, &mut d, &q, 0, &mut tool).unwrap();
+        let x = algo::tool_pose(&m, &d, 0).unwrap();
+        let body = m.tools()[0].body;
+        algo::point_jacobian(&m, &d, body, x.translation, &mut jac).unwrap();
+        for row in 0..6 {
+            assert_close("tool columns", &jac[row][..n], &tool[row][..n], 1e-12);
+        }
+    }
+    assert!(matches!(
+        algo::point_jacobian(&m, &d, 99, DVec3::ZERO, &mut jac),
+        Err(rl_core::Error::UnknownBody { body: 99 })
+    ));
+}
+
+/// A proximity on a random body of `m` at `q`, 2–15 cm from its obstacle.
+fn random_proximity<const N: usize>(
+    m: &Model<N>,
+    d: &mut Data<N>,
+    q: &[f64],
+    r: &mut Rng,
+) -> Proximity {
+    algo::forward_position(m, d, q).unwrap();
+    let b = 2 + (r.range(0.0, 0.999) * (m.body_count() - 2) as f64) as usize;
+    let point = body_point(d, b, r.vec3(0.05));
+    Proximity::at_rest(b, point, r.vec3(1.0).normalize(), r.range(0.06, 0.15))
+}
+
+#[test]
+fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_obstacles() {
+    let m = iiwa();
+    let mut d = Box::new(Data::<16>::new());
+    let mut task = Box::new(TaskData::<16>::new());
+    let mut r = Rng(31);
+    let n = m.dof();
+    let mut jac = [[0.0; 16]; 6];
+    for _ in 0..30 {
+        let (q, qd, target, posture) = scene(&m, &mut d, &mut r);
+        let g = ImpedanceGains {
+            priority: Priority::OrientationFirst,
+            ..gains(&mut r, Orientation::Held)
+        };
+        let want = commanded(&m, &mut d, &g, &target, &q, &qd);
+        let scale = 1.0 + want.iter().map(|a| a.abs()).fold(0.0, f64::max);
+        let call = |d: &mut Data<16>, task: &mut TaskData<16>, g: &ImpedanceGains| {
+            let mut tau = vec![0.0; n];
+            let report = operational_impedance(
+                &m, d, task, 0, g, &target, &q, &qd, &posture, &mut tau,
+            )
+            .unwrap();
+            (tau, report)
+        };
+        // Without obstacles, away from singularities: both levels exactly as commanded, and
+        // the same torques as one 6-D task.
+        task.set_proximities(&[]).unwrap();
+        let (tau, _) = call(&mut d, &mut task, &g);
+        let (got, qdd_free) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
+        assert_close("two levels, no obstacle", &got, &want, 1e-7 * scale);
+        let together = ImpedanceGains {
+            priority: Priority::Together,
+            ..g
+        };
+        let (tau_one, _) = call(&mut d, &mut task, &together);
+        let tscale = 1.0 + tau_one.iter().map(|t| t.abs()).fold(0.0, f64::max);
+        assert_close("two levels = one task", &tau, &tau_one, 1e-7 * tscale);
+
+        // An obstacle near a link: the orientation is untouched, the point is pushed away.
+        let p = random_proximity(&m, &mut d, &q, &mut r);
+        assert_eq!(task.set_proximities(&[p]).unwrap(), 1);
+        let (tau, report) = call(&mut d, &mut task, &g);
+        assert_eq!(report.repelling, 1);
+        assert_eq!(report.min_distance, p.distance);
+        let (got, qdd) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
+        assert_close("orientation with an obstacle", &got[3..], &want[3..], 1e-7 * scale);
+        algo::forward_position(&m, &mut d, &q).unwrap();
+        algo::point_jacobian(&m, &d, p.body, p.point, &mut jac).unwrap();
+        let away: f64 = (0..n)
+            .map(|k| {
+                (p.normal.x * jac[0][k] + p.normal.y * jac[1][k] + p.normal.z * jac[2][k])
+                    * (qdd[k] - qdd_free[k])
+            })
+            .sum();
+        assert!(away > 0.0, "the repulsion pulled the point toward the obstacle ({away})");
+
+        // One 6-D task: the repulsion acts in its nullspace only.
+        let (tau, _) = call(&mut d, &mut task, &together);
+        let (got, _) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
+        assert_close("one task with an obstacle", &got, &want, 1e-7 * scale);
+        // Beyond the influence distance nothing changes.
+        let far = Proximity {
+            distance: g.repulsion.influence,
+            ..p
+        };
+        task.set_proximities(&[far]).unwrap();
+        let (tau_far, report) = call(&mut d, &mut task, &g);
+        assert_eq!(report.repelling, 0);
+        let (got, _) = tool_acceleration(&m, &mut d, &q, &qd, &tau_far);
+        assert_close("an obstacle out of reach", &got, &want, 1e-7 * scale);
+    }
+}
+
+#[test]
+fn on_a_six_joint_arm_orientation_first_is_the_six_dimensional_task() {
+    for seed in [41, 42, 43] {
+        let m = random_chain::<16>(6, seed);
+        let mut d = Box::new(Data::<16>::new());
+        let mut task = Box::new(TaskData::<16>::new());
+        let mut r = Rng(seed);
+        let n = m.dof();
+        for _ in 0..10 {
+            let (q, qd, target, posture) = scene(&m, &mut d, &mut r);
+            let g = gains(&mut r, Orientation::Held);
+            let mut one = vec![0.0; n];
+            let mut two = vec![0.0; n];
+            let first = ImpedanceGains {
+                priority: Priority::OrientationFirst,
+                ..g
+            };
+            let a = operational_impedance(
+                &m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut one,
+            );
+            let b = operational_impedance(
+                &m, &mut d, &mut task, 0, &first, &target, &q, &qd, &posture, &mut two,
+            );
+            match (a, b) {
+                (Ok(_), Ok(_)) => {
+                    let scale = 1.0 + one.iter().map(|t| t.abs()).fold(0.0, f64::max);
+                    assert_close("one level vs two", &two, &one, 1e-7 * scale);
+                }
+                // A singular random state is singular for both.
+                (Err(TaskError::Singular), Err(TaskError::Singular)) => {}
+                (a, b) => panic!("{a:?} vs {b:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn the_repulsion_grows_toward_the_margin_and_vanishes_smoothly_at_its_reach() {
+    let rep = Repulsion::default();
+    assert_eq!(rep.acceleration(rep.influence, -5.0), 0.0);
+    assert_eq!(rep.acceleration(1.0, -5.0), 0.0);
+    // Continuous at the influence distance, the approach's damping included.
+    assert!(rep.acceleration(rep.influence - 1e-9, -5.0) < 1e-6);
+    // Growing toward the margin, capped.
+    let mut last = 0.0;
+    for k in 1..100 {
+        let d = rep.influence - (rep.influence - rep.margin) * k as f64 / 100.0;
+        let a = rep.acceleration(d, 0.0);
+        assert!(
+            a > last || a == rep.max_acceleration,
+            "{d}: {a} after {last}"
+        );
+        last = a;
+    }
+    assert_eq!(rep.acceleration(rep.margin, 0.0), rep.max_acceleration);
+    assert_eq!(rep.acceleration(-0.1, 0.0), rep.max_acceleration);
+    // Damping only of an approach.
+    let d = 0.15;
+    assert!(rep.acceleration(d, -0.5) > rep.acceleration(d, 0.0));
+    assert_eq!(rep.acceleration(d, 0.5), rep.acceleration(d, 0.0));
+    // 1 m²/s² · (1/(0.1 − 0.05) − 1/(0.2 − 0.05)) at 10 cm.
+    assert!((rep.acceleration(0.1, 0.0) - (20.0 - 1.0 / 0.15)).abs() < 1e-12);
+
+    for (bad, what) in [
+        (
+            Repulsion {
+                influence: 0.05,
+                ..rep
+            },
+            "repulsion.influence",
+        ),
+        (
+            Repulsion {
+                damping: f64::NAN,
+                ..rep
+            },
+            "repulsion.damping",
+        ),
+        (
+            Repulsion {
+                margin: -0.01,
+                ..rep
+            },
+            "repulsion.margin",
+        ),
+    ] {
+        let g = ImpedanceGains {
+            repulsion: bad,
+            ..ImpedanceGains::default()
+        };
+        assert_eq!(g.check(), Err(TaskError::Gain { gain: what }));
+    }
+    let mut task = Box::new(TaskData::<16>::new());
+    let p = Proximity::at_rest(1, DVec3::ZERO, DVec3::X, 0.1);
+    for bad in [
+        Proximity {
+            normal: DVec3::new(1.0, 1.0, 0.0),
+            ..p
+        },
+        Proximity {
+            distance: f64::NAN,
+            ..p
+        },
+        Proximity {
+            point: DVec3::new(f64::INFINITY, 0.0, 0.0),
+            ..p
+        },
+    ] {
+        assert_eq!(
+            task.set_proximities(&[p, bad]),
+            Err(TaskError::NotFinite {
+                argument: "proximity"
+            })
+        );
+        assert!(task.proximities().is_empty());
+    }
+    assert_eq!(task.set_proximities(&[p; 12]).unwrap(), task::MAX_PROXIMITIES);
 }

@@ -37,6 +37,19 @@ fn fill<const N: usize>(
     } else {
         data.world_pose[t.body].transform_point(t.placement.translation)
     };
+    fill_at(model, data, t.body, p, out);
+    Ok(())
+}
+
+/// The Jacobian of the point `p` (world) moving with body `body` (its ancestors' columns from
+/// the world poses in `data`, the others zero).
+fn fill_at<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    body: usize,
+    p: DVec3,
+    out: &mut Jacobian<N>,
+) {
     let mut zero_from = model.nv;
     let mut set = |k: usize, lin: DVec3, ang: DVec3| {
         for (row, v) in out
@@ -47,7 +60,7 @@ fn fill<const N: usize>(
         }
     };
     // Leaf to root, so DOF indices fall; the gap above each ancestor's DOFs is zero.
-    let mut b = model.tools[tool].body;
+    let mut b = body;
     while b != ROOT {
         let sv = model.idx_v[b];
         let end = sv + model.joints[b].nv();
@@ -77,6 +90,28 @@ fn fill<const N: usize>(
     }
     for k in 0..zero_from {
         set(k, DVec3::ZERO, DVec3::ZERO);
+    }
+}
+
+/// The world Jacobian of the point `point` (world coordinates) moving with body `body` — e.g.
+/// the point of a link closest to an obstacle — from the world poses of the body's ancestors in
+/// `data` (those of the last [`super::forward_position`] or [`jacobian`] through that body), in
+/// [`jacobian`]'s convention: rows `[linear; angular]`, the linear rows the point's velocity.
+/// [`ROOT`] gives zeros. O(depth). Does not allocate.
+pub fn point_jacobian<const N: usize>(
+    model: &Model<N>,
+    data: &Data<N>,
+    body: usize,
+    point: DVec3,
+    out: &mut Jacobian<N>,
+) -> Result<(), Error> {
+    if body != ROOT && body >= model.nbodies {
+        return Err(Error::UnknownBody { body });
+    }
+    if model.has_mimic {
+        super::mimic::fill_jacobian(model, data, body, point, out);
+    } else {
+        fill_at(model, data, body, point, out);
     }
     Ok(())
 }

@@ -30,7 +30,7 @@ pub use forward_acceleration::{forward_acceleration, tool_acceleration};
 pub use forward_position::{forward_position, tool_pose};
 pub use forward_velocity::{forward_velocity, tool_velocity};
 pub use gravity::gravity;
-pub use jacobian::{Jacobian, jacobian, jacobian_derivative_times_qd, jacobians};
+pub use jacobian::{Jacobian, jacobian, jacobian_derivative_times_qd, jacobians, point_jacobian};
 pub use mass_solve::{factor_mass_matrix, solve_mass_matrix};
 pub use operational::operational_inverse_inertia;
 pub use rnea::{rnea, rnea_with_external_forces};

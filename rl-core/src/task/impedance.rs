@@ -48,14 +48,16 @@ use core::fmt;
 use glam::{DQuat, DVec3};
 
 use crate::algo::{
-    Jacobian, crba, factor_mass_matrix, gravity, jacobian, jacobian_derivative_times_qd,
-    nonlinear_effects, solve_mass_matrix, tool_pose,
+    Jacobian, crba, factor_mass_matrix, forward_position, gravity, jacobian,
+    jacobian_derivative_times_qd, nonlinear_effects, solve_mass_matrix, tool_pose,
 };
 use crate::error::{Error, check_len};
 use crate::math::{invert_spd, symmetric_eigen};
 use crate::model::{Data, Model};
 use crate::rotation::quaternion;
 use crate::spatial::PlueckerTransform;
+
+use super::repulsion::{MAX_PROXIMITIES, Proximity, Repulsion, add_repulsion};
 
 /// What the task controls of the tool's orientation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -95,6 +97,23 @@ pub struct ImpedanceGains {
     pub singularity: Singularity,
     /// The device adds the gravity torque itself (a Franka arm): `G(q)` is left out of `τ`.
     pub gravity_by_device: bool,
+    /// Which task rows yield to which ([`Priority`]).
+    pub priority: Priority,
+    /// The repulsion from the proximities in [`TaskData::set_proximities`].
+    pub repulsion: Repulsion,
+}
+
+/// The order of the task's parts when they cannot all be met (module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Priority {
+    /// Position and orientation as one task; the repulsion and the posture act in its
+    /// nullspace (on a 7-DoF arm with a 6-D task: the elbow only).
+    #[default]
+    Together,
+    /// The orientation first; the position in its nullspace, where the repulsion acts beside
+    /// it (the position yields to obstacles, the orientation does not); the posture in the
+    /// nullspace of both. With [`Orientation::Free`] the same as `Together`.
+    OrientationFirst,
 }
 
 impl Default for ImpedanceGains {
@@ -114,6 +133,8 @@ impl Default for ImpedanceGains {
             limit_stiffness: 200.0,
             singularity: Singularity::Clamped([0.01, 0.1]),
             gravity_by_device: false,
+            priority: Priority::Together,
+            repulsion: Repulsion::default(),
         }
     }
 }
@@ -148,6 +169,7 @@ impl ImpedanceGains {
         if let Some((gain, _)) = checks.iter().find(|(_, good)| !good) {
             return Err(TaskError::Gain { gain });
         }
+        self.repulsion.check()?;
         match self.singularity {
             Singularity::Exact => Ok(()),
             Singularity::Damped(e) | Singularity::Clamped(e) => {
@@ -195,6 +217,11 @@ pub struct TaskData<const N: usize> {
     minv_jt: [[f64; N]; 6],
     /// `Λ`, the damped operational inertia of the task rows (leading `m × m` block).
     lambda: [[f64; 6]; 6],
+    /// The points near obstacles the next calls repel ([`Self::set_proximities`]).
+    proximities: [Proximity; MAX_PROXIMITIES],
+    nproximities: usize,
+    /// Scratch: a proximity's point Jacobian.
+    point_jacobian: Jacobian<N>,
 }
 
 impl<const N: usize> Default for TaskData<N> {
@@ -210,7 +237,41 @@ impl<const N: usize> TaskData<N> {
             jacobian: [[0.0; N]; 6],
             minv_jt: [[0.0; N]; 6],
             lambda: [[0.0; 6]; 6],
+            proximities: [Proximity::at_rest(0, DVec3::ZERO, DVec3::X, f64::INFINITY);
+                MAX_PROXIMITIES],
+            nproximities: 0,
+            point_jacobian: [[0.0; N]; 6],
         }
+    }
+
+    /// The robot's points near obstacles that the next calls of [`operational_impedance`]
+    /// repel (replacing the last ones; at most [`MAX_PROXIMITIES`], the rest ignored): e.g.
+    /// rl-sg's nearest capsule contacts of this cycle. Their bodies' world poses must be those
+    /// at the `q` of the call (the law runs a forward sweep when there are proximities). Refuses
+    /// (keeping none) a proximity that is not finite or whose normal is not a unit vector.
+    /// Returns how many were kept.
+    pub fn set_proximities(&mut self, proximities: &[Proximity]) -> Result<usize, TaskError> {
+        self.nproximities = 0;
+        let n = proximities.len().min(MAX_PROXIMITIES);
+        for p in &proximities[..n] {
+            let finite = p.point.is_finite()
+                && p.normal.is_finite()
+                && p.obstacle_velocity.is_finite()
+                && !p.distance.is_nan();
+            if !finite || (p.normal.length_squared() - 1.0).abs() > 1e-6 {
+                return Err(TaskError::NotFinite {
+                    argument: "proximity",
+                });
+            }
+        }
+        self.proximities[..n].copy_from_slice(&proximities[..n]);
+        self.nproximities = n;
+        Ok(n)
+    }
+
+    /// The proximities of the next calls.
+    pub fn proximities(&self) -> &[Proximity] {
+        &self.proximities[..self.nproximities]
     }
 
     /// The damped operational inertia `Λ` of the last call, `m × m` over the task rows (the
@@ -221,7 +282,7 @@ impl<const N: usize> TaskData<N> {
 }
 
 /// How the task stood at the call.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TaskReport {
     /// `|p_d − p|`, m (before saturation).
     pub position_error: f64,
@@ -236,6 +297,10 @@ pub struct TaskReport {
     /// Task directions whose operational inertia was bounded ([`Singularity::Clamped`]: the
     /// clamped eigenvalues; [`Singularity::Damped`]: all of them).
     pub bounded_directions: usize,
+    /// Proximities inside the repulsion's influence distance.
+    pub repelling: usize,
+    /// The smallest distance among the proximities, m (∞ without).
+    pub min_distance: f64,
 }
 
 /// Why [`operational_impedance`] gave no torques.
@@ -342,7 +407,12 @@ pub fn operational_impedance<const N: usize>(
         Orientation::Free => 3,
     };
 
-    // J, the tool's pose and velocity.
+    // J, the tool's pose and velocity (the world poses of every body first when proximities
+    // need them).
+    let nprox = task.nproximities;
+    if nprox > 0 {
+        forward_position(model, data, q)?;
+    }
     jacobian(model, data, q, tool, &mut task.jacobian)?;
     let pose = tool_pose(model, data, tool)?;
     let jac = &task.jacobian;
@@ -381,10 +451,10 @@ pub fn operational_impedance<const N: usize>(
         }
     }
 
-    // M, its factors, M⁻¹ Jᵀ (m solves) and Λ⁻¹ = J M⁻¹ Jᵀ + Λ_ε.
+    // M, its factors, M⁻¹ Jᵀ (m solves) and Ψ = J M⁻¹ Jᵀ.
     crba(model, data, q)?;
     factor_mass_matrix(model, data)?;
-    let mut lambda_inv = [[0.0; 6]; 6];
+    let mut psi = [[0.0; 6]; 6];
     for r in 0..m {
         let x = &mut task.minv_jt[r];
         x[..n].copy_from_slice(&jac[r][..n]);
@@ -393,24 +463,106 @@ pub fn operational_impedance<const N: usize>(
     for r in 0..m {
         for c in 0..=r {
             let v = dot(&jac[r][..n], &task.minv_jt[c][..n]);
-            lambda_inv[r][c] = v;
-            lambda_inv[c][r] = v;
+            psi[r][c] = v;
+            psi[c][r] = v;
         }
     }
-    let bounded_directions =
-        operational_inertia(&lambda_inv, m, gains.singularity, &mut task.lambda)?;
+    let eps_lin = match gains.singularity {
+        Singularity::Exact => 0.0,
+        Singularity::Damped(e) | Singularity::Clamped(e) => e[0],
+    };
+    // Λ of the whole task: its nullspace is the posture's.
+    let mut bounded_directions =
+        operational_inertia(&psi, m, 0, gains.singularity, &mut task.lambda)?;
+    let minv_jt = &task.minv_jt;
+    let lambda = &task.lambda;
+    let levels = gains.priority == Priority::OrientationFirst && m == 6;
+
+    // The task torque, and the operational inertia of the level the repulsion joins.
+    let mut first = [[0.0; 6]; 6];
+    if levels {
+        // Level 1, the orientation (rows 3..6): τ₁ = J_aᵀ Λ₁ a_a.
+        let block = |r0: usize, c0: usize| {
+            let mut b = [[0.0; 6]; 6];
+            for r in 0..3 {
+                for c in 0..3 {
+                    b[r][c] = psi[r0 + r][c0 + c];
+                }
+            }
+            b
+        };
+        bounded_directions =
+            operational_inertia(&block(3, 3), 3, 3, gains.singularity, &mut first)?;
+        let y = mat_vec(&first, 3, &a[3..6]);
+        for (k, t) in tau[..n].iter_mut().enumerate() {
+            *t = (0..3).map(|r| jac[3 + r][k] * y[r]).sum();
+        }
+        // Level 2, the position in level 1's nullspace: F₂ = Λ₂ (a_l − Ψ_la Λ₁ a_a) with
+        // Λ₂⁻¹ = Ψ_ll − Ψ_la Λ₁ Ψ_al, τ₂ = N₁ᵀ J_lᵀ F₂.
+        let psi_la = block(0, 3);
+        let mut s = block(0, 0);
+        let mut want = [0.0; 3];
+        for r in 0..3 {
+            let row_l1: [f64; 3] =
+                core::array::from_fn(|c| (0..3).map(|k| psi_la[r][k] * first[k][c]).sum());
+            for c in 0..3 {
+                s[r][c] -= (0..3).map(|k| row_l1[k] * psi_la[c][k]).sum::<f64>();
+            }
+            want[r] = a[r] - (0..3).map(|k| psi_la[r][k] * y[k]).sum::<f64>();
+        }
+        let mut second = [[0.0; 6]; 6];
+        bounded_directions += operational_inertia(&s, 3, 0, gains.singularity, &mut second)?;
+        let f2 = mat_vec(&second, 3, &want);
+        let mut v = [0.0; N];
+        for (k, x) in v[..n].iter_mut().enumerate() {
+            *x = (0..3).map(|r| jac[r][k] * f2[r]).sum();
+        }
+        project_rows(&mut v[..n], jac, minv_jt, &first, 3, 3);
+        for (t, x) in tau[..n].iter_mut().zip(&v[..n]) {
+            *t += x;
+        }
+    } else {
+        // One level: τ = Jᵀ Λ (a − J̇ q̇).
+        let f = mat_vec(lambda, m, &a[..m]);
+        for (k, t) in tau[..n].iter_mut().enumerate() {
+            *t = (0..m).map(|r| jac[r][k] * f[r]).sum();
+        }
+    }
+
+    // The repulsion, in the nullspace of what must not yield: the orientation (two levels) or
+    // the whole task (one).
+    let mut repelling = 0;
+    let mut min_distance = f64::INFINITY;
+    if nprox > 0 {
+        let mut rep = [0.0; N];
+        repelling = add_repulsion(
+            model,
+            data,
+            &gains.repulsion,
+            eps_lin,
+            &task.proximities[..nprox],
+            qd,
+            &mut task.point_jacobian,
+            &mut rep[..n],
+        )?;
+        min_distance = task.proximities[..nprox]
+            .iter()
+            .map(|p| p.distance)
+            .fold(f64::INFINITY, f64::min);
+        let jac = &task.jacobian;
+        if levels {
+            project_rows(&mut rep[..n], jac, &task.minv_jt, &first, 3, 3);
+        } else {
+            project(&mut rep[..n], jac, &task.minv_jt, &task.lambda, m);
+        }
+        for (t, x) in tau[..n].iter_mut().zip(&rep[..n]) {
+            *t += x;
+        }
+    }
+    let jac = &task.jacobian;
     let lambda = &task.lambda;
 
-    // The task force F = Λ (a − J̇ q̇) and τ = Jᵀ F.
-    let mut f = [0.0; 6];
-    for r in 0..m {
-        f[r] = (0..m).map(|c| lambda[r][c] * a[c]).sum();
-    }
-    for k in 0..n {
-        tau[k] = (0..m).map(|r| jac[r][k] * f[r]).sum();
-    }
-
-    // The nullspace: τ₀ = M a₀, then Nᵀ τ₀ = τ₀ − Jᵀ Λ (M⁻¹ Jᵀ)ᵀ τ₀.
+    // The posture in the nullspace of the whole task: τ₀ = M a₀, Nᵀ τ₀ = τ₀ − Jᵀ Λ (M⁻¹ Jᵀ)ᵀ τ₀.
     let kq = gains.posture_stiffness.max(0.0);
     let dq_gain = 2.0 * gains.posture_damping_ratio * libm::sqrt(kq);
     let mut a0 = [0.0; N];
@@ -434,16 +586,9 @@ pub fn operational_impedance<const N: usize>(
     for r in 0..n {
         tau0[r] = (0..n).map(|c| data.mass_matrix(r, c) * a0[c]).sum();
     }
-    let mut y = [0.0; 6];
-    for r in 0..m {
-        y[r] = dot(&task.minv_jt[r][..n], &tau0[..n]);
-    }
-    let mut z = [0.0; 6];
-    for r in 0..m {
-        z[r] = (0..m).map(|c| lambda[r][c] * y[c]).sum();
-    }
+    project(&mut tau0[..n], jac, &task.minv_jt, lambda, m);
     for k in 0..n {
-        tau[k] += tau0[k] - (0..m).map(|r| jac[r][k] * z[r]).sum::<f64>() + bias[k];
+        tau[k] += tau0[k] + bias[k];
     }
 
     let mut tool_velocity = [0.0; 6];
@@ -455,13 +600,57 @@ pub fn operational_impedance<const N: usize>(
         tool_pose: pose,
         joints_near_limits: near,
         bounded_directions,
+        repelling,
+        min_distance,
     })
 }
 
-/// `Λ` from `Λ⁻¹` (`m × m`) as `singularity` says; returns the directions it bounded.
+/// `v ← Nᵀ v = v − Jᵀ Λ (M⁻¹ Jᵀ)ᵀ v` over the task rows `0..m` (`Λ`: `m × m`).
+fn project<const N: usize>(
+    v: &mut [f64],
+    jac: &Jacobian<N>,
+    minv_jt: &[[f64; N]; 6],
+    lambda: &[[f64; 6]; 6],
+    m: usize,
+) {
+    project_rows(v, jac, minv_jt, lambda, 0, m);
+}
+
+/// [`project`] over the task rows `r0..r0 + m`.
+fn project_rows<const N: usize>(
+    v: &mut [f64],
+    jac: &Jacobian<N>,
+    minv_jt: &[[f64; N]; 6],
+    lambda: &[[f64; 6]; 6],
+    r0: usize,
+    m: usize,
+) {
+    let n = v.len();
+    let mut y = [0.0; 6];
+    for r in 0..m {
+        y[r] = dot(&minv_jt[r0 + r][..n], v);
+    }
+    let z = mat_vec(lambda, m, &y[..m]);
+    for (k, x) in v.iter_mut().enumerate() {
+        *x -= (0..m).map(|r| jac[r0 + r][k] * z[r]).sum::<f64>();
+    }
+}
+
+/// The leading `m × m` block of `a` times `x` (`m` long).
+fn mat_vec(a: &[[f64; 6]; 6], m: usize, x: &[f64]) -> [f64; 6] {
+    let mut y = [0.0; 6];
+    for r in 0..m {
+        y[r] = (0..m).map(|c| a[r][c] * x[c]).sum();
+    }
+    y
+}
+
+/// `Λ` from `Λ⁻¹` (`m × m`) as `singularity` says; returns the directions it bounded. Row `r`
+/// of the block is task row `r0 + r` (rows 0..3 linear, 3..6 angular: their bound `ε`).
 fn operational_inertia(
     lambda_inv: &[[f64; 6]; 6],
     m: usize,
+    r0: usize,
     singularity: Singularity,
     lambda: &mut [[f64; 6]; 6],
 ) -> Result<usize, TaskError> {
@@ -484,7 +673,7 @@ fn operational_inertia(
         Singularity::Damped(_) => {
             let mut a = *lambda_inv;
             for r in 0..m {
-                a[r][r] += eps[r / 3];
+                a[r][r] += eps[(r0 + r) / 3];
             }
             if !invert_spd(&a, m, lambda) {
                 return Err(TaskError::Singular);
@@ -493,7 +682,7 @@ fn operational_inertia(
         }
         Singularity::Clamped(_) => {
             // W = ε^{-1/2}; A = W Λ⁻¹ W = V diag(σ) Vᵀ; Λ = W V diag(1/max(σ, 1)) Vᵀ W.
-            let w = |r: usize| 1.0 / libm::sqrt(eps[r / 3]);
+            let w = |r: usize| 1.0 / libm::sqrt(eps[(r0 + r) / 3]);
             let mut a = [[0.0; 6]; 6];
             for r in 0..m {
                 for c in 0..m {

@@ -6,6 +6,8 @@
 //!   nullspace: the tool's acceleration is commanded, the posture and joint-limit avoidance act
 //!   only where the task leaves the arm free, and a clamped (or damped) operational inertia
 //!   keeps the torques bounded through singularities.
+//! - [`repulsion`]: distance-based repulsion from obstacles at the robot's points nearest to
+//!   them, in the nullspace of what must not yield ([`Priority`]).
 //! - [`limit_rate`]: a torque-rate limit, as a torque-controlled arm enforces on its input
 //!   (Franka: 1 N·m per ms).
 //!
@@ -15,9 +17,11 @@
 
 pub mod impedance;
 mod rate;
+pub mod repulsion;
 
 pub use impedance::{
-    ImpedanceGains, Orientation, Singularity, TaskData, TaskError, TaskReport, TaskTarget,
-    operational_impedance,
+    ImpedanceGains, Orientation, Priority, Singularity, TaskData, TaskError, TaskReport,
+    TaskTarget, operational_impedance,
 };
+pub use repulsion::{MAX_PROXIMITIES, Proximity, Repulsion};
 pub use rate::limit_rate;
