@@ -279,3 +279,38 @@ fn the_kernel_and_the_scene_update_allocate_nothing() {
             .is_err()
     );
 }
+
+/// A model without collision geometry gets a capsule along every link of its skeleton: every
+/// joint's origin and the tool's lie on a capsule's axis, wherever the arm is.
+#[test]
+fn a_skeleton_covers_every_joint_origin_and_the_tool() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../rl-core/tests/data/urdf/kuka_lbr_iiwa.urdf"
+    );
+    let m = rl_core::loader::load_file::<16>(path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .model;
+    let mut caps = CapsuleModel::<32>::skeleton(&m, 0.06).unwrap();
+    // One per child joint and per tool (a chain: one per body).
+    assert_eq!(caps.len(), m.body_count());
+    let mut d = rl_core::Data::<16>::new();
+    let mut r = Rng::new(3);
+    for _ in 0..20 {
+        let q: Vec<f64> = (0..m.dof()).map(|_| r.range(-2.0, 2.0)).collect();
+        rl_core::algo::forward_position(&m, &mut d, &q).unwrap();
+        caps.update(&d);
+        let tool = rl_core::algo::tool_pose(&m, &d, 0).unwrap().translation;
+        let points = (0..m.body_count())
+            .map(|b| d.world_pose(b).translation)
+            .chain([tool]);
+        for p in points {
+            let on_axis = (0..caps.len())
+                .filter_map(|i| caps.world_capsule(i))
+                .map(|c| c.signed_distance_to_point(p) + c.radius)
+                .fold(f64::INFINITY, f64::min);
+            assert!(on_axis.abs() < 1e-12, "{p}: {on_axis}");
+        }
+    }
+    assert!(CapsuleModel::<3>::skeleton(&m, 0.06).is_err());
+}

@@ -45,6 +45,7 @@ use glam::DVec3;
 use rl_core::Data;
 use rl_core::model::ROOT;
 use rl_core::spatial::PlueckerTransform;
+use rl_core::task::Proximity;
 
 /// A capsule: the points within `radius` of the segment from `a` to `b` (a sphere when
 /// `a == b`).
@@ -244,6 +245,37 @@ impl<const N: usize> CapsuleModel<N> {
             dz: [0.0; N],
             len: 0,
         }
+    }
+
+    /// A capsule of radius `radius` along every link of `model`'s skeleton: from each body's
+    /// origin to each child's joint and to each tool on it (a sphere at the origin of a body
+    /// with neither). For models without collision geometry (a URDF of frames and inertias);
+    /// fitting capsules to meshes ([`crate::fit`]) is tighter. An error when they do not fit.
+    pub fn skeleton<const B: usize>(
+        model: &rl_core::Model<B>,
+        radius: f64,
+    ) -> Result<Self, CapacityError> {
+        let mut m = Self::new();
+        for b in 0..model.body_count() {
+            let mut ends = 0;
+            let link = u16::try_from(b).unwrap_or(u16::MAX);
+            for c in (b + 1)..model.body_count() {
+                if model.parent(c) == b {
+                    let end = model.placement(c).translation;
+                    m.push(LinkCapsule::new(b, link, Capsule::new(DVec3::ZERO, end, radius)))?;
+                    ends += 1;
+                }
+            }
+            for t in model.tools().iter().filter(|t| t.body == b) {
+                let end = t.placement.translation;
+                m.push(LinkCapsule::new(b, link, Capsule::new(DVec3::ZERO, end, radius)))?;
+                ends += 1;
+            }
+            if ends == 0 {
+                m.push(LinkCapsule::new(b, link, Capsule::sphere(DVec3::ZERO, radius)))?;
+            }
+        }
+        Ok(m)
     }
 
     /// Adds a capsule; its world pose is that of the last update (the local one until then).
@@ -501,6 +533,101 @@ impl<const N: usize> CapsuleModel<N> {
         false
     }
 
+    /// The robot's points nearest to `obstacles` for a task-space law's repulsion
+    /// ([`rl_core::task::Proximity`]): for every capsule moving with a body its nearest
+    /// obstacle, then the (up to `out.len()`) capsules closest to theirs among those nearer
+    /// than `within` m, nearest first, into `out`; returns how many. Each proximity is the
+    /// point of the capsule's surface nearest to the obstacle, the unit normal from the obstacle
+    /// to it and the signed distance (the obstacles at rest: set `obstacle_velocity` for moving
+    /// ones). Capsules fixed to the world are skipped. Spheres take a vectorised pass over the
+    /// capsules. Does not allocate.
+    pub fn proximities(
+        &self,
+        obstacles: &[Capsule],
+        within: f64,
+        out: &mut [Proximity],
+    ) -> usize {
+        let n = self.len;
+        let mut best = [f64::INFINITY; N];
+        let mut of = [usize::MAX; N];
+        for (j, o) in obstacles.iter().enumerate() {
+            if o.a == o.b {
+                self.sphere_distances(o.a, o.radius, j, &mut best, &mut of);
+            } else {
+                let ow = WorldCapsule::from_capsule(o);
+                for i in 0..n {
+                    let (p, q) = closest(&self.world(i), &ow);
+                    let d = (p - q).length() - self.radius[i] - o.radius;
+                    if d < best[i] {
+                        best[i] = d;
+                        of[i] = j;
+                    }
+                }
+            }
+        }
+        let mut count = 0;
+        while count < out.len() {
+            // The nearest capsule not taken yet (taken ones are marked by `of = MAX`).
+            let mut pick = usize::MAX;
+            for i in 0..n {
+                let moving = self.local[i].body != ROOT;
+                if moving && of[i] != usize::MAX && best[i] < within {
+                    if pick == usize::MAX || best[i] < best[pick] {
+                        pick = i;
+                    }
+                }
+            }
+            if pick == usize::MAX {
+                break;
+            }
+            let w = self.world(pick);
+            let o = WorldCapsule::from_capsule(&obstacles[of[pick]]);
+            let (p, q) = closest(&w, &o);
+            let v = p - q;
+            let len = v.length();
+            // Centres that coincide: any direction; z keeps it deterministic.
+            let normal = if len > 0.0 { v / len } else { DVec3::Z };
+            out[count] = Proximity::at_rest(
+                self.local[pick].body,
+                p - normal * w.radius,
+                normal,
+                len - w.radius - o.radius,
+            );
+            of[pick] = usize::MAX;
+            count += 1;
+        }
+        count
+    }
+
+    /// For each capsule, the distance to sphere `(c, r)` (index `j`) where it beats `best`.
+    #[inline(always)]
+    fn sphere_distances(
+        &self,
+        c: DVec3,
+        r: f64,
+        j: usize,
+        best: &mut [f64; N],
+        of: &mut [usize; N],
+    ) {
+        for i in 0..self.len {
+            let d2 = point_segment_squared(
+                c,
+                self.ax[i],
+                self.ay[i],
+                self.az[i],
+                self.dx[i],
+                self.dy[i],
+                self.dz[i],
+                self.inv_dd[i],
+            );
+            let d = sqrt(d2) - self.radius[i] - r;
+            if d < best[i] {
+                best[i] = d;
+                of[i] = j;
+            }
+        }
+    }
+
     /// For each capsule, its distance to the nearest obstacle, into `out[i]` (`out` shorter
     /// than the model: the rest is not computed; longer: the tail is left as it is). Does not
     /// allocate.
@@ -614,6 +741,72 @@ mod tests {
         assert!((s.distance - (5.0 - 0.6)).abs() < 1e-12);
         assert!(CapsuleModel::<2>::new().min_distance(&obstacles).is_none());
         assert!(m.min_distance(&[]).is_none());
+    }
+
+    #[test]
+    fn proximities_are_the_nearest_capsules_with_their_surface_points_and_normals() {
+        let mut rng = rl_core::algo::ik::SplitMix64::new(7);
+        let mut r = || rng.next_f64() * 2.0 - 1.0;
+        let data = Data::<2>::new();
+        for round in 0..40 {
+            let mut m = CapsuleModel::<20>::new();
+            for i in 0..17 {
+                let a = DVec3::new(r(), r(), r());
+                let b = if i % 4 == 0 { a } else { a + DVec3::new(r(), r(), r()) * 0.3 };
+                // Body 0 (identity in a fresh `Data`), two on the world (never reported).
+                let body = if i % 8 == 5 { ROOT } else { 0 };
+                m.push(LinkCapsule::new(body, i, Capsule::new(a, b, 0.05 + 0.05 * r().abs())))
+                    .unwrap();
+            }
+            m.update(&data);
+            let mut obstacles = [Capsule::sphere(DVec3::ZERO, 0.0); 6];
+            for (k, o) in obstacles.iter_mut().enumerate() {
+                let c = DVec3::new(r(), r(), r()) * 1.2;
+                let e = if k % 2 == 0 { c } else { c + DVec3::new(r(), r(), r()) * 0.2 };
+                *o = Capsule::new(c, e, 0.1 * r().abs());
+            }
+            let within = if round % 2 == 0 { 0.3 } else { f64::INFINITY };
+            // Brute force: every moving capsule's nearest obstacle, sorted.
+            let mut want: Vec<f64> = (0..m.len())
+                .filter(|&i| m.capsules()[i].body != ROOT)
+                .map(|i| {
+                    let w = m.world_capsule(i).unwrap();
+                    obstacles.iter().map(|o| w.distance(o).0).fold(f64::INFINITY, f64::min)
+                })
+                .filter(|d| *d < within)
+                .collect();
+            want.sort_by(f64::total_cmp);
+            let mut out = [Proximity::at_rest(0, DVec3::ZERO, DVec3::X, 0.0); 4];
+            let k = m.proximities(&obstacles, within, &mut out);
+            assert_eq!(k, want.len().min(4));
+            for (p, d) in out[..k].iter().zip(&want) {
+                assert!((p.distance - d).abs() < 1e-12, "{p:?} vs {d}");
+                assert!((p.normal.length() - 1.0).abs() < 1e-12);
+                assert_eq!(p.body, 0);
+                // On the surface of its capsule, `distance` from the nearest obstacle along
+                // the normal.
+                let on_surface = (0..m.len())
+                    .filter_map(|i| m.world_capsule(i))
+                    .map(|c| c.signed_distance_to_point(p.point).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(on_surface < 1e-12);
+                if p.distance <= 0.0 {
+                    // Overlapping: the points are the deepest along the axis, not nearest.
+                    continue;
+                }
+                let to_obstacle = obstacles
+                    .iter()
+                    .map(|o| o.signed_distance_to_point(p.point))
+                    .fold(f64::INFINITY, f64::min);
+                assert!((to_obstacle - p.distance).abs() < 1e-9, "{to_obstacle} {p:?}");
+                let back = p.point - p.normal * p.distance;
+                let at = obstacles
+                    .iter()
+                    .map(|o| o.signed_distance_to_point(back).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(at < 1e-9, "{at}");
+            }
+        }
     }
 
     #[test]
