@@ -14,8 +14,7 @@ use rl_core::algo;
 use rl_core::spatial::PlueckerTransform;
 use rl_core::task::{
     self, ImpedanceGains, Orientation, Priority, Proximity, Repulsion, Singularity, TaskData,
-    TaskError, TaskTarget,
-    operational_impedance,
+    TaskError, TaskTarget, operational_impedance,
 };
 use rl_core::{Data, Model};
 use support::{Rng, assert_close, random_chain};
@@ -620,7 +619,10 @@ fn a_point_jacobian_is_the_derivative_of_the_point_and_the_tool_jacobian_at_the_
             let down = body_point(&d, b, local);
             let fd = (up - down) / (2.0 * h);
             let col = DVec3::new(jac[0][k], jac[1][k], jac[2][k]);
-            assert!((fd - col).length() < 1e-8, "body {b} column {k}: {fd} vs {col}");
+            assert!(
+                (fd - col).length() < 1e-8,
+                "body {b} column {k}: {fd} vs {col}"
+            );
         }
         // At the tool's origin on the tool's body: the tool Jacobian.
         let mut tool = [[0.0; 16]; 6];
@@ -669,10 +671,9 @@ fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_
         let scale = 1.0 + want.iter().map(|a| a.abs()).fold(0.0, f64::max);
         let call = |d: &mut Data<16>, task: &mut TaskData<16>, g: &ImpedanceGains| {
             let mut tau = vec![0.0; n];
-            let report = operational_impedance(
-                &m, d, task, 0, g, &target, &q, &qd, &posture, &mut tau,
-            )
-            .unwrap();
+            let report =
+                operational_impedance(&m, d, task, 0, g, &target, &q, &qd, &posture, &mut tau)
+                    .unwrap();
             (tau, report)
         };
         // Without obstacles, away from singularities: both levels exactly as commanded, and
@@ -696,7 +697,12 @@ fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_
         assert_eq!(report.repelling, 1);
         assert_eq!(report.min_distance, p.distance);
         let (got, qdd) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
-        assert_close("orientation with an obstacle", &got[3..], &want[3..], 1e-7 * scale);
+        assert_close(
+            "orientation with an obstacle",
+            &got[3..],
+            &want[3..],
+            1e-7 * scale,
+        );
         algo::forward_position(&m, &mut d, &q).unwrap();
         algo::point_jacobian(&m, &d, p.body, p.point, &mut jac).unwrap();
         let away: f64 = (0..n)
@@ -705,7 +711,10 @@ fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_
                     * (qdd[k] - qdd_free[k])
             })
             .sum();
-        assert!(away > 0.0, "the repulsion pulled the point toward the obstacle ({away})");
+        assert!(
+            away > 0.0,
+            "the repulsion pulled the point toward the obstacle ({away})"
+        );
 
         // One 6-D task: the repulsion acts in its nullspace only.
         let (tau, _) = call(&mut d, &mut task, &together);
@@ -840,5 +849,8 @@ fn the_repulsion_grows_toward_the_margin_and_vanishes_smoothly_at_its_reach() {
         );
         assert!(task.proximities().is_empty());
     }
-    assert_eq!(task.set_proximities(&[p; 12]).unwrap(), task::MAX_PROXIMITIES);
+    assert_eq!(
+        task.set_proximities(&[p; 12]).unwrap(),
+        task::MAX_PROXIMITIES
+    );
 }

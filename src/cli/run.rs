@@ -37,11 +37,12 @@ use rl::controller::plan::joint_name;
 use rl::controller::planned::{PathExecution, PlannedMotion, PlannedMotionError, plan_motion_with};
 use rl::controller::runtime::DEFAULT_SPEED;
 use rl::controller::stream::{self, TargetSource};
-use rl::controller::task_space::{CartesianImpedance, TaskMotion};
+use rl::controller::task_space::{CartesianImpedance, TaskMotion, TowardTool};
 use rl::controller::{
     ControlLaw, ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions,
     Supervision, TargetFollower, TelemetryFile, ViewHook,
 };
+use rl::core::task::{ImpedanceGains, Priority};
 use rl::drivers::safety::StopCategory;
 use rl_core::Model;
 use rl_core::loader::{LoadOptions, LoadedModel};
@@ -255,6 +256,52 @@ pub struct RunArgs {
     /// With --task figure-eight: the time for one figure [default: 4s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "law", help_heading = "Task-space control")]
     pub task_period: Option<Duration>,
+    /// With --law: an obstacle to avoid: `moving-sphere` (a sphere of 8 cm radius that comes
+    /// horizontally at the tool's start position from 55 cm beyond it to 15 cm of it and goes
+    /// back, every --obstacle-period). The arm's links are capsules around its skeleton; the
+    /// repulsion keeps them --obstacle-margin away while the orientation holds (see
+    /// --task-priority).
+    #[arg(
+        long,
+        value_name = "OBSTACLE",
+        value_enum,
+        requires = "law",
+        help_heading = "Task-space control"
+    )]
+    pub obstacle: Option<ObstacleArg>,
+    /// With --obstacle moving-sphere: the time it takes to come and go back [default: 8s].
+    #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "obstacle", help_heading = "Task-space control")]
+    pub obstacle_period: Option<Duration>,
+    /// With --obstacle: the distance the repulsion keeps between the arm and an obstacle, m
+    /// [default: 0.05]; it acts from 0.15 m farther.
+    #[arg(
+        long,
+        value_name = "M",
+        requires = "obstacle",
+        help_heading = "Task-space control"
+    )]
+    pub obstacle_margin: Option<f64>,
+    /// With --law: which part of the task yields when not all can be met: `orientation-first`
+    /// (the orientation first, the position in its nullspace beside the obstacles' repulsion,
+    /// the posture last) or `together` (the whole pose as one task; obstacles and posture in its
+    /// nullspace) [default: orientation-first with --obstacle, else together].
+    #[arg(
+        long,
+        value_name = "PRIORITY",
+        value_enum,
+        requires = "law",
+        help_heading = "Task-space control"
+    )]
+    pub task_priority: Option<PriorityArg>,
+    /// With --law: the tool the task moves, by name [default: the model's tool farthest down
+    /// the chain, e.g. the FR3's link8 flange].
+    #[arg(
+        long,
+        value_name = "NAME",
+        requires = "law",
+        help_heading = "Task-space control"
+    )]
+    pub tool: Option<String>,
     /// The emergency-stop input, a GPIO line CHIP:OFFSET (e.g. gpiochip0:17), normally closed:
     /// it reads high while the chain is closed; low (pressed, or a broken wire) stops the arm.
     /// The run does not start with it open; a stop latches: closing it again restarts nothing.
@@ -366,6 +413,22 @@ pub enum TaskArg {
     Hold,
 }
 
+/// `--obstacle`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ObstacleArg {
+    /// A sphere coming at the tool and going back.
+    MovingSphere,
+}
+
+/// `--task-priority`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PriorityArg {
+    /// The orientation, then the position, then the posture.
+    OrientationFirst,
+    /// The pose as one task, then the posture.
+    Together,
+}
+
 /// The task-space law `--law` asks for.
 fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedance<B, J> {
     let motion = match args.task.unwrap_or(TaskArg::Hold) {
@@ -375,7 +438,38 @@ fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedanc
             period_s: args.task_period.map_or(4.0, |d| d.as_secs_f64()),
         },
     };
-    CartesianImpedance::new(0, motion)
+    let default = if args.obstacle.is_some() {
+        PriorityArg::OrientationFirst
+    } else {
+        PriorityArg::Together
+    };
+    let mut gains = ImpedanceGains {
+        priority: match args.task_priority.unwrap_or(default) {
+            PriorityArg::OrientationFirst => Priority::OrientationFirst,
+            PriorityArg::Together => Priority::Together,
+        },
+        ..ImpedanceGains::default()
+    };
+    if let Some(margin) = args.obstacle_margin {
+        // The repulsion's reach moves with the margin.
+        let reach = gains.repulsion.influence - gains.repulsion.margin;
+        gains.repulsion.margin = margin;
+        gains.repulsion.influence = margin + reach;
+    }
+    let law = match &args.tool {
+        Some(name) => CartesianImpedance::for_tool(name, motion),
+        None => CartesianImpedance::for_flange(motion),
+    }
+    .gains(gains);
+    match args.obstacle {
+        Some(ObstacleArg::MovingSphere) => law.moving_sphere(TowardTool {
+            period_s: args
+                .obstacle_period
+                .map_or(TowardTool::default().period_s, |d| d.as_secs_f64()),
+            ..TowardTool::default()
+        }),
+        None => law,
+    }
 }
 
 /// `--follow`'s value.

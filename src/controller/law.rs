@@ -334,6 +334,10 @@ pub struct LawSummary {
     pub lines: Vec<String>,
     /// An object for the JSON report's `law` key.
     pub json: serde_json::Value,
+    /// The law's headline results, an object whose keys go to the top of the JSON report too
+    /// (e.g. the task-space law's `task_error_max_m`); a key the report has of its own keeps
+    /// the report's value. `Null`: none.
+    pub headline: serde_json::Value,
     /// The law's own failure, if it had one (e.g. cycles it could not compute): the run fails
     /// with it (exit 1) unless it failed already.
     pub failure: Option<String>,

@@ -12,6 +12,7 @@ use serde_json::json;
 use super::control::{FaultAt, RunEnd};
 use super::input::InputReport;
 use super::lateness::{self, HostActivity, Lateness, PeerLateness};
+use super::supervise::Fault;
 use super::tracking::Violation;
 
 /// How the device was brought to a safe state after the loop.
@@ -101,6 +102,9 @@ pub struct RunReport {
     /// What the law reported at the end ([`ControlLaw::summary`](super::ControlLaw::summary)),
     /// e.g. the targets a [`TargetFollower`](super::TargetFollower) followed.
     pub law: Option<serde_json::Value>,
+    /// The law's headline results, merged into the top of the JSON report
+    /// ([`LawSummary::headline`](super::LawSummary::headline)).
+    pub law_headline: Option<serde_json::Value>,
     /// What the safety chain saw (`None`: the run had none).
     pub safety: Option<super::safety::SafetyReport>,
     /// How the device was stopped.
@@ -162,6 +166,7 @@ impl RunReport {
             torque_clamped: 0,
             inputs: None,
             law: None,
+            law_headline: None,
             safety: None,
             shutdown: Shutdown::default(),
             telemetry_rows: None,
@@ -216,9 +221,12 @@ impl RunReport {
         }
     }
 
-    /// The report as JSON: `cycles`, `overruns`, `lost_packets`, `latency_us` {min, mean, p99,
+    /// The report as JSON: `result` (`ok` or `failed`), `reflexes` (motions the device
+    /// stopped on its own — a Franka reflex, a drive's fault: a run ends at the first, so 0 or
+    /// 1), `cycles`, `overruns`, `lost_packets`, `latency_us` {min, mean, p99,
     /// p999, max}, `tracking_error_rad` {max, rms, per joint, bound per joint}, `loop` (rl-rt's
-    /// loop statistics schema), `link` (the device's counts), `fault`, and the rest.
+    /// loop statistics schema), `link` (the device's counts), `fault`, the law's headline keys
+    /// ([`LawSummary::headline`](super::LawSummary::headline)), and the rest.
     pub fn to_json(&self) -> serde_json::Value {
         let w = self.stats.wakeup.summary();
         let s = self.stats.step.summary();
@@ -228,7 +236,9 @@ impl RunReport {
             Some(RunEnd::Fault(f)) => Some(f),
             _ => None,
         };
-        json!({
+        let mut report = json!({
+            "result": if self.failure.is_some() { "failed" } else { "ok" },
+            "reflexes": u32::from(matches!(fault, Some(Fault::Device { .. }))),
             "cycles": self.stats.cycles(),
             "overruns": self.stats.overruns,
             "missed_deadlines": self.stats.missed_deadlines,
@@ -316,7 +326,15 @@ impl RunReport {
             "notes": self.notes,
             "failed": self.failure.is_some(),
             "failure": self.failure,
-        })
+        });
+        if let (Some(serde_json::Value::Object(extra)), Some(top)) =
+            (&self.law_headline, report.as_object_mut())
+        {
+            for (k, v) in extra {
+                top.entry(k.clone()).or_insert_with(|| v.clone());
+            }
+        }
+        report
     }
 }
 

@@ -325,6 +325,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for TargetFollower<J> {
                     "apply_delay_max_s": c.apply_delay_max_s,
                     "apply_delay_mean_s": (c.targets > 0).then_some(mean_delay_s),
             }),
+            headline: serde_json::Value::Null,
             failure: None,
         })
     }

@@ -23,5 +23,5 @@ pub use impedance::{
     ImpedanceGains, Orientation, Priority, Singularity, TaskData, TaskError, TaskReport,
     TaskTarget, operational_impedance,
 };
-pub use repulsion::{MAX_PROXIMITIES, Proximity, Repulsion};
 pub use rate::limit_rate;
+pub use repulsion::{MAX_PROXIMITIES, Proximity, Repulsion};

@@ -262,17 +262,29 @@ impl<const N: usize> CapsuleModel<N> {
             for c in (b + 1)..model.body_count() {
                 if model.parent(c) == b {
                     let end = model.placement(c).translation;
-                    m.push(LinkCapsule::new(b, link, Capsule::new(DVec3::ZERO, end, radius)))?;
+                    m.push(LinkCapsule::new(
+                        b,
+                        link,
+                        Capsule::new(DVec3::ZERO, end, radius),
+                    ))?;
                     ends += 1;
                 }
             }
             for t in model.tools().iter().filter(|t| t.body == b) {
                 let end = t.placement.translation;
-                m.push(LinkCapsule::new(b, link, Capsule::new(DVec3::ZERO, end, radius)))?;
+                m.push(LinkCapsule::new(
+                    b,
+                    link,
+                    Capsule::new(DVec3::ZERO, end, radius),
+                ))?;
                 ends += 1;
             }
             if ends == 0 {
-                m.push(LinkCapsule::new(b, link, Capsule::sphere(DVec3::ZERO, radius)))?;
+                m.push(LinkCapsule::new(
+                    b,
+                    link,
+                    Capsule::sphere(DVec3::ZERO, radius),
+                ))?;
             }
         }
         Ok(m)
@@ -538,12 +550,13 @@ impl<const N: usize> CapsuleModel<N> {
     /// obstacle, then the (up to `out.len()`) capsules closest to theirs among those nearer
     /// than `within` m, nearest first, into `out`; returns how many. Each proximity is the
     /// point of the capsule's surface nearest to the obstacle, the unit normal from the obstacle
-    /// to it and the signed distance (the obstacles at rest: set `obstacle_velocity` for moving
-    /// ones). Capsules fixed to the world are skipped. Spheres take a vectorised pass over the
-    /// capsules. Does not allocate.
+    /// to it, the signed distance and the obstacle's velocity (for its approach's damping;
+    /// ones). `velocities[j]` is obstacle `j`'s (zero past the end of the slice: at rest).
+    /// Capsules fixed to the world are skipped. Does not allocate.
     pub fn proximities(
         &self,
         obstacles: &[Capsule],
+        velocities: &[DVec3],
         within: f64,
         out: &mut [Proximity],
     ) -> usize {
@@ -587,12 +600,15 @@ impl<const N: usize> CapsuleModel<N> {
             let len = v.length();
             // Centres that coincide: any direction; z keeps it deterministic.
             let normal = if len > 0.0 { v / len } else { DVec3::Z };
-            out[count] = Proximity::at_rest(
-                self.local[pick].body,
-                p - normal * w.radius,
-                normal,
-                len - w.radius - o.radius,
-            );
+            out[count] = Proximity {
+                obstacle_velocity: velocities.get(of[pick]).copied().unwrap_or(DVec3::ZERO),
+                ..Proximity::at_rest(
+                    self.local[pick].body,
+                    p - normal * w.radius,
+                    normal,
+                    len - w.radius - o.radius,
+                )
+            };
             of[pick] = usize::MAX;
             count += 1;
         }
@@ -752,17 +768,29 @@ mod tests {
             let mut m = CapsuleModel::<20>::new();
             for i in 0..17 {
                 let a = DVec3::new(r(), r(), r());
-                let b = if i % 4 == 0 { a } else { a + DVec3::new(r(), r(), r()) * 0.3 };
+                let b = if i % 4 == 0 {
+                    a
+                } else {
+                    a + DVec3::new(r(), r(), r()) * 0.3
+                };
                 // Body 0 (identity in a fresh `Data`), two on the world (never reported).
                 let body = if i % 8 == 5 { ROOT } else { 0 };
-                m.push(LinkCapsule::new(body, i, Capsule::new(a, b, 0.05 + 0.05 * r().abs())))
-                    .unwrap();
+                m.push(LinkCapsule::new(
+                    body,
+                    i,
+                    Capsule::new(a, b, 0.05 + 0.05 * r().abs()),
+                ))
+                .unwrap();
             }
             m.update(&data);
             let mut obstacles = [Capsule::sphere(DVec3::ZERO, 0.0); 6];
             for (k, o) in obstacles.iter_mut().enumerate() {
                 let c = DVec3::new(r(), r(), r()) * 1.2;
-                let e = if k % 2 == 0 { c } else { c + DVec3::new(r(), r(), r()) * 0.2 };
+                let e = if k % 2 == 0 {
+                    c
+                } else {
+                    c + DVec3::new(r(), r(), r()) * 0.2
+                };
                 *o = Capsule::new(c, e, 0.1 * r().abs());
             }
             let within = if round % 2 == 0 { 0.3 } else { f64::INFINITY };
@@ -771,13 +799,16 @@ mod tests {
                 .filter(|&i| m.capsules()[i].body != ROOT)
                 .map(|i| {
                     let w = m.world_capsule(i).unwrap();
-                    obstacles.iter().map(|o| w.distance(o).0).fold(f64::INFINITY, f64::min)
+                    obstacles
+                        .iter()
+                        .map(|o| w.distance(o).0)
+                        .fold(f64::INFINITY, f64::min)
                 })
                 .filter(|d| *d < within)
                 .collect();
             want.sort_by(f64::total_cmp);
             let mut out = [Proximity::at_rest(0, DVec3::ZERO, DVec3::X, 0.0); 4];
-            let k = m.proximities(&obstacles, within, &mut out);
+            let k = m.proximities(&obstacles, &[], within, &mut out);
             assert_eq!(k, want.len().min(4));
             for (p, d) in out[..k].iter().zip(&want) {
                 assert!((p.distance - d).abs() < 1e-12, "{p:?} vs {d}");
@@ -798,7 +829,10 @@ mod tests {
                     .iter()
                     .map(|o| o.signed_distance_to_point(p.point))
                     .fold(f64::INFINITY, f64::min);
-                assert!((to_obstacle - p.distance).abs() < 1e-9, "{to_obstacle} {p:?}");
+                assert!(
+                    (to_obstacle - p.distance).abs() < 1e-9,
+                    "{to_obstacle} {p:?}"
+                );
                 let back = p.point - p.normal * p.distance;
                 let at = obstacles
                     .iter()

@@ -127,6 +127,7 @@ pub(super) fn report<R: JointRobot, const B: usize, const J: usize, L: ControlLa
         torque_clamped: controller.torque_clamped(),
         inputs: controller.input_report().filter(|r| r.is_used()),
         law: summary.as_ref().map(|s| s.json.clone()),
+        law_headline: summary.as_ref().map(|s| s.headline.clone()),
         safety,
         shutdown,
         telemetry_rows: None,

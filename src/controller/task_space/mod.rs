@@ -40,7 +40,11 @@
 //! The device's velocities are used where it measures them; otherwise they are the measured
 //! positions' differences over the period.
 
+mod compute;
+mod obstacles;
+
 use std::f64::consts::PI;
+use std::time::Instant;
 
 use glam::{DMat3, DQuat, DVec3};
 use rl_core::spatial::PlueckerTransform;
@@ -49,6 +53,13 @@ use rl_core::task::{
 };
 use rl_core::{Model, algo};
 use serde_json::json;
+
+pub use compute::ComputeTimes;
+use obstacles::Obstacles;
+pub use obstacles::{
+    MAX_ARM_CAPSULES, MAX_OBSTACLES, MovingSphere, Obstacle, SKELETON_RADIUS, TowardTool,
+};
+use rl_sg::capsule::CapsuleModel;
 
 use super::input::Input;
 use super::law::{
@@ -107,11 +118,21 @@ pub enum TaskMotion {
 pub enum TaskInput {
     /// A new pose for the tool (with [`TaskMotion::Streamed`]), world coordinates.
     Pose(PlueckerTransform),
+    /// An obstacle into slot `slot` (< [`MAX_OBSTACLES`]), or the slot cleared (`None`), for a
+    /// law that avoids obstacles ([`CartesianImpedance::avoid`]).
+    Obstacle {
+        /// The slot.
+        slot: usize,
+        /// The obstacle, world coordinates.
+        obstacle: Option<Obstacle>,
+    },
 }
 
 /// Operational-space impedance as a [`ControlLaw`] in torque mode (module doc).
 pub struct CartesianImpedance<const B: usize, const J: usize> {
     tool: usize,
+    /// The tool asked for by name (resolved at the start).
+    tool_name: Option<String>,
     motion: TaskMotion,
     gains: ImpedanceGains,
     torque_rate: f64,
@@ -132,6 +153,8 @@ pub struct CartesianImpedance<const B: usize, const J: usize> {
     still_cycles: u32,
     failures_in_a_row: u32,
     stats: TaskStats,
+    obstacles: Box<Obstacles>,
+    compute: Box<ComputeTimes>,
 }
 
 /// What the task-space law measured over a run (its report's `law` object).
@@ -160,6 +183,14 @@ pub struct TaskStats {
     pub first_failure: Option<TaskError>,
     /// Pose inputs taken.
     pub poses: u64,
+    /// Obstacle inputs taken.
+    pub obstacle_inputs: u64,
+    /// The smallest distance between the arm's capsules and an obstacle, m (∞ without any).
+    pub min_obstacle_distance_m: f64,
+    /// Cycles with an obstacle inside the repulsion's influence distance.
+    pub repelling_cycles: u64,
+    /// Cycles with an obstacle nearer than the repulsion's margin.
+    pub margin_violations: u64,
 }
 
 impl TaskStats {
@@ -180,6 +211,7 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
     pub fn new(tool: usize, motion: TaskMotion) -> Self {
         Self {
             tool,
+            tool_name: None,
             motion,
             gains: ImpedanceGains::default(),
             torque_rate: DEFAULT_TORQUE_RATE,
@@ -200,7 +232,63 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
             still_cycles: 0,
             failures_in_a_row: 0,
             stats: TaskStats::default(),
+            obstacles: Box::new(Obstacles::new()),
+            compute: Box::new(ComputeTimes::new()),
         }
+    }
+
+    /// Avoids obstacles: the arm's capsules (the skeleton at [`SKELETON_RADIUS`] unless
+    /// [`Self::arm_capsules`] gives them) are kept away from the obstacles streamed in
+    /// ([`TaskInput::Obstacle`]), given ([`Self::obstacle`]) or scripted
+    /// ([`Self::moving_sphere`]) by the repulsion of the gains ([`ImpedanceGains::repulsion`]),
+    /// in the nullspace of what the priority keeps ([`ImpedanceGains::priority`]: with
+    /// `OrientationFirst` the position yields, the orientation does not; with `Together` only
+    /// the nullspace of the whole pose avoids).
+    pub fn avoid(mut self) -> Self {
+        self.obstacles.enabled = true;
+        self
+    }
+
+    /// The arm's capsules, fixed to the model's bodies (e.g. [`rl_sg::fit`] fitted to its
+    /// meshes); avoidance on.
+    pub fn arm_capsules(mut self, capsules: CapsuleModel<MAX_ARM_CAPSULES>) -> Self {
+        self.obstacles.capsules = Some(Box::new(capsules));
+        self.avoid()
+    }
+
+    /// An obstacle from the start, in the first free slot (ignored when all are taken);
+    /// avoidance on.
+    pub fn obstacle(mut self, obstacle: Obstacle) -> Self {
+        if let Some(slot) = self.obstacles.slots.iter_mut().find(|s| s.is_none()) {
+            *slot = Some(obstacle);
+        }
+        self.avoid()
+    }
+
+    /// A scripted sphere coming at the tool's start position and going back; avoidance on.
+    pub fn moving_sphere(mut self, sphere: TowardTool) -> Self {
+        self.obstacles.script = Some(sphere);
+        self.avoid()
+    }
+
+    /// The law's compute time per cycle so far (the whole of [`ControlLaw::cycle`]).
+    pub fn compute_times(&self) -> &ComputeTimes {
+        &self.compute
+    }
+
+    /// The law for the model's tool named `name` (resolved at the start: an error there if the
+    /// model has none of that name).
+    pub fn for_tool(name: &str, motion: TaskMotion) -> Self {
+        let mut law = Self::new(0, motion);
+        law.tool_name = Some(name.to_owned());
+        law
+    }
+
+    /// The law for the model's flange ([`flange`]: the tool farthest down the chain).
+    pub fn for_flange(motion: TaskMotion) -> Self {
+        let mut law = Self::new(usize::MAX, motion);
+        law.tool_name = None;
+        law
     }
 
     /// Other gains.
@@ -277,6 +365,22 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
     }
 }
 
+/// The tool farthest down the kinematic chain (the most moving bodies between it and the
+/// world; of those, the last): a URDF's flange or end effector rather than a sensor frame on
+/// the base, which a URDF may list first.
+pub fn flange<const B: usize>(model: &Model<B>) -> Option<usize> {
+    let depth = |mut b: usize| {
+        let mut d = 0;
+        while b != rl_core::model::ROOT && d <= model.body_count() {
+            d += 1;
+            b = model.parent(b);
+        }
+        d
+    };
+    let tools = model.tools();
+    (0..tools.len()).max_by_key(|&t| (depth(tools[t].body), t))
+}
+
 /// Gerono's lemniscate `y = a sin φ, z = (a/2) sin 2φ` (a: half the width) through `start`,
 /// with `φ̇` ramping from 0 to `2π/T` over the first period along a quintic smoothstep.
 fn figure_eight(start: &PlueckerTransform, size_m: f64, period_s: f64, t: f64) -> TaskTarget {
@@ -308,138 +412,13 @@ fn figure_eight(start: &PlueckerTransform, size_m: f64, period_s: f64, t: f64) -
     }
 }
 
-impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, J> {
-    type Input = TaskInput;
-
-    fn mode(&self) -> CommandMode {
-        CommandMode::Torque
-    }
-
-    fn name(&self) -> &str {
-        "cartesian-impedance"
-    }
-
-    fn describe(&self) -> String {
-        let what = match self.motion {
-            TaskMotion::Hold => "holding the tool's start pose".to_owned(),
-            TaskMotion::FigureEight { size_m, period_s } => format!(
-                "a figure-eight {size_m} m wide in the world's y-z plane every {period_s} s at \
-                 constant orientation"
-            ),
-            TaskMotion::Streamed => "streamed tool poses".to_owned(),
-        };
-        format!(
-            "operational-space impedance ({what}), posture and joint-limit avoidance in the \
-             dynamically consistent nullspace, torques changing at most {} N·m/s",
-            self.torque_rate
-        )
-    }
-
-    fn start(&mut self, start: &Start<'_, B, J>) -> Result<(), LawError> {
-        let model: &Model<B> = start.model;
-        let dof = start.position.len().min(J);
-        if model.nq() != model.dof() {
-            return Err(TaskError::NotFixedBase {
-                nq: model.nq(),
-                nv: model.dof(),
-            }
-            .into());
-        }
-        if self.tool >= model.tools().len() {
-            return Err(format!(
-                "the model has {} tools: no tool {}",
-                model.tools().len(),
-                self.tool
-            )
-            .into());
-        }
-        if let TaskMotion::FigureEight { size_m, period_s } = self.motion {
-            if !(size_m.is_finite() && size_m >= 0.0 && period_s.is_finite() && period_s > 0.0) {
-                return Err(format!(
-                    "a figure-eight needs a size ≥ 0 and a period > 0 (given {size_m} m, \
-                     {period_s} s)"
-                )
-                .into());
-            }
-            // Half the width a, ω = 2π/T: peak speed aω (both axes), acceleration 2aω² (z).
-            let (a, w) = (0.5 * size_m, 2.0 * PI / period_s);
-            if a * w > MAX_FIGURE_SPEED || 2.0 * a * w * w > MAX_FIGURE_ACCELERATION {
-                return Err(format!(
-                    "a figure-eight {size_m} m wide every {period_s} s moves the tool at up to \
-                     {:.2} m/s and {:.1} m/s²; the law takes at most {MAX_FIGURE_SPEED} m/s and \
-                     {MAX_FIGURE_ACCELERATION} m/s² (a smaller figure or a longer period)",
-                    a * w,
-                    2.0 * a * w * w
-                )
-                .into());
-            }
-        }
-        self.gains.check()?;
-        if self.torque_rate.is_nan() || self.torque_rate <= 0.0 {
-            return Err(format!(
-                "the torque-rate limit must be above 0 N·m/s (given {})",
-                self.torque_rate
-            )
-            .into());
-        }
-        let mut data = Box::new(rl_core::Data::<B>::new());
-        algo::forward_position(model, &mut data, start.position)?;
-        self.start_pose = algo::tool_pose(model, &data, self.tool)?;
-        self.tool_pose = self.start_pose;
-        self.gains.gravity_by_device = self.gravity_by_device.unwrap_or(start.device_adds_gravity);
-        self.dof = dof;
-        self.period_s = start.period_s;
-        self.posture = [0.0; J];
-        self.posture[..dof].copy_from_slice(&start.position[..dof]);
-        self.last_position = self.posture;
-        self.last_torque = [0.0; J];
-        self.streamed = None;
-        self.filtered = self.start_pose;
-        self.filtered_velocity = [0.0; 6];
-        self.filtered_acceleration = [0.0; 6];
-        self.braking = None;
-        self.still_cycles = 0;
-        self.failures_in_a_row = 0;
-        self.stats = TaskStats::default();
-        Ok(())
-    }
-
-    fn input(&mut self, input: &Input<J, TaskInput>) -> Result<(), Refused> {
-        match input {
-            Input::Other(TaskInput::Pose(_)) if self.motion != TaskMotion::Streamed => {
-                Err(Refused("this task does not take streamed poses"))
-            }
-            Input::Other(TaskInput::Pose(_)) if self.braking.is_some() => {
-                Err(Refused("the arm is being brought to rest"))
-            }
-            Input::Other(TaskInput::Pose(p)) => {
-                if !(p.translation.is_finite() && p.rotation.is_finite()) {
-                    return Err(Refused("a pose that is not finite"));
-                }
-                let r = p.rotation;
-                if !(r.transpose() * r).abs_diff_eq(DMat3::IDENTITY, 1e-6) {
-                    return Err(Refused("a rotation that is not orthonormal"));
-                }
-                self.streamed = Some(*p);
-                self.stats.poses += 1;
-                Ok(())
-            }
-            Input::Target(_) => Err(Refused("this law takes tool poses, not joint targets")),
-        }
-    }
-
-    fn hold(&mut self, cx: &mut Context<'_, B, J, TaskInput>, out: &mut Command<J>) {
-        // The first exchange holds the arm: gravity, unless the device adds it.
-        if !self.gains.gravity_by_device
-            && let Ok(g) = algo::gravity(cx.model, cx.data, cx.measured.position)
-            && g.iter().all(|t| t.is_finite())
-        {
-            out.torque[..g.len()].copy_from_slice(g);
-        }
-        self.last_torque = out.torque;
-    }
-
-    fn cycle(&mut self, cx: &mut Context<'_, B, J, TaskInput>, out: &mut Command<J>) -> LawStatus {
+impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
+    /// One cycle of the law ([`ControlLaw::cycle`] times it).
+    fn compute_cycle(
+        &mut self,
+        cx: &mut Context<'_, B, J, TaskInput>,
+        out: &mut Command<J>,
+    ) -> LawStatus {
         let dof = self.dof.min(cx.dof);
         let q = cx.measured.position;
         let mut qd = [0.0; J];
@@ -456,6 +435,17 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             self.approach(&goal, cx.period_s);
         }
         let target = self.target_at(cx.time_s);
+        // The arm's points nearest to the obstacles, from the world poses at `q`.
+        let near = if self.obstacles.enabled && algo::forward_position(cx.model, cx.data, q).is_ok()
+        {
+            self.obstacles.nearest(cx.data, cx.time_s)
+        } else {
+            0
+        };
+        // Checked when they came in: a proximity of finite obstacles is finite.
+        let _ = self
+            .task
+            .set_proximities(&self.obstacles.proximities[..near]);
         let mut tau = [0.0; J];
         let computed = operational_impedance(
             cx.model,
@@ -483,6 +473,14 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                 }
                 if report.joints_near_limits > 0 {
                     self.stats.near_limit_cycles += 1;
+                }
+                let s = &mut self.stats;
+                s.min_obstacle_distance_m = s.min_obstacle_distance_m.min(report.min_distance);
+                if report.repelling > 0 {
+                    s.repelling_cycles += 1;
+                }
+                if report.min_distance < self.gains.repulsion.margin {
+                    s.margin_violations += 1;
                 }
             }
             Err(e) => {
@@ -536,6 +534,188 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             LawStatus::Braking
         }
     }
+}
+
+impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, J> {
+    type Input = TaskInput;
+
+    fn mode(&self) -> CommandMode {
+        CommandMode::Torque
+    }
+
+    fn name(&self) -> &str {
+        "cartesian-impedance"
+    }
+
+    fn describe(&self) -> String {
+        let what = match self.motion {
+            TaskMotion::Hold => "holding the tool's start pose".to_owned(),
+            TaskMotion::FigureEight { size_m, period_s } => format!(
+                "a figure-eight {size_m} m wide in the world's y-z plane every {period_s} s at \
+                 constant orientation"
+            ),
+            TaskMotion::Streamed => "streamed tool poses".to_owned(),
+        };
+        format!(
+            "operational-space impedance ({what}), posture and joint-limit avoidance in the \
+             dynamically consistent nullspace, torques changing at most {} N·m/s",
+            self.torque_rate
+        )
+    }
+
+    fn start(&mut self, start: &Start<'_, B, J>) -> Result<(), LawError> {
+        let model: &Model<B> = start.model;
+        let dof = start.position.len().min(J);
+        if model.nq() != model.dof() {
+            return Err(TaskError::NotFixedBase {
+                nq: model.nq(),
+                nv: model.dof(),
+            }
+            .into());
+        }
+        if let Some(name) = &self.tool_name {
+            self.tool = model.tool_index(name).ok_or_else(|| {
+                let names: Vec<&str> = model.tools().iter().map(|t| t.name.as_str()).collect();
+                format!("the model has no tool {name:?} (it has {names:?})")
+            })?;
+        } else if self.tool == usize::MAX {
+            self.tool = flange(model).ok_or("the model has no tool")?;
+        }
+        if self.tool >= model.tools().len() {
+            return Err(format!(
+                "the model has {} tools: no tool {}",
+                model.tools().len(),
+                self.tool
+            )
+            .into());
+        }
+        if let TaskMotion::FigureEight { size_m, period_s } = self.motion {
+            if !(size_m.is_finite() && size_m >= 0.0 && period_s.is_finite() && period_s > 0.0) {
+                return Err(format!(
+                    "a figure-eight needs a size ≥ 0 and a period > 0 (given {size_m} m, \
+                     {period_s} s)"
+                )
+                .into());
+            }
+            // Half the width a, ω = 2π/T: peak speed aω (both axes), acceleration 2aω² (z).
+            let (a, w) = (0.5 * size_m, 2.0 * PI / period_s);
+            if a * w > MAX_FIGURE_SPEED || 2.0 * a * w * w > MAX_FIGURE_ACCELERATION {
+                return Err(format!(
+                    "a figure-eight {size_m} m wide every {period_s} s moves the tool at up to \
+                     {:.2} m/s and {:.1} m/s²; the law takes at most {MAX_FIGURE_SPEED} m/s and \
+                     {MAX_FIGURE_ACCELERATION} m/s² (a smaller figure or a longer period)",
+                    a * w,
+                    2.0 * a * w * w
+                )
+                .into());
+            }
+        }
+        self.gains.check()?;
+        if let Some(script) = &self.obstacles.script {
+            script.check()?;
+        }
+        for o in self.obstacles.slots.iter().flatten() {
+            if !o.is_valid() {
+                return Err(format!("an obstacle that is not finite: {o:?}").into());
+            }
+        }
+        if self.obstacles.enabled {
+            self.obstacles.ensure_capsules(model).map_err(|e| {
+                format!("the arm's skeleton needs more capsules than the law holds: {e}")
+            })?;
+        }
+        if self.torque_rate.is_nan() || self.torque_rate <= 0.0 {
+            return Err(format!(
+                "the torque-rate limit must be above 0 N·m/s (given {})",
+                self.torque_rate
+            )
+            .into());
+        }
+        let mut data = Box::new(rl_core::Data::<B>::new());
+        algo::forward_position(model, &mut data, start.position)?;
+        self.start_pose = algo::tool_pose(model, &data, self.tool)?;
+        self.tool_pose = self.start_pose;
+        self.gains.gravity_by_device = self.gravity_by_device.unwrap_or(start.device_adds_gravity);
+        self.dof = dof;
+        self.period_s = start.period_s;
+        self.posture = [0.0; J];
+        self.posture[..dof].copy_from_slice(&start.position[..dof]);
+        self.last_position = self.posture;
+        self.last_torque = [0.0; J];
+        self.streamed = None;
+        self.filtered = self.start_pose;
+        self.filtered_velocity = [0.0; 6];
+        self.filtered_acceleration = [0.0; 6];
+        self.braking = None;
+        self.still_cycles = 0;
+        self.failures_in_a_row = 0;
+        self.stats = TaskStats {
+            min_obstacle_distance_m: f64::INFINITY,
+            ..TaskStats::default()
+        };
+        self.obstacles.moving = self
+            .obstacles
+            .script
+            .map(|s| s.sphere(self.start_pose.translation));
+        self.compute.clear();
+        Ok(())
+    }
+
+    fn input(&mut self, input: &Input<J, TaskInput>) -> Result<(), Refused> {
+        match input {
+            Input::Other(TaskInput::Pose(_)) if self.motion != TaskMotion::Streamed => {
+                Err(Refused("this task does not take streamed poses"))
+            }
+            Input::Other(TaskInput::Pose(_)) if self.braking.is_some() => {
+                Err(Refused("the arm is being brought to rest"))
+            }
+            Input::Other(TaskInput::Pose(p)) => {
+                if !(p.translation.is_finite() && p.rotation.is_finite()) {
+                    return Err(Refused("a pose that is not finite"));
+                }
+                let r = p.rotation;
+                if !(r.transpose() * r).abs_diff_eq(DMat3::IDENTITY, 1e-6) {
+                    return Err(Refused("a rotation that is not orthonormal"));
+                }
+                self.streamed = Some(*p);
+                self.stats.poses += 1;
+                Ok(())
+            }
+            Input::Other(TaskInput::Obstacle { .. }) if !self.obstacles.enabled => {
+                Err(Refused("this law does not avoid obstacles"))
+            }
+            Input::Other(TaskInput::Obstacle { slot, obstacle }) => {
+                if *slot >= MAX_OBSTACLES {
+                    return Err(Refused("an obstacle slot beyond the law's"));
+                }
+                if obstacle.is_some_and(|o| !o.is_valid()) {
+                    return Err(Refused("an obstacle that is not finite"));
+                }
+                self.obstacles.slots[*slot] = *obstacle;
+                self.stats.obstacle_inputs += 1;
+                Ok(())
+            }
+            Input::Target(_) => Err(Refused("this law takes tool poses, not joint targets")),
+        }
+    }
+
+    fn hold(&mut self, cx: &mut Context<'_, B, J, TaskInput>, out: &mut Command<J>) {
+        // The first exchange holds the arm: gravity, unless the device adds it.
+        if !self.gains.gravity_by_device
+            && let Ok(g) = algo::gravity(cx.model, cx.data, cx.measured.position)
+            && g.iter().all(|t| t.is_finite())
+        {
+            out.torque[..g.len()].copy_from_slice(g);
+        }
+        self.last_torque = out.torque;
+    }
+
+    fn cycle(&mut self, cx: &mut Context<'_, B, J, TaskInput>, out: &mut Command<J>) -> LawStatus {
+        let began = Instant::now();
+        let status = self.compute_cycle(cx, out);
+        self.compute.record(began.elapsed().as_nanos() as u64);
+        status
+    }
 
     fn brake(&mut self, reason: BrakeReason) {
         // The target freezes where the tool is (at the last computed cycle).
@@ -554,12 +734,37 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             s.torque_rate_max,
             s.rate_limited_cycles
         )];
+        let avoiding = self.obstacles.enabled;
+        if avoiding {
+            lines.push(format!(
+                "cartesian impedance: obstacles at least {:.1} mm from the arm's capsules (margin \
+                 {:.1} mm, nearer in {} cycles), repelled in {} cycles, {} obstacle inputs",
+                s.min_obstacle_distance_m * 1e3,
+                self.gains.repulsion.margin * 1e3,
+                s.margin_violations,
+                s.repelling_cycles,
+                s.obstacle_inputs
+            ));
+        }
+        let c = &self.compute;
+        lines.push(format!(
+            "cartesian impedance: computed in {:.1} µs per cycle (p50; p99 {:.1}, max {:.1})",
+            c.quantile_us(0.5).unwrap_or(0.0),
+            c.quantile_us(0.99).unwrap_or(0.0),
+            c.max_us()
+        ));
         if let Some(e) = s.first_failure {
             lines.push(format!(
                 "cartesian impedance: {} cycles not computed, the first: {e}",
                 s.failed_cycles
             ));
         }
+        let min_distance = (avoiding && s.min_obstacle_distance_m.is_finite())
+            .then_some(s.min_obstacle_distance_m);
+        let compute_us = json!({
+            "p50": c.quantile_us(0.5), "p99": c.quantile_us(0.99), "max": c.max_us(),
+            "cycles": c.count(),
+        });
         Some(LawSummary {
             lines,
             json: json!({
@@ -574,6 +779,29 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                     "failed_cycles": s.failed_cycles,
                     "first_failure": s.first_failure.map(|e| e.to_string()),
                     "poses": s.poses,
+                    "priority": format!("{:?}", self.gains.priority),
+                    "obstacles": avoiding.then(|| json!({
+                        "min_distance_m": min_distance,
+                        "margin_m": self.gains.repulsion.margin,
+                        "influence_m": self.gains.repulsion.influence,
+                        "margin_violations": s.margin_violations,
+                        "repelling_cycles": s.repelling_cycles,
+                        "inputs": s.obstacle_inputs,
+                        "arm_capsules": self.obstacles.capsules.as_ref().map(|c| c.len()),
+                        "moving_sphere": self.obstacles.moving.map(|m| json!({
+                            "radius_m": m.radius, "from": m.from.to_array(),
+                            "to": m.to.to_array(), "period_s": m.period_s,
+                        })),
+                    })),
+                    "compute_us": compute_us,
+            }),
+            headline: json!({
+                "task_error_max_m": s.task_error_max_m,
+                "task_error_rms_m": s.task_error_rms_m(),
+                "orientation_error_max_rad": s.orientation_error_max_rad,
+                "min_obstacle_distance_m": min_distance,
+                "torque_rate_max": s.torque_rate_max,
+                "compute_us": compute_us,
             }),
             failure: s.first_failure.map(|e| {
                 format!(
