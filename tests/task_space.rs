@@ -303,6 +303,122 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     assert!(max < 1e-3, "{law}");
 }
 
+/// The seed's tracked worker: a sphere streamed into the running law from another thread (as
+/// a tracker would, 200 times a second, with its velocity) comes at the tool until, left where
+/// it is, it would overlap the tool's capsule. With the orientation first, the position yields:
+/// the arm keeps the margin from it — by the law's own distances and by the robot's joint
+/// states sampled meanwhile — while the orientation holds, and the robot raises no reflex.
+#[test]
+fn a_streamed_obstacle_is_kept_at_the_margin_while_the_orientation_holds() {
+    use rl::controller::task_space::{MovingSphere, Obstacle, SKELETON_RADIUS};
+    use rl::core::task::{ImpedanceGains, Priority};
+    use rl::sg::capsule::{Capsule, CapsuleModel};
+    let urdf = fr3_shaped_urdf();
+    let m = model(&urdf);
+    let gains = ImpedanceGains {
+        priority: Priority::OrientationFirst,
+        ..ImpedanceGains::default()
+    };
+    let margin = gains.repulsion.margin;
+    let radius = 0.08;
+    let attempt = || {
+        let _one = one_run_at_a_time();
+        let (fake, arm) = fake_and_arm(&urdf);
+        let start = tool_at(&m.model, &fake.status().q);
+        // From 60 cm out (horizontally, away from the base) to 12 cm of the tool, in 1.5 s.
+        let p = start.translation;
+        let u = glam::DVec3::new(p.x, p.y, 0.0).normalize();
+        let way = MovingSphere {
+            radius,
+            from: p + u * 0.6,
+            to: p + u * 0.12,
+            period_s: 3.0,
+        };
+        let law = CartesianImpedance::<16, 8>::new(0, TaskMotion::Hold)
+            .gains(gains)
+            .avoid();
+        let mut run =
+            ControlRun::start_law(arm, m.clone(), options(Duration::from_millis(3500)), law)
+                .expect("starts");
+        // The tracker: the sphere's pose and velocity every 5 ms (it stops at its nearest),
+        // and the robot's joints sampled meanwhile: the nearest the arm came, by our capsules
+        // at the robot's own state.
+        let mut caps = CapsuleModel::<64>::skeleton(&m.model, SKELETON_RADIUS).expect("skeleton");
+        let mut d = Box::new(Data::<16>::new());
+        let began = Instant::now();
+        let mut nearest = f64::INFINITY;
+        let mut sent = 0;
+        while run.poll(Duration::from_millis(5)).is_some() {
+            let t = began.elapsed().as_secs_f64().min(1.5);
+            let mut o = way.at(t);
+            if t >= 1.5 {
+                o.velocity = glam::DVec3::ZERO;
+            }
+            if run
+                .inputs()
+                .send(TaskInput::Obstacle {
+                    slot: 0,
+                    obstacle: Some(o),
+                })
+                .is_ok()
+            {
+                sent += 1;
+            }
+            algo::forward_position(&m.model, &mut d, &fake.status().q).expect("fk");
+            caps.update(&d);
+            let sphere = [Capsule::sphere(o.shape.a, radius)];
+            if let Some(c) = caps.min_distance(&sphere) {
+                nearest = nearest.min(c.distance);
+            }
+            assert!(
+                began.elapsed() < Duration::from_secs(60),
+                "the run did not end"
+            );
+        }
+        let report = run.join();
+        let end = tool_at(&m.model, &fake.status().q);
+        (report, (fake, start, end, way.to, nearest, sent))
+    };
+    let Some((report, (fake, start, end, stop, nearest, sent))) = late::while_late(
+        "a streamed obstacle on the fake FR3",
+        attempt,
+        |(r, (fake, ..))| failed_late(r, fake),
+    ) else {
+        return;
+    };
+    println!("{report}");
+    assert_eq!(report.exit_code(), 0, "{report}");
+    assert_no_reflex(&fake);
+    let law = law_json(&report);
+    assert_eq!(law["failed_cycles"], 0, "{law}");
+    assert_rate(&law);
+    let o = &law["obstacles"];
+    println!("streamed obstacle: {o}; nearest at the robot's sampled states {nearest} m");
+    // Left where it stopped, the sphere would overlap the tool's capsule.
+    let untouched = (stop - start.translation).length() - radius - SKELETON_RADIUS;
+    assert!(untouched < 0.0, "{untouched}");
+    assert!(o["inputs"].as_u64() >= Some(100), "{o} ({sent} sent)");
+    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
+    assert_eq!(o["margin_violations"], 0, "{o}");
+    let min = o["min_distance_m"].as_f64().expect("min distance");
+    assert!(min >= margin, "{o}");
+    // By the robot's own states (sampled between cycles, against the sphere as sent).
+    assert!(nearest >= margin - 2e-3, "{nearest}");
+    // The position yielded, the orientation held.
+    let moved = (end.translation - start.translation).length();
+    assert!(moved > 0.05, "the tool moved {moved} m");
+    let ori = law["orientation_error_max_rad"]
+        .as_f64()
+        .expect("orientation");
+    assert!(ori < 5e-3, "{law}");
+    // The report's headline keys, at its top.
+    let json = report.to_json();
+    assert_eq!(json["result"], "ok");
+    assert_eq!(json["reflexes"], 0);
+    assert_eq!(json["min_obstacle_distance_m"], o["min_distance_m"]);
+    assert!(json["compute_us"]["p99"].as_f64().is_some(), "{json}");
+}
+
 /// What the law refuses before anything moves: a figure-eight faster than it takes, gains that
 /// are not gains, a torque-rate limit that is not one, a tool the model does not have.
 #[test]

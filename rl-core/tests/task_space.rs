@@ -703,12 +703,31 @@ fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_
             &want[3..],
             1e-7 * scale,
         );
+        // The same obstacle without its push (the position yields as much): the repulsion
+        // alone accelerates the point away from the obstacle.
+        let pushless = ImpedanceGains {
+            repulsion: Repulsion {
+                stiffness: 0.0,
+                damping: 0.0,
+                ..g.repulsion
+            },
+            ..g
+        };
+        let (tau_yield, report_yield) = call(&mut d, &mut task, &pushless);
+        let (got_yield, qdd_yield) = tool_acceleration(&m, &mut d, &q, &qd, &tau_yield);
+        // The position's command faded by the obstacle's activation, the orientation whole.
+        let s = g.repulsion.activation(p.distance);
+        assert_eq!(report_yield.yielding, s);
+        let faded: Vec<f64> = (0..6)
+            .map(|k| if k < 3 { (1.0 - s) * want[k] } else { want[k] })
+            .collect();
+        assert_close("the position yields", &got_yield, &faded, 1e-7 * scale);
         algo::forward_position(&m, &mut d, &q).unwrap();
         algo::point_jacobian(&m, &d, p.body, p.point, &mut jac).unwrap();
         let away: f64 = (0..n)
             .map(|k| {
                 (p.normal.x * jac[0][k] + p.normal.y * jac[1][k] + p.normal.z * jac[2][k])
-                    * (qdd[k] - qdd_free[k])
+                    * (qdd[k] - qdd_yield[k])
             })
             .sum();
         assert!(

@@ -111,8 +111,10 @@ pub enum Priority {
     #[default]
     Together,
     /// The orientation first; the position in its nullspace, where the repulsion acts beside
-    /// it (the position yields to obstacles, the orientation does not); the posture in the
-    /// nullspace of both. With [`Orientation::Free`] the same as `Together`.
+    /// it: the position yields to obstacles — its command fades with the nearest obstacle's
+    /// activation `s` ([`Repulsion::activation`]: 0 at the influence distance, 1 at the
+    /// margin), `ẍ_l ← (1 − s) ẍ_l` of the commanded tool acceleration — the orientation does not; the posture in the nullspace
+    /// of both. With [`Orientation::Free`] the same as `Together`.
     OrientationFirst,
 }
 
@@ -301,6 +303,10 @@ pub struct TaskReport {
     pub repelling: usize,
     /// The smallest distance among the proximities, m (∞ without).
     pub min_distance: f64,
+    /// How much the position's command was faded for the nearest obstacle
+    /// ([`Priority::OrientationFirst`]): 0 (none inside the influence distance) to 1 (at the
+    /// margin).
+    pub yielding: f64,
 }
 
 /// Why [`operational_impedance`] gave no torques.
@@ -477,6 +483,16 @@ pub fn operational_impedance<const N: usize>(
     let minv_jt = &task.minv_jt;
     let lambda = &task.lambda;
     let levels = gains.priority == Priority::OrientationFirst && m == 6;
+    // How far the position yields to the nearest obstacle (two levels only): its command fades
+    // from whole at the repulsion's influence distance to none at the margin.
+    let yielding = if levels {
+        task.proximities[..nprox]
+            .iter()
+            .map(|p| gains.repulsion.activation(p.distance))
+            .fold(0.0, f64::max)
+    } else {
+        0.0
+    };
 
     // The task torque, and the operational inertia of the level the repulsion joins.
     let mut first = [[0.0; 6]; 6];
@@ -508,7 +524,10 @@ pub fn operational_impedance<const N: usize>(
             for c in 0..3 {
                 s[r][c] -= (0..3).map(|k| row_l1[k] * psi_la[c][k]).sum::<f64>();
             }
-            want[r] = a[r] - (0..3).map(|k| psi_la[r][k] * y[k]).sum::<f64>();
+            // The command (`a + J̇ q̇`) fades; the J̇ q̇ compensation stays.
+            want[r] = a[r]
+                - yielding * (a[r] + jdqd[r])
+                - (0..3).map(|k| psi_la[r][k] * y[k]).sum::<f64>();
         }
         let mut second = [[0.0; 6]; 6];
         bounded_directions += operational_inertia(&s, 3, 0, gains.singularity, &mut second)?;
@@ -602,6 +621,7 @@ pub fn operational_impedance<const N: usize>(
         bounded_directions,
         repelling,
         min_distance,
+        yielding,
     })
 }
 

@@ -112,6 +112,12 @@ impl Repulsion {
         }
     }
 
+    /// How far inside the influence distance `d` is: `clamp((d_i − d)/(d_i − d_m), 0, 1)`.
+    pub fn activation(&self, d: f64) -> f64 {
+        let a = ((self.influence - d) / (self.influence - self.margin)).clamp(0.0, 1.0);
+        if a.is_nan() { 1.0 } else { a }
+    }
+
     /// The commanded acceleration along the normal at distance `d` (m) approached at `rate`
     /// (`ḋ`, m/s; negative when approaching); 0 beyond the influence distance.
     pub fn acceleration(&self, d: f64, rate: f64) -> f64 {
@@ -119,7 +125,7 @@ impl Repulsion {
             return 0.0;
         }
         let span = self.influence - self.margin;
-        let s = ((self.influence - d) / span).clamp(0.0, 1.0);
+        let s = self.activation(d);
         let barrier = self.stiffness * (1.0 / (d - self.margin).max(1e-3) - 1.0 / span);
         (barrier + s * self.damping * (-rate).max(0.0)).min(self.max_acceleration)
     }

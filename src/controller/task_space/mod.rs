@@ -436,12 +436,13 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
         }
         let target = self.target_at(cx.time_s);
         // The arm's points nearest to the obstacles, from the world poses at `q`.
-        let near = if self.obstacles.enabled && algo::forward_position(cx.model, cx.data, q).is_ok()
-        {
-            self.obstacles.nearest(cx.data, cx.time_s)
-        } else {
-            0
-        };
+        let (near, nearest) =
+            if self.obstacles.enabled && algo::forward_position(cx.model, cx.data, q).is_ok() {
+                let within = self.gains.repulsion.influence;
+                self.obstacles.nearest(cx.data, cx.time_s, within)
+            } else {
+                (0, f64::INFINITY)
+            };
         // Checked when they came in: a proximity of finite obstacles is finite.
         let _ = self
             .task
@@ -475,11 +476,11 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
                     self.stats.near_limit_cycles += 1;
                 }
                 let s = &mut self.stats;
-                s.min_obstacle_distance_m = s.min_obstacle_distance_m.min(report.min_distance);
+                s.min_obstacle_distance_m = s.min_obstacle_distance_m.min(nearest);
                 if report.repelling > 0 {
                     s.repelling_cycles += 1;
                 }
-                if report.min_distance < self.gains.repulsion.margin {
+                if nearest < self.gains.repulsion.margin {
                     s.margin_violations += 1;
                 }
             }

@@ -179,11 +179,12 @@ impl Obstacles {
         Ok(())
     }
 
-    /// This cycle's proximities (the arm's world poses in `data` must be those at the measured
-    /// position): how many, nearest first. Does not allocate.
-    pub fn nearest<const B: usize>(&mut self, data: &Data<B>, t: f64) -> usize {
+    /// This cycle's proximities within `within` m (the arm's world poses in `data` must be
+    /// those at the measured position), nearest first: how many, and the smallest distance
+    /// between the arm and an obstacle (∞ without obstacles). Does not allocate.
+    pub fn nearest<const B: usize>(&mut self, data: &Data<B>, t: f64, within: f64) -> (usize, f64) {
         let Some(caps) = self.capsules.as_mut().filter(|_| self.enabled) else {
-            return 0;
+            return (0, f64::INFINITY);
         };
         caps.update(data);
         let mut n = 0;
@@ -198,11 +199,18 @@ impl Obstacles {
             self.velocities[n] = o.velocity;
             n += 1;
         }
-        caps.proximities(
+        let k = caps.proximities(
             &self.shapes[..n],
             &self.velocities[..n],
-            f64::INFINITY,
+            within,
             &mut self.proximities,
-        )
+        );
+        let min = if k > 0 {
+            self.proximities[0].distance
+        } else {
+            caps.min_distance(&self.shapes[..n])
+                .map_or(f64::INFINITY, |d| d.distance)
+        };
+        (k, min)
     }
 }
