@@ -178,13 +178,12 @@ fn the_tool_follows_a_figure_eight_at_constant_orientation() {
     assert!(max < 1e-3 && rms < 5e-4 && ori < 5e-3, "{law}");
 }
 
-/// `rl run --device franka://… --law cartesian-impedance --task figure-eight` against
-/// `rl fake-robot franka --model` (the arm's dynamics integrated from the same URDF), as a user
-/// runs it: the device is opened in torque mode, the tool follows the figure-eight, the robot
-/// raises no reflex, and the JSON report carries the law's numbers.
-#[test]
-fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
-    let dir = std::env::temp_dir().join(format!("rl-task-space-{}", std::process::id()));
+/// `rl run --device franka://… --law cartesian-impedance ARGS --json` against `rl fake-robot
+/// franka --model` (the arm's dynamics integrated from the same URDF), as a user runs it: the
+/// exit code, the JSON report and the fake's last status line; `None` when the machine made
+/// every attempt late (SKIPPED by the rule).
+fn cli_run(what: &str, args: &[&str]) -> Option<(Option<i32>, serde_json::Value, String)> {
+    let dir = std::env::temp_dir().join(format!("rl-task-space-{}-{what}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let urdf = dir.join("fr3.urdf");
     std::fs::write(&urdf, fr3_shaped_urdf()).expect("URDF written");
@@ -228,15 +227,8 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
             .args(["run", "--device", &format!("franka://{addr}"), "--model"])
             .arg(&urdf)
-            .args(["--law", "cartesian-impedance", "--task", "figure-eight"])
-            .args([
-                "--task-size",
-                "0.1",
-                "--task-period",
-                "2s",
-                "--duration",
-                "4s",
-            ])
+            .args(["--law", "cartesian-impedance"])
+            .args(args)
             .args(["--json", "--no-mlock"])
             .output()
             .expect("rl run");
@@ -261,27 +253,41 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     // The run's own rule (the loop late), and the fake's: a run that failed while the fake (a
     // process of its own, whose lateness the run cannot see) slipped or woke a quarter cycle
     // late, by its status line.
-    let Some((code, report, status)) = late::while_late(
-        "rl run --law cartesian-impedance",
-        attempt,
-        |(code, report, status)| {
-            late::json_late(report).or_else(|| {
-                let field = |key: &str| {
-                    status
-                        .split_whitespace()
-                        .find_map(|w| w.strip_prefix(key))
-                        .and_then(|v| v.parse::<u64>().ok())
-                        .unwrap_or(0)
-                };
-                (*code != Some(0) && (field("slips=") > 0 || field("max_lateness_us=") > 250))
-                    .then(|| format!("the fake was late: {status}"))
-            })
-        },
-    ) else {
-        let _ = std::fs::remove_dir_all(&dir);
+    let result = late::while_late(what, attempt, |(code, report, status)| {
+        late::json_late(report).or_else(|| {
+            let field = |key: &str| {
+                status
+                    .split_whitespace()
+                    .find_map(|w| w.strip_prefix(key))
+                    .and_then(|v| v.parse::<u64>().ok())
+                    .unwrap_or(0)
+            };
+            (*code != Some(0) && (field("slips=") > 0 || field("max_lateness_us=") > 250))
+                .then(|| format!("the fake was late: {status}"))
+        })
+    });
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+/// `rl run --device franka://… --law cartesian-impedance --task figure-eight` against the fake
+/// FR3: the device is opened in torque mode, the tool follows the figure-eight, the robot
+/// raises no reflex, and the JSON report carries the law's numbers.
+#[test]
+fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
+    let args = [
+        "--task",
+        "figure-eight",
+        "--task-size",
+        "0.1",
+        "--task-period",
+        "2s",
+        "--duration",
+        "4s",
+    ];
+    let Some((code, report, status)) = cli_run("rl run --law cartesian-impedance", &args) else {
         return;
     };
-    let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(code, Some(0), "{report}");
     assert_eq!(
         report["trajectory_source"], "cartesian-impedance",
@@ -301,6 +307,66 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     assert_rate(law);
     let max = law["task_error_max_m"].as_f64().expect("max");
     assert!(max < 1e-3, "{law}");
+    // The headline keys at the report's top.
+    assert_eq!(report["result"], "ok", "{report}");
+    assert_eq!(report["reflexes"], 0, "{report}");
+    assert_eq!(report["task_error_max_m"], law["task_error_max_m"]);
+    assert!(report["min_obstacle_distance_m"].is_null(), "{report}");
+}
+
+/// `rl run … --task figure-eight --obstacle moving-sphere`: a sphere comes at the tool while it
+/// draws the figure; the arm keeps the margin from it with the orientation held, and the
+/// report's top carries what the issue names.
+#[test]
+fn rl_run_avoids_a_moving_sphere_while_the_orientation_holds() {
+    let args = [
+        "--task",
+        "figure-eight",
+        "--task-size",
+        "0.1",
+        "--task-period",
+        "2s",
+        "--obstacle",
+        "moving-sphere",
+        "--obstacle-period",
+        "3s",
+        "--duration",
+        "4s",
+    ];
+    let Some((code, report, status)) = cli_run("rl run --obstacle moving-sphere", &args) else {
+        return;
+    };
+    assert_eq!(code, Some(0), "{report}");
+    assert!(status.contains(" reflexes=0 "), "{status}");
+    for key in [
+        "result",
+        "cycles",
+        "reflexes",
+        "task_error_max_m",
+        "task_error_rms_m",
+        "orientation_error_max_rad",
+        "min_obstacle_distance_m",
+        "torque_rate_max",
+        "compute_us",
+    ] {
+        assert!(!report[key].is_null(), "no {key}: {report}");
+    }
+    assert_eq!(report["result"], "ok");
+    assert_eq!(report["reflexes"], 0);
+    let o = &report["law"]["obstacles"];
+    println!("moving sphere: {o}");
+    assert_eq!(report["law"]["priority"], "OrientationFirst", "{report}");
+    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
+    let margin = o["margin_m"].as_f64().expect("margin");
+    assert!(min >= margin, "{o}");
+    assert!(o["repelling_cycles"].as_u64() > Some(100), "{o}");
+    assert!(
+        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
+        "{report}"
+    );
+    let c = &report["compute_us"];
+    assert!(c["p50"].as_f64() <= c["p99"].as_f64(), "{c}");
+    assert!(c["p99"].as_f64() <= c["max"].as_f64(), "{c}");
 }
 
 /// The seed's tracked worker: a sphere streamed into the running law from another thread (as
