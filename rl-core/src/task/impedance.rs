@@ -37,10 +37,30 @@
 //! error is the rotation vector of `R_d Rᵀ` (the shortest way, `|e_o| ≤ π`); its derivative is
 //! the angular velocity error for small errors, as is usual.
 //!
+//! **Priorities** ([`Priority`]). With `OrientationFirst` the orientation rows (`a`) come
+//! first and the position rows (`l`) act in their dynamically consistent nullspace
+//! (Khatib's prioritised operational space; Sentis & Khatib 2005), with `Ψ = J M⁻¹ Jᵀ`:
+//!
+//! ```text
+//! τ₁ = J_aᵀ Λ₁ a_a                          Λ₁ = Ψ_aa⁻¹
+//! τ₂ = N₁ᵀ J_lᵀ Λ₂ (a_l − Ψ_la Λ₁ a_a)      Λ₂ = (Ψ_ll − Ψ_la Λ₁ Ψ_al)⁻¹,  N₁ᵀ = I − J_aᵀ Λ₁ J_a M⁻¹
+//! τ  = τ₁ + τ₂ + N₁ᵀ τ_rep + Nᵀ M a₀ + C + G
+//! ```
+//!
+//! (both inverses bounded as [`Singularity`] says): the orientation's acceleration is exact
+//! whatever the lower levels and the repulsion ([`super::repulsion`], at the robot's points
+//! near obstacles, [`TaskData::set_proximities`]) ask; the position's is exact without
+//! obstacles and yields to them — its commanded acceleration fades with the nearest
+//! obstacle's activation, to none at the margin; away from singularities the two levels give
+//! the same torques as the one 6-D task. With `Together` the repulsion acts in the whole
+//! task's nullspace, as the posture does.
+//!
 //! `q`, `q_r`: `nq` (= `nv`: fixed-base models without quaternion joints); `q̇`, `τ`: `nv`.
 //! Cost: one CRBA, its sparse factorisation and `m ≤ 6` solves, one Jacobian, one forward
-//! acceleration sweep (`J̇ q̇`), one RNEA (and a gravity sweep when the device adds gravity),
-//! two `m × m` Cholesky factorisations, and a Jacobi eigen-decomposition when the clamp acts.
+//! acceleration sweep (`J̇ q̇`), one RNEA (without gravity when the device adds it),
+//! two `m × m` Cholesky factorisations, and a Jacobi eigen-decomposition when the clamp acts;
+//! with two levels two more `3 × 3` inversions; per proximity one forward sweep (once), one
+//! point Jacobian and one solve.
 //! The gains are checked at every call ([`ImpedanceGains::check`]). Does not allocate.
 
 use core::fmt;
@@ -48,7 +68,7 @@ use core::fmt;
 use glam::{DQuat, DVec3};
 
 use crate::algo::{
-    Jacobian, crba, factor_mass_matrix, forward_position, gravity, jacobian,
+    Jacobian, coriolis, crba, factor_mass_matrix, forward_position, jacobian,
     jacobian_derivative_times_qd, nonlinear_effects, solve_mass_matrix, tool_pose,
 };
 use crate::error::{Error, check_len};
@@ -449,12 +469,10 @@ pub fn operational_impedance<const N: usize>(
 
     // C(q, q̇) + G(q) (less G for a device that adds it), before the sweeps below reuse `data`.
     let mut bias = [0.0; N];
-    bias[..n].copy_from_slice(nonlinear_effects(model, data, q, qd)?);
     if gains.gravity_by_device {
-        let g = gravity(model, data, q)?;
-        for (b, g) in bias[..n].iter_mut().zip(g) {
-            *b -= g;
-        }
+        bias[..n].copy_from_slice(coriolis(model, data, q, qd)?);
+    } else {
+        bias[..n].copy_from_slice(nonlinear_effects(model, data, q, qd)?);
     }
 
     // M, its factors, M⁻¹ Jᵀ (m solves) and Ψ = J M⁻¹ Jᵀ.
