@@ -376,7 +376,7 @@ fn rl_run_avoids_a_moving_sphere_while_the_orientation_holds() {
 /// states sampled meanwhile — while the orientation holds, and the robot raises no reflex.
 #[test]
 fn a_streamed_obstacle_is_kept_at_the_margin_while_the_orientation_holds() {
-    use rl::controller::task_space::{MovingSphere, Obstacle, SKELETON_RADIUS};
+    use rl::controller::task_space::{MovingSphere, SKELETON_RADIUS};
     use rl::core::task::{ImpedanceGains, Priority};
     use rl::sg::capsule::{Capsule, CapsuleModel};
     let urdf = fr3_shaped_urdf();

@@ -680,7 +680,7 @@ fn orientation_first_holds_the_orientation_exactly_while_the_position_yields_to_
         // the same torques as one 6-D task.
         task.set_proximities(&[]).unwrap();
         let (tau, _) = call(&mut d, &mut task, &g);
-        let (got, qdd_free) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
+        let (got, _) = tool_acceleration(&m, &mut d, &q, &qd, &tau);
         assert_close("two levels, no obstacle", &got, &want, 1e-7 * scale);
         let together = ImpedanceGains {
             priority: Priority::Together,

@@ -62,6 +62,7 @@ using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
+using ArrC = Eigen::Array<double, MAX_CAPSULES, 1>;
 
 struct Gains {
   double kp[6], zeta, max_pos, max_ori, kq, zeta_q, band, limit_k, eps_lin, eps_ang;
@@ -203,8 +204,12 @@ struct Law {
   // workspace
   Mat6N J;
   Eigen::Matrix<double, 6, Eigen::Dynamic> Jp;
-  std::array<Vec3, MAX_CAPSULES> wa, wd;
+  // The world capsules (structure of arrays; a = end, d = axis), 1/(d·d), radii; per capsule
+  // the nearest sphere's distance and index.
+  ArrC ax, ay, az, dx, dy, dz, inv, rad, dist, of;
   int contacts_seen = 0;
+  std::array<Contact, MAX_CONTACTS> best;
+  int nbest = 0;
 
   Law(const pin::Model &m, const Problem &p, pin::FrameIndex fid)
       : model(m), data(m), P(p), tool(fid), Jp(6, m.nv) {
@@ -213,8 +218,71 @@ struct Law {
     w_lin.setConstant(1.0 / std::sqrt(p.g.eps_lin));
     w_ang.setConstant(1.0 / std::sqrt(p.g.eps_ang));
     w6 << w_lin, w_ang;
+    for (ArrC *x : {&ax, &ay, &az, &dx, &dy, &dz, &inv, &rad}) x->setZero();
+    for (std::size_t i = 0; i < p.caps.size(); ++i) {
+      const double dd = p.caps[i].d.squaredNorm();  // a rigid motion keeps it
+      inv[i] = dd > 1e-24 ? 1.0 / dd : 0.0;
+      rad[i] = p.caps[i].radius;
+    }
     J.setZero();
     Jp.setZero();
+  }
+
+  // The capsules to the world from data.oMi, every capsule's nearest sphere, and the (up to K)
+  // capsules nearest to theirs under the influence distance, nearest first, into best[..nbest].
+  // The capsules are kept as a structure of fixed-size Eigen arrays (padded to MAX_CAPSULES
+  // with points at the origin that are never reported), so that the pass over the capsules for
+  // one sphere is Eigen's vectorised array code, square roots included (the same structure as
+  // rl-sg's kernel; a scalar loop with std::sqrt does not vectorise without -fno-math-errno).
+  void nearest() {
+    const Gains &g = P.g;
+    const int nc = static_cast<int>(P.caps.size());
+    for (int i = 0; i < nc; ++i) {
+      const pin::SE3 &X = data.oMi[P.caps[i].jid];
+      const Vec3 a = X.act(P.caps[i].a), d = X.rotation() * P.caps[i].d;
+      ax[i] = a[0], ay[i] = a[1], az[i] = a[2];
+      dx[i] = d[0], dy[i] = d[1], dz[i] = d[2];
+    }
+    dist.setConstant(INFINITY);
+    of.setConstant(-1.0);
+    for (std::size_t o = 0; o < P.obs.size(); ++o) {
+      const Vec3 &c = P.obs[o].c;
+      const ArrC px = c[0] - ax, py = c[1] - ay, pz = c[2] - az;
+      const ArrC t = ((px * dx + py * dy + pz * dz) * inv).max(0.0).min(1.0);
+      const ArrC ex = px - dx * t, ey = py - dy * t, ez = pz - dz * t;
+      const ArrC d = (ex * ex + ey * ey + ez * ez).sqrt() - rad - P.obs[o].r;
+      of = (d < dist).select(ArrC::Constant(static_cast<double>(o)), of);
+      dist = dist.min(d);
+    }
+    // The K nearest capsules under the influence distance, nearest first.
+    nbest = 0;
+    const int K = g.max_contacts;
+    for (int i = 0; i < nc; ++i) {
+      const double bd = dist[i];
+      if (of[i] < 0 || !(bd < g.influence)) continue;
+      if (nbest == K && bd >= best[K - 1].d) continue;
+      int at = nbest < K ? nbest++ : K - 1;
+      while (at > 0 && best[at - 1].d > bd) {
+        best[at] = best[at - 1];
+        --at;
+      }
+      best[at] = Contact{i, bd, Vec3::Zero(), Vec3::Zero()};
+    }
+    // Their closest axis points and sphere centres.
+    for (int k = 0; k < nbest; ++k) {
+      const int i = best[k].capsule;
+      const Vec3 &c = P.obs[static_cast<std::size_t>(of[i])].c;
+      const Vec3 A(ax[i], ay[i], az[i]), D(dx[i], dy[i], dz[i]);
+      const double t = std::clamp((c - A).dot(D) * inv[i], 0.0, 1.0);
+      best[k].x = A + D * t;
+      best[k].c = c;
+    }
+  }
+
+  // The distance part alone, for the breakdown: forward kinematics and nearest().
+  void distances_only(const Vec &q) {
+    pin::forwardKinematics(model, data, q);
+    nearest();
   }
 
   void run(Variant variant, const Vec &q, const Vec &v, Vec &tau) {
@@ -264,7 +332,16 @@ struct Law {
     const Vec3 aa = a.tail<3>(), al = a.head<3>();
     const Vec3 F1 = L1 * aa;
     tau.noalias() = Ja.transpose() * F1;
-    const Vec3 F2 = L2 * (al - Pla * F1);
+    // The position yields to the nearest obstacle: its commanded acceleration (a_l + J̇q̇_l)
+    // fades with the largest activation s = clamp((d_i − d)/(d_i − d_m), 0, 1) among the
+    // contacts (rl-core's Repulsion::activation; NaN counts as 1); the −J̇q̇ compensation stays.
+    nearest();
+    double yielding = 0.0;
+    for (int k = 0; k < nbest; ++k) {
+      const double act = std::clamp((g.influence - best[k].d) / (g.influence - g.margin), 0.0, 1.0);
+      yielding = std::max(yielding, std::isnan(act) ? 1.0 : act);
+    }
+    const Vec3 F2 = L2 * (al - yielding * (al + jdqd.head<3>()) - Pla * F1);
     // N1ᵀ x = x − J_aᵀ Λ1 (M⁻¹J_aᵀ)ᵀ x
     auto n1t = [&](const Vec &x) -> Vec {
       return x - Ja.transpose() * (L1 * (MinvJat.transpose() * x));
@@ -285,53 +362,12 @@ struct Law {
           a0[k] -= g.limit_k * above;
       }
     }
-    const Vec tau0 = M * a0;
-    const Mat6 L = bounded_inverse<6>(Psi, w6);
-    tau += tau0 - J.transpose() * (L * (MinvJt.transpose() * tau0));
+    // N₁ᵀ, then level 2's in level 1's nullspace: z = N₁ᵀ τ₀; z − N₁ᵀ J_lᵀ Λ₂ (M⁻¹J_lᵀ)ᵀ z.
+    const Vec z = n1t(M * a0);
+    const auto MinvJlt = MinvJt.leftCols<3>();
+    tau += z - n1t(Jl.transpose() * (L2 * (MinvJlt.transpose() * z)));
 
-    // --- 4. repulsion ---
-    const std::size_t nc = P.caps.size();
-    for (std::size_t i = 0; i < nc; ++i) {
-      const pin::SE3 &X = data.oMi[P.caps[i].jid];
-      wa[i] = X.act(P.caps[i].a);
-      wd[i] = X.rotation() * P.caps[i].d;
-    }
-    std::array<Contact, MAX_CONTACTS> best;
-    int nbest = 0;
-    const int K = g.max_contacts;
-    for (std::size_t i = 0; i < nc; ++i) {
-      const Vec3 &A = wa[i], &D = wd[i];
-      const double dd = D.squaredNorm();
-      const double inv = dd > 1e-24 ? 1.0 / dd : 0.0;
-      const double rc = P.caps[i].radius;
-      // The nearest sphere (sqrt only when it can beat the best so far).
-      double bd = INFINITY;
-      int bo = -1;
-      for (std::size_t o = 0; o < P.obs.size(); ++o) {
-        const Vec3 pc = P.obs[o].c - A;
-        const double t = std::clamp(pc.dot(D) * inv, 0.0, 1.0);
-        const double d2 = (pc - D * t).squaredNorm();
-        const double reach = bd + rc + P.obs[o].r;
-        if (bo < 0 || (reach > 0 && d2 < reach * reach)) {
-          const double d = std::sqrt(d2) - rc - P.obs[o].r;
-          if (d < bd) {
-            bd = d;
-            bo = static_cast<int>(o);
-          }
-        }
-      }
-      if (bo < 0 || !(bd < g.influence)) continue;
-      if (nbest == K && bd >= best[K - 1].d) continue;
-      // Insert, keeping best sorted by d.
-      int at = nbest < K ? nbest++ : K - 1;
-      while (at > 0 && best[at - 1].d > bd) {
-        best[at] = best[at - 1];
-        --at;
-      }
-      const Vec3 pc = P.obs[bo].c - A;
-      const double t = std::clamp(pc.dot(D) * inv, 0.0, 1.0);
-      best[at] = Contact{static_cast<int>(i), bd, A + D * t, P.obs[bo].c};
-    }
+    // --- 4. repulsion (the contacts of nearest() above) ---
     contacts_seen += nbest;
     Vec tau_rep = Vec::Zero();
     const double span = g.influence - g.margin;
@@ -342,6 +378,8 @@ struct Law {
       const Vec3 p = c.x - n * cap.radius;
       const pin::SE3 &X = data.oMi[cap.jid];
       const pin::SE3 at_p(Mat3::Identity(), X.actInv(p));
+      // getFrameJacobian writes the columns of the joint's supports only.
+      Jp.setZero();
       pin::getFrameJacobian(model, data, cap.jid, at_p, pin::LOCAL_WORLD_ALIGNED, Jp);
       const Vec Jn = Jp.topRows<3>().transpose() * n;
       const double ddot = Jn.dot(v);
@@ -443,6 +481,10 @@ int main(int argc, char **argv) {
       law.run(Variant::Sweeps, P.q[s], P.v[s], tau);
       keep(tau);
     });
+    const double ns_dist = time_per_cycle(n, rounds, [&](std::size_t s) {
+      law.distances_only(P.q[s]);
+      keep(law.best);
+    });
     if (!torques_path.empty()) {
       std::ofstream out(torques_path);
       out << "{\"tau\": [";
@@ -459,8 +501,9 @@ int main(int argc, char **argv) {
     }
     std::printf(
         "{\"library\": \"pinocchio\", \"pinocchio_version\": \"%s\", \"states\": %zu, "
-        "\"rounds\": %d, \"ns_all_terms\": %.3f, \"ns_sweeps\": %.3f, \"contacts_mean\": %.4f}\n",
-        PINOCCHIO_VERSION, n, rounds, ns_all, ns_sweeps, contacts_mean);
+        "\"rounds\": %d, \"ns_all_terms\": %.3f, \"ns_sweeps\": %.3f, \"ns_distances\": %.3f, "
+        "\"contacts_mean\": %.4f}\n",
+        PINOCCHIO_VERSION, n, rounds, ns_all, ns_sweeps, ns_dist, contacts_mean);
   } catch (const std::exception &e) {
     std::fprintf(stderr, "task_bench: %s\n", e.what());
     return 1;

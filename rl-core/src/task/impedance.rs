@@ -68,8 +68,8 @@ use core::fmt;
 use glam::{DQuat, DVec3};
 
 use crate::algo::{
-    Jacobian, coriolis, crba, factor_mass_matrix, forward_position, jacobian,
-    jacobian_derivative_times_qd, nonlinear_effects, solve_mass_matrix, tool_pose,
+    Jacobian, coriolis, crba, factor_mass_matrix, jacobian, jacobian_derivative_times_qd,
+    nonlinear_effects, solve_mass_matrix, tool_pose,
 };
 use crate::error::{Error, check_len};
 use crate::math::{invert_spd, symmetric_eigen};
@@ -268,8 +268,9 @@ impl<const N: usize> TaskData<N> {
 
     /// The robot's points near obstacles that the next calls of [`operational_impedance`]
     /// repel (replacing the last ones; at most [`MAX_PROXIMITIES`], the rest ignored): e.g.
-    /// rl-sg's nearest capsule contacts of this cycle. Their bodies' world poses must be those
-    /// at the `q` of the call (the law runs a forward sweep when there are proximities). Refuses
+    /// rl-sg's nearest capsule contacts of this cycle. Their bodies' world poses in the `Data`
+    /// of the call must be those at its `q` — as the caller's [`crate::algo::forward_position`]
+    /// that placed the capsules left them (the law's sweeps move no other body). Refuses
     /// (keeping none) a proximity that is not finite or whose normal is not a unit vector.
     /// Returns how many were kept.
     pub fn set_proximities(&mut self, proximities: &[Proximity]) -> Result<usize, TaskError> {
@@ -297,7 +298,8 @@ impl<const N: usize> TaskData<N> {
     }
 
     /// The damped operational inertia `Λ` of the last call, `m × m` over the task rows (the
-    /// first `m` rows and columns of the result).
+    /// first `m` rows and columns of the result); zeros after a call with two levels
+    /// ([`Priority::OrientationFirst`], which bounds each level's instead).
     pub fn operational_inertia(&self) -> &[[f64; 6]; 6] {
         &self.lambda
     }
@@ -433,12 +435,9 @@ pub fn operational_impedance<const N: usize>(
         Orientation::Free => 3,
     };
 
-    // J, the tool's pose and velocity (the world poses of every body first when proximities
-    // need them).
+    // J, the tool's pose and velocity (the proximities' bodies are where the caller's forward
+    // sweep at `q` put them: `jacobian` moves only the tool's chain, to the same poses).
     let nprox = task.nproximities;
-    if nprox > 0 {
-        forward_position(model, data, q)?;
-    }
     jacobian(model, data, q, tool, &mut task.jacobian)?;
     let pose = tool_pose(model, data, tool)?;
     let jac = &task.jacobian;
@@ -495,12 +494,17 @@ pub fn operational_impedance<const N: usize>(
         Singularity::Exact => 0.0,
         Singularity::Damped(e) | Singularity::Clamped(e) => e[0],
     };
-    // Λ of the whole task: its nullspace is the posture's.
-    let mut bounded_directions =
-        operational_inertia(&psi, m, 0, gains.singularity, &mut task.lambda)?;
+    let levels = gains.priority == Priority::OrientationFirst && m == 6;
+    // One level: Λ of the whole task (its nullspace is the posture's and the repulsion's). Two
+    // levels: Λ₁ and Λ₂ below, whose nullspaces chained are the posture's.
+    let mut bounded_directions = 0;
+    if levels {
+        task.lambda = [[0.0; 6]; 6];
+    } else {
+        bounded_directions = operational_inertia(&psi, m, 0, gains.singularity, &mut task.lambda)?;
+    }
     let minv_jt = &task.minv_jt;
     let lambda = &task.lambda;
-    let levels = gains.priority == Priority::OrientationFirst && m == 6;
     // How far the position yields to the nearest obstacle (two levels only): its command fades
     // from whole at the repulsion's influence distance to none at the margin.
     let yielding = if levels {
@@ -512,8 +516,9 @@ pub fn operational_impedance<const N: usize>(
         0.0
     };
 
-    // The task torque, and the operational inertia of the level the repulsion joins.
+    // The task torque, and the operational inertias of the two levels.
     let mut first = [[0.0; 6]; 6];
+    let mut second = [[0.0; 6]; 6];
     if levels {
         // Level 1, the orientation (rows 3..6): τ₁ = J_aᵀ Λ₁ a_a.
         let block = |r0: usize, c0: usize| {
@@ -547,7 +552,6 @@ pub fn operational_impedance<const N: usize>(
                 - yielding * (a[r] + jdqd[r])
                 - (0..3).map(|k| psi_la[r][k] * y[k]).sum::<f64>();
         }
-        let mut second = [[0.0; 6]; 6];
         bounded_directions += operational_inertia(&s, 3, 0, gains.singularity, &mut second)?;
         let f2 = mat_vec(&second, 3, &want);
         let mut v = [0.0; N];
@@ -623,7 +627,25 @@ pub fn operational_impedance<const N: usize>(
     for r in 0..n {
         tau0[r] = (0..n).map(|c| data.mass_matrix(r, c) * a0[c]).sum();
     }
-    project(&mut tau0[..n], jac, &task.minv_jt, lambda, m);
+    if levels {
+        // N₁ᵀ then level 2's: z = N₁ᵀ τ₀, z − N₁ᵀ J_lᵀ Λ₂ (M⁻¹ J_lᵀ)ᵀ z (J_l N₁ M⁻¹ = J_l M⁻¹ N₁ᵀ).
+        project_rows(&mut tau0[..n], jac, &task.minv_jt, &first, 3, 3);
+        let mut y = [0.0; 3];
+        for (r, x) in y.iter_mut().enumerate() {
+            *x = dot(&task.minv_jt[r][..n], &tau0[..n]);
+        }
+        let z = mat_vec(&second, 3, &y);
+        let mut v = [0.0; N];
+        for (k, x) in v[..n].iter_mut().enumerate() {
+            *x = (0..3).map(|r| jac[r][k] * z[r]).sum();
+        }
+        project_rows(&mut v[..n], jac, &task.minv_jt, &first, 3, 3);
+        for (t, x) in tau0[..n].iter_mut().zip(&v[..n]) {
+            *t -= x;
+        }
+    } else {
+        project(&mut tau0[..n], jac, &task.minv_jt, lambda, m);
+    }
     for k in 0..n {
         tau[k] += tau0[k] + bias[k];
     }

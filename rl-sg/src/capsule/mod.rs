@@ -584,10 +584,12 @@ impl<const N: usize> CapsuleModel<N> {
             let mut pick = usize::MAX;
             for i in 0..n {
                 let moving = self.local[i].body != ROOT;
-                if moving && of[i] != usize::MAX && best[i] < within {
-                    if pick == usize::MAX || best[i] < best[pick] {
-                        pick = i;
-                    }
+                if moving
+                    && of[i] != usize::MAX
+                    && best[i] < within
+                    && (pick == usize::MAX || best[i] < best[pick])
+                {
+                    pick = i;
                 }
             }
             if pick == usize::MAX {
