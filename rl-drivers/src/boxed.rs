@@ -118,6 +118,12 @@ impl<D: JointTorqueActuator + ?Sized> JointTorqueActuator for Box<D> {
     fn set_joint_torque(&mut self, tau: &[f64]) -> Result<(), Self::Error> {
         (**self).set_joint_torque(tau)
     }
+    fn adds_gravity(&self) -> bool {
+        (**self).adds_gravity()
+    }
+    fn applied_joint_torque(&self, tau: &mut [f64]) -> bool {
+        (**self).applied_joint_torque(tau)
+    }
 }
 
 impl<D: LinkStatisticsSensor + ?Sized> LinkStatisticsSensor for Box<D> {

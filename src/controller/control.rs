@@ -133,9 +133,11 @@ struct Feedback<const J: usize> {
     previous: [f64; J],
     velocity: [f64; J],
     torque: [f64; J],
+    applied_torque: [f64; J],
     resolution: [f64; J],
     has_velocity: bool,
     has_torque: bool,
+    has_applied_torque: bool,
     fresh: bool,
     previous_fresh: bool,
 }
@@ -329,9 +331,11 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
                 previous: position,
                 velocity: [0.0; J],
                 torque: [0.0; J],
+                applied_torque: [0.0; J],
                 resolution: [0.0; J],
                 has_velocity: false,
                 has_torque: false,
+                has_applied_torque: false,
                 fresh: true,
                 previous_fresh: false,
             },
@@ -518,6 +522,10 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             .robot
             .joint_torque_sensor()
             .is_some_and(|s| s.joint_torque(&mut f.torque[..dof]).is_ok());
+        f.has_applied_torque = self
+            .robot
+            .joint_torque_actuator()
+            .is_some_and(|a| a.applied_joint_torque(&mut f.applied_torque[..dof]));
     }
 
     /// The safety chain's cycle (the watchdog toggles); a stop it finds is the run's fault.
@@ -579,6 +587,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
                 position: &f.position[..dof],
                 velocity: f.has_velocity.then_some(&f.velocity[..dof]),
                 torque: f.has_torque.then_some(&f.torque[..dof]),
+                applied_torque: f.has_applied_torque.then_some(&f.applied_torque[..dof]),
                 fresh: f.fresh,
             },
             commanded: &self.setpoint[..dof],
@@ -619,13 +628,18 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
     /// Never sends more than the bounds allow: a position (or reference) step beyond what the
     /// speed limit allows in one cycle, or a velocity beyond the speed limit, is clamped and
     /// is a fault (the law then brakes); torques beyond the model's effort limits are clamped
-    /// and counted; anything not a number is a fault and is replaced by holding.
+    /// and counted; anything not a number is a fault and is replaced by holding. A torque law
+    /// commands no position (its `position` reports where the arm is, which after replies lost
+    /// on the way moves by several cycles at once): its steps are not checked.
     fn check_command(&mut self) {
         let dof = self.dof;
         let c = &mut self.command;
-        let mut fault = self
-            .supervisor
-            .check_step(&self.setpoint[..dof], &c.position[..dof]);
+        let mut fault = if self.mode == CommandMode::Torque {
+            None
+        } else {
+            self.supervisor
+                .check_step(&self.setpoint[..dof], &c.position[..dof])
+        };
         if fault.is_some() {
             let b = self.supervisor.bounds();
             for ((n, s), bound) in c

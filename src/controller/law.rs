@@ -210,6 +210,10 @@ pub struct Measured<'a> {
     pub velocity: Option<&'a [f64]>,
     /// Joint torques, N·m or N, where the device measures them.
     pub torque: Option<&'a [f64]>,
+    /// The torque command the device applies, as it reports it (the last it received; a
+    /// Franka arm's `tau_J_d`, without gravity), where it does
+    /// ([`JointTorqueActuator::applied_joint_torque`](rl_drivers::JointTorqueActuator::applied_joint_torque)).
+    pub applied_torque: Option<&'a [f64]>,
     /// Whether the last step brought a fresh reply (otherwise the values are the last ones).
     pub fresh: bool,
 }

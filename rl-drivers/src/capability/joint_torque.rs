@@ -11,6 +11,16 @@ pub trait JointTorqueActuator: JointDevice {
     fn adds_gravity(&self) -> bool {
         false
     }
+
+    /// The torques the device applies from the last command it received, as it reports them
+    /// (a Franka arm: the state's `tau_J_d`), into `tau` (length [`JointDevice::dof`]); `false`
+    /// (the default) when it does not report them. A torque-rate limit against these — as
+    /// libfranka's `limitRate` does — keeps each step the device sees within its limit even
+    /// after commands were lost on the way.
+    fn applied_joint_torque(&self, tau: &mut [f64]) -> bool {
+        let _ = tau;
+        false
+    }
 }
 
 /// Measures joint torques (RL's `JointTorqueSensor`).

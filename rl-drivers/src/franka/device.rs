@@ -1178,6 +1178,12 @@ impl JointTorqueActuator for FrankaArm {
     fn adds_gravity(&self) -> bool {
         true
     }
+
+    /// The last state's `tau_J_d`: the command the robot received last, which it compares the
+    /// next with (its torque-rate limit).
+    fn applied_joint_torque(&self, tau: &mut [f64]) -> bool {
+        self.read(&self.state.tau_J_d, tau).is_ok()
+    }
 }
 
 impl CartesianPositionSensor for FrankaArm {

@@ -170,7 +170,8 @@ pub struct TaskStats {
     task_error_cycles: u64,
     /// The largest angle between the tool's orientation and its target's, rad (not braking).
     pub orientation_error_max_rad: f64,
-    /// The largest torque change between two commands, N·m/s.
+    /// The largest torque change per period from the torque the device applied (where it
+    /// reports it, else from the last command), N·m/s.
     pub torque_rate_max: f64,
     /// Cycles in which the torque-rate limit cut a joint's torque.
     pub rate_limited_cycles: u64,
@@ -507,12 +508,20 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
         }
         let ramp = ((cx.time_s + cx.period_s) / SOFT_START_S).min(1.0);
         let step = self.torque_rate * cx.period_s * ramp;
-        if limit_rate(&self.last_torque[..dof], &mut tau[..dof], step) > 0 {
+        // The step counts from what the device applies where it says (the last command it
+        // received: after commands lost on the way the next is still within its limit), else
+        // from the last command sent; the two agree while nothing is lost.
+        let applied = cx.measured.applied_torque.filter(|a| a.len() >= dof);
+        let reference = match applied {
+            Some(a) => &a[..dof],
+            None => &self.last_torque[..dof],
+        };
+        if limit_rate(reference, &mut tau[..dof], step) > 0 {
             self.stats.rate_limited_cycles += 1;
         }
         let rate = tau[..dof]
             .iter()
-            .zip(&self.last_torque[..dof])
+            .zip(reference)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max)
             / cx.period_s;
