@@ -175,17 +175,21 @@ fn our_client_drives_franky_sim() {
                 .join("site-packages/franky_sim/assets/fr3_clean.urdf")
         })
         .expect("franky-sim's URDF");
-    let out = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--device",
-            &format!("franka://{}", sim.ip),
-            "--model",
-        ])
-        .arg(&fr3)
-        .args(["--duration", "3s", "--tracking-bound", "0.3", "--json"])
-        .output()
-        .expect("rl runs");
+    // `rl run --device franka://SIM --model FR3.urdf ARGS`.
+    let rl_run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_rl"))
+            .args([
+                "run",
+                "--device",
+                &format!("franka://{}", sim.ip),
+                "--model",
+            ])
+            .arg(&fr3)
+            .args(args)
+            .output()
+            .expect("rl runs")
+    };
+    let out = rl_run(&["--duration", "3s", "--tracking-bound", "0.3", "--json"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     println!("rl run against franky-sim: {stdout}\n{stderr}");
@@ -220,26 +224,20 @@ fn our_client_drives_franky_sim() {
     //    unanswered), so the link's supervision is off here; the robot itself — its reflexes —
     //    is not. The model (the URDF) lacks MuJoCo's joint armature and damping: the impedance's
     //    feedback absorbs them, within millimetres.
-    let out = Command::new(env!("CARGO_BIN_EXE_rl"))
-        .args([
-            "run",
-            "--device",
-            &format!("franka://{}", sim.ip),
-            "--model",
-        ])
-        .arg(&fr3)
-        .args(["--law", "cartesian-impedance", "--task", "figure-eight"])
-        .args([
-            "--task-size",
-            "0.1",
-            "--task-period",
-            "4s",
-            "--duration",
-            "5s",
-        ])
-        .args(["--no-supervision", "--json"])
-        .output()
-        .expect("rl runs");
+    let out = rl_run(&[
+        "--law",
+        "cartesian-impedance",
+        "--task",
+        "figure-eight",
+        "--task-size",
+        "0.1",
+        "--task-period",
+        "4s",
+        "--duration",
+        "5s",
+        "--no-supervision",
+        "--json",
+    ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let report: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
         panic!(

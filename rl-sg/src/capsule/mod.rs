@@ -448,30 +448,9 @@ impl<const N: usize> CapsuleModel<N> {
         while start < n {
             let m = W.min(n - start);
             let mut dist = [f64::INFINITY; W];
-            if let (
-                Some(ax),
-                Some(ay),
-                Some(az),
-                Some(dx),
-                Some(dy),
-                Some(dz),
-                Some(inv),
-                Some(rad),
-            ) = (
-                block(&self.ax, start),
-                block(&self.ay, start),
-                block(&self.az, start),
-                block(&self.dx, start),
-                block(&self.dy, start),
-                block(&self.dz, start),
-                block(&self.inv_dd, start),
-                block(&self.radius, start),
-            ) {
-                let mut d2 = [0.0; W];
+            if let Some((d2, rad)) = self.block_squared(c, start) {
                 let mut near = false;
                 for k in 0..W {
-                    d2[k] =
-                        point_segment_squared(c, ax[k], ay[k], az[k], dx[k], dy[k], dz[k], inv[k]);
                     let reach = (best.0 + rad[k] + r).max(0.0);
                     near |= d2[k] < reach * reach;
                 }
@@ -484,17 +463,7 @@ impl<const N: usize> CapsuleModel<N> {
                 // The last, partial block of a capacity that is no multiple of eight.
                 for (k, out) in dist.iter_mut().enumerate().take(m) {
                     let i = start + k;
-                    let d2 = point_segment_squared(
-                        c,
-                        self.ax[i],
-                        self.ay[i],
-                        self.az[i],
-                        self.dx[i],
-                        self.dy[i],
-                        self.dz[i],
-                        self.inv_dd[i],
-                    );
-                    *out = sqrt(d2) - self.radius[i] - r;
+                    *out = sqrt(self.squared(c, i)) - self.radius[i] - r;
                 }
             }
             for (k, &d) in dist[..m].iter().enumerate() {
@@ -636,34 +605,11 @@ impl<const N: usize> CapsuleModel<N> {
         let mut start = 0;
         while start < n {
             let m = W.min(n - start);
-            let bound = block(&best[..], start).copied();
-            if let (
-                Some(ax),
-                Some(ay),
-                Some(az),
-                Some(dx),
-                Some(dy),
-                Some(dz),
-                Some(inv),
-                Some(rad),
-                Some(bb),
-            ) = (
-                block(&self.ax, start),
-                block(&self.ay, start),
-                block(&self.az, start),
-                block(&self.dx, start),
-                block(&self.dy, start),
-                block(&self.dz, start),
-                block(&self.inv_dd, start),
-                block(&self.radius, start),
-                bound,
-            ) {
-                let mut d2 = [0.0; W];
+            if let Some((d2, rad)) = self.block_squared(c, start) {
                 let mut near = false;
                 for k in 0..W {
-                    d2[k] =
-                        point_segment_squared(c, ax[k], ay[k], az[k], dx[k], dy[k], dz[k], inv[k]);
-                    let reach = (bb[k].min(within) + rad[k] + r).max(0.0);
+                    let bk = best.get(start + k).copied().unwrap_or(f64::INFINITY);
+                    let reach = (bk.min(within) + rad[k] + r).max(0.0);
                     near |= d2[k] < reach * reach;
                 }
                 if !near {
@@ -680,17 +626,7 @@ impl<const N: usize> CapsuleModel<N> {
             } else {
                 // The last, partial block of a capacity that is no multiple of eight.
                 for i in start..start + m {
-                    let d2 = point_segment_squared(
-                        c,
-                        self.ax[i],
-                        self.ay[i],
-                        self.az[i],
-                        self.dx[i],
-                        self.dy[i],
-                        self.dz[i],
-                        self.inv_dd[i],
-                    );
-                    let d = sqrt(d2) - self.radius[i] - r;
+                    let d = sqrt(self.squared(c, i)) - self.radius[i] - r;
                     if d < best[i] {
                         best[i] = d;
                         of[i] = j;
@@ -714,6 +650,46 @@ impl<const N: usize> CapsuleModel<N> {
             }
             *slot = d;
         }
+    }
+}
+
+impl<const N: usize> CapsuleModel<N> {
+    /// The squared distances from `c` to the axes of the eight capsules from `start` (entries
+    /// past the last capsule are computed and ignored) and their radii, in a branch-free loop
+    /// the compiler vectorises; `None` where the capacity has no eight from there.
+    #[inline(always)]
+    fn block_squared(&self, c: DVec3, start: usize) -> Option<([f64; 8], &[f64; 8])> {
+        let (ax, ay, az) = (
+            block(&self.ax, start)?,
+            block(&self.ay, start)?,
+            block(&self.az, start)?,
+        );
+        let (dx, dy, dz) = (
+            block(&self.dx, start)?,
+            block(&self.dy, start)?,
+            block(&self.dz, start)?,
+        );
+        let (inv, rad) = (block(&self.inv_dd, start)?, block(&self.radius, start)?);
+        let mut d2 = [0.0; 8];
+        for k in 0..8 {
+            d2[k] = point_segment_squared(c, ax[k], ay[k], az[k], dx[k], dy[k], dz[k], inv[k]);
+        }
+        Some((d2, rad))
+    }
+
+    /// The squared distance from `c` to capsule `i`'s axis.
+    #[inline(always)]
+    fn squared(&self, c: DVec3, i: usize) -> f64 {
+        point_segment_squared(
+            c,
+            self.ax[i],
+            self.ay[i],
+            self.az[i],
+            self.dx[i],
+            self.dy[i],
+            self.dz[i],
+            self.inv_dd[i],
+        )
     }
 }
 
