@@ -643,7 +643,7 @@ fn a_torque_law_takes_the_fake_franka_to_a_streamed_target() {
     // that failed with the loop or the fake late (its clock slipped or woke a quarter cycle
     // late) is tried again. Lost commands with both on time fail the test.
     let failed_late = |r: &RunReport, (_, fake): &(Vec<CycleRecord<8>>, FakeFranka)| {
-        common::franka_run_failed_late(r, fake)
+        common::franka_run_late(r, fake)
     };
     let attempt = || {
         let (fake, robot) = common::fake_franka_in_torque_mode(&urdf);
@@ -695,12 +695,22 @@ struct VelocityServo {
     reference: [f64; 8],
     velocity: [f64; 8],
     braking: bool,
+    /// Its top speed (rad/s).
+    speed: f64,
 }
 
 impl VelocityServo {
     const GAIN: f64 = 10.0;
-    const SPEED: f64 = 0.5;
     const ACCEL: f64 = 4.0;
+
+    fn new(speed: f64) -> Self {
+        Self {
+            reference: [0.0; 8],
+            velocity: [0.0; 8],
+            braking: false,
+            speed,
+        }
+    }
 }
 
 impl ControlLaw<16, 8> for VelocityServo {
@@ -727,7 +737,7 @@ impl ControlLaw<16, 8> for VelocityServo {
         let dv = Self::ACCEL * cx.period_s;
         for k in 0..cx.dof {
             let want = target.map_or(0.0, |t| {
-                (Self::GAIN * (t[k] - self.reference[k])).clamp(-Self::SPEED, Self::SPEED)
+                (Self::GAIN * (t[k] - self.reference[k])).clamp(-self.speed, self.speed)
             });
             self.velocity[k] += (want - self.velocity[k]).clamp(-dv, dv);
             self.reference[k] += self.velocity[k] * cx.period_s;
@@ -757,11 +767,7 @@ fn inputs_that_stop_coming_bring_the_arm_to_rest() {
             arm,
             model,
             options().input_timeout(timeout),
-            VelocityServo {
-                reference: [0.0; 8],
-                velocity: [0.0; 8],
-                braking: false,
-            },
+            VelocityServo::new(0.5),
         )
         .expect("starts");
         // A target that moves every 20 ms for 0.6 s, then nothing: the arm follows (still
@@ -803,6 +809,47 @@ fn inputs_that_stop_coming_bring_the_arm_to_rest() {
     for (k, goal) in [0.29, -0.29, 0.29, 0.0, 0.29, 0.0].iter().enumerate() {
         assert!((st.q[k] - goal).abs() < 5e-3, "{:?}", st.q);
     }
+}
+
+/// The speed check of the measured motion divides by the time between two measurements: a
+/// device that numbers its measurements (the Franka's `message_id`) and moved several of its
+/// periods between two readings (the states between lost, as a loop that woke late finds a
+/// robot that kept its own clock) is not taken for one that went several times too fast; for
+/// a device that does not number them the same motion counts as too fast (nothing tells the
+/// loop it lasted longer).
+#[test]
+fn the_speed_check_counts_the_periods_between_numbered_measurements() {
+    let run = |numbered: bool, stall: u32| {
+        let _one = one_run_at_a_time();
+        let model = rv6sl().expect("model");
+        let mut arm = SimArm::new(model.model.clone(), &[0.0; 6], ArmMode::Velocity, PERIOD)
+            .stalling(350, stall);
+        if numbered {
+            arm = arm.numbered();
+        }
+        let mut run = ControlRun::start_law(
+            arm,
+            model,
+            options().duration(Duration::from_millis(800)),
+            VelocityServo::new(3.0),
+        )
+        .expect("starts");
+        run.inputs()
+            .send_position(&[2.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            .expect("the target");
+        finish(run).0
+    };
+    // Two periods of motion of joint 0 at 2.8 rad/s (its limit: 4.4 rad/s) between two
+    // readings, at the 350th exchange.
+    let numbered = run(true, 2);
+    assert_eq!(numbered.exit_code(), 0, "{numbered}");
+    assert_eq!(numbered.limit_violations, 0, "{numbered}");
+    let unnumbered = run(false, 2);
+    assert_eq!(unnumbered.exit_code(), 0, "{unnumbered}");
+    assert_eq!(unnumbered.limit_violations, 1, "{unnumbered}");
+    let v = unnumbered.first_violation.expect("the first");
+    assert_eq!((v.quantity, v.joint), ("speed", 0), "{v:?}");
+    assert!(v.value > 5.5, "{v:?}");
 }
 
 #[test]

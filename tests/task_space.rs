@@ -46,12 +46,12 @@ fn tool_at(m: &Model<16>, q: &[f64]) -> PlueckerTransform {
 
 use common::fake_franka_in_torque_mode as fake_and_arm;
 
-/// The lateness rule for these runs (`common::franka_run_failed_late`), except that a reflex is
+/// The lateness rule for these runs (`common::franka_run_late`), except that a reflex is
 /// never the machine's doing: the law steps its torques from the robot's last applied command,
 /// so commands lost while the machine was late raise none.
 fn failed_late(r: &RunReport, fake: &FakeFranka) -> Option<String> {
     if fake.status().raised.is_empty() {
-        common::franka_run_failed_late(r, fake)
+        common::franka_run_late(r, fake)
     } else {
         None
     }

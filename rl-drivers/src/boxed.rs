@@ -88,6 +88,9 @@ impl<D: JointPositionSensor + ?Sized> JointPositionSensor for Box<D> {
     fn joint_position_resolution(&self, q: f64) -> f64 {
         (**self).joint_position_resolution(q)
     }
+    fn joint_position_sample(&self) -> Option<u64> {
+        (**self).joint_position_sample()
+    }
 }
 
 impl<D: JointPositionActuator + ?Sized> JointPositionActuator for Box<D> {

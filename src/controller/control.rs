@@ -15,7 +15,7 @@ use super::law::{BrakeReason, Command, CommandMode, Context, ControlLaw, LawStat
 use super::plan::{MotionLimits, Plan, PlanError, check_model};
 use super::robot::JointRobot;
 use super::safety::SafetyBox;
-use super::supervise::{Bounds, Fault, Observation, Supervision, Supervisor};
+use super::supervise::{Bounds, Fault, Observation, Supervision, Supervisor, measurement_gap};
 use super::telemetry::{CycleRecord, RunState};
 use super::tracking::{Tracking, Violation};
 use super::{DEFAULT_BODIES, DEFAULT_JOINTS};
@@ -140,6 +140,10 @@ struct Feedback<const J: usize> {
     has_applied_torque: bool,
     fresh: bool,
     previous_fresh: bool,
+    /// The device's count of its measurements (where it numbers them) at the last fresh
+    /// one, and how many of its periods passed between the two last fresh ones.
+    last_fresh_sample: Option<u64>,
+    samples_between: Option<u64>,
 }
 
 /// How the run is being ended.
@@ -338,6 +342,8 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
                 has_applied_torque: false,
                 fresh: true,
                 previous_fresh: false,
+                last_fresh_sample: None,
+                samples_between: None,
             },
             speed_limit: limits.speed_limit,
             effort_limit,
@@ -444,7 +450,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             let dof = self.dof;
             self.tracking
                 .record_error(&self.setpoint[..dof], &self.feedback.position[..dof]);
-            self.record_violations();
+            self.record_violations(timing.skipped_deadlines);
         }
         if self.end.is_none() {
             self.supervise(timing);
@@ -510,6 +516,14 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
         f.previous = f.position;
         if self.robot.joint_position(&mut f.position[..dof]).is_err() {
             f.fresh = false;
+        }
+        f.samples_between = None;
+        if f.fresh {
+            let sample = self.robot.joint_position_sample();
+            if let (Some(now), Some(before)) = (sample, f.last_fresh_sample) {
+                f.samples_between = Some(now.saturating_sub(before));
+            }
+            f.last_fresh_sample = sample;
         }
         for k in 0..dof {
             f.resolution[k] = self.robot.joint_position_resolution(f.position[k]);
@@ -785,6 +799,7 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
             link,
             skipped_deadlines: timing.skipped_deadlines,
             overran: timing.overran,
+            samples_between: f.samples_between,
         });
         if let Some(f) = observed {
             self.on_fault(f);
@@ -826,9 +841,13 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
 
     /// Position limits, and the speed between two fresh measurements, of the measured joints
     /// (statistics for the report; the supervisor acts on them).
-    fn record_violations(&mut self) {
+    fn record_violations(&mut self, skipped_deadlines: u64) {
         let cycle = self.cycle;
         let f = &self.feedback;
+        // The time between the two measurements: the device's count of its periods where it
+        // numbers them (a state lost between two readings doubles it), else one period.
+        let gap = measurement_gap(f.samples_between, 1, skipped_deadlines);
+        let interval = gap as f64 * self.period_s;
         let speed_ok = f.previous_fresh;
         for k in 0..self.dof {
             let l = self.model.limits(k);
@@ -845,8 +864,8 @@ impl<R: JointRobot, const B: usize, const J: usize, L: ControlLaw<B, J>> Control
                 });
             }
             if speed_ok {
-                let v = (q - f.previous[k]).abs() / self.period_s;
-                if v > l.velocity * 1.01 + tolerance / self.period_s {
+                let v = (q - f.previous[k]).abs() / interval;
+                if v > l.velocity * 1.01 + tolerance / interval {
                     self.tracking.record_violation(Violation {
                         cycle,
                         joint: k,

@@ -504,6 +504,21 @@ pub struct Observation<'a> {
     pub skipped_deadlines: u64,
     /// Whether the previous cycle overran its period.
     pub overran: bool,
+    /// The device's own count of its periods since the previous fresh measurement, where it
+    /// numbers its measurements (`JointPositionSensor::joint_position_sample`).
+    pub samples_between: Option<u64>,
+}
+
+/// Periods of motion between two fresh measurements `cycles` loop cycles apart: the device's
+/// own count where it numbers its measurements (a robot that kept its clock while the loop
+/// woke late sent states the loop never read), bounded by what the loop's clock allows — its
+/// cycles, the deadlines it skipped, and one for a late wake-up — so a corrupt count cannot
+/// widen a check further; else the loop's cycles.
+pub fn measurement_gap(device: Option<u64>, cycles: u64, skipped_deadlines: u64) -> u64 {
+    match device {
+        Some(periods) => periods.clamp(1, cycles + skipped_deadlines + 1),
+        None => cycles,
+    }
 }
 
 impl<const J: usize> Supervisor<J> {
@@ -602,7 +617,11 @@ impl<const J: usize> Supervisor<J> {
             self.cycles_since_fresh = self.cycles_since_fresh.saturating_add(1);
             return None;
         }
-        let gap = f64::from(self.cycles_since_fresh + 1);
+        let gap = measurement_gap(
+            o.samples_between,
+            u64::from(self.cycles_since_fresh) + 1,
+            o.skipped_deadlines,
+        ) as f64;
         let mut all_identical = self.have_previous;
         for k in 0..dof {
             let q = o.measured[k];
@@ -751,6 +770,7 @@ mod tests {
             link,
             skipped_deadlines: 0,
             overran: false,
+            samples_between: None,
         }
     }
 
@@ -831,6 +851,39 @@ mod tests {
             ),
             "{f:?}"
         );
+    }
+
+    #[test]
+    fn a_jump_is_bounded_by_the_periods_the_device_counted_within_the_loops_clock() {
+        let link = LinkStatistics::default();
+        let numbered = |measured: &'static [f64], periods: u64, skipped: u64| Observation {
+            samples_between: Some(periods),
+            skipped_deadlines: skipped,
+            ..obs(measured, measured, link)
+        };
+        // Two of the device's periods passed (a state between two readings was lost): joint 0
+        // may move twice 0.02.
+        let mut s = supervisor();
+        assert_eq!(s.observe(&numbered(&[0.0, 0.0], 1, 0)), None);
+        assert_eq!(s.observe(&numbered(&[0.039, 0.0], 2, 0)), None);
+        // Unnumbered, the same motion is a jump.
+        let mut s = supervisor();
+        assert_eq!(s.observe(&obs(&[0.0, 0.0], &[0.0, 0.0], link)), None);
+        assert!(
+            s.observe(&obs(&[0.039, 0.0], &[0.039, 0.0], link))
+                .is_some()
+        );
+        // A count beyond what the loop's clock allows (one cycle, no deadline skipped, one for a
+        // late wake-up: two periods) does not widen the bound further.
+        let mut s = supervisor();
+        assert_eq!(s.observe(&numbered(&[0.0, 0.0], 1, 0)), None);
+        assert!(s.observe(&numbered(&[0.059, 0.0], 1000, 0)).is_some());
+        // ... unless the loop skipped deadlines meanwhile.
+        let mut s = supervisor();
+        assert_eq!(s.observe(&numbered(&[0.0, 0.0], 1, 0)), None);
+        assert_eq!(s.observe(&numbered(&[0.059, 0.0], 3, 1)), None);
+        assert_eq!(measurement_gap(None, 2, 5), 2);
+        assert_eq!(measurement_gap(Some(0), 1, 0), 1);
     }
 
     #[test]

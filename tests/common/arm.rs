@@ -58,6 +58,12 @@ pub struct SimArm {
     command: Vec<f64>,
     link: LinkStatistics,
     status: Arc<Mutex<ArmStatus>>,
+    /// The count of measurements (periods of motion), reported where `numbered`.
+    sample: u64,
+    numbered: bool,
+    /// Every `.0`-th exchange the arm moves `.1` periods (the states between lost: what a
+    /// loop that woke late reads of a robot that kept its own clock).
+    stall: Option<(u64, u32)>,
 }
 
 /// The simulated model refused a state (cannot happen for the vectors of its own length).
@@ -93,7 +99,23 @@ impl SimArm {
                 qd: vec![0.0; dof],
                 ..ArmStatus::default()
             })),
+            sample: 0,
+            numbered: false,
+            stall: None,
         }
+    }
+
+    /// Numbers its measurements ([`JointPositionSensor::joint_position_sample`]): one per
+    /// period of motion.
+    pub fn numbered(mut self) -> Self {
+        self.numbered = true;
+        self
+    }
+
+    /// Every `every`-th exchange moves the arm `periods` periods instead of one.
+    pub fn stalling(mut self, every: u64, periods: u32) -> Self {
+        self.stall = Some((every, periods));
+        self
     }
 
     /// A handle on what the arm does.
@@ -103,8 +125,13 @@ impl SimArm {
 
     fn exchange(&mut self) -> Result<(), Error> {
         self.link.sent += 1;
+        let periods = match self.stall {
+            Some((every, periods)) if self.link.sent % every == 0 => periods,
+            _ => 1,
+        };
+        self.sample += u64::from(periods);
         let h = self.period.as_secs_f64() / f64::from(SUBSTEPS);
-        for _ in 0..SUBSTEPS {
+        for _ in 0..SUBSTEPS * periods {
             match self.mode {
                 ArmMode::Torque => {
                     self.tau.copy_from_slice(&self.command);
@@ -191,6 +218,10 @@ impl JointDevice for SimArm {
 impl JointPositionSensor for SimArm {
     fn joint_position(&self, q: &mut [f64]) -> Result<(), Error> {
         self.read(&self.q, q)
+    }
+
+    fn joint_position_sample(&self) -> Option<u64> {
+        self.numbered.then_some(self.sample)
     }
 }
 

@@ -21,4 +21,12 @@ pub trait JointPositionSensor: JointDevice {
         let _ = q;
         0.0
     }
+
+    /// The device's own count of its measurements, where its protocol numbers them (the
+    /// Franka's `message_id`): consecutive measurements are one apart, a lost one shows as a
+    /// jump. A check of the measured speed divides by the measurements actually between two
+    /// readings instead of assuming one. `None` when the protocol does not number them.
+    fn joint_position_sample(&self) -> Option<u64> {
+        None
+    }
 }

@@ -1126,6 +1126,11 @@ impl JointPositionSensor for FrankaArm {
         }
         0.5 * f64::from(f32::from_bits(f.to_bits() + 1) - f)
     }
+
+    /// The state's `message_id`: one per robot cycle.
+    fn joint_position_sample(&self) -> Option<u64> {
+        self.have_state.then_some(self.state.message_id)
+    }
 }
 
 impl JointVelocitySensor for FrankaArm {
