@@ -827,7 +827,7 @@ fn the_speed_check_counts_the_periods_between_numbered_measurements() {
         if numbered {
             arm = arm.numbered();
         }
-        let mut run = ControlRun::start_law(
+        let run = ControlRun::start_law(
             arm,
             model,
             options().duration(Duration::from_millis(800)),
