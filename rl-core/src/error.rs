@@ -31,6 +31,13 @@ pub enum Error {
         /// The degree of freedom (index into `q̇`); [`crate::Model::dof_body`] gives its joint.
         dof: usize,
     },
+    /// A physical parameter that cannot be: negative or not finite.
+    NotPhysical {
+        /// The parameter's name (`"armature"`).
+        argument: &'static str,
+        /// The element (a DOF for the armature).
+        index: usize,
+    },
 }
 
 impl fmt::Display for Error {
@@ -53,6 +60,9 @@ impl fmt::Display for Error {
                 "the mass matrix is singular at degree of freedom {dof}: the bodies its joint \
                  moves have no mass or inertia along it (a massless subtree)"
             ),
+            Error::NotPhysical { argument, index } => {
+                write!(f, "`{argument}` element {index} is negative or not finite")
+            }
         }
     }
 }

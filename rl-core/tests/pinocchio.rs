@@ -191,3 +191,23 @@ fn iiwa() {
 fn g1_floating_base() {
     check("g1");
 }
+
+/// The Panda arm with the FR3's armature (franky-sim's MuJoCo values): RNEA adds `armature ·
+/// q̈`, CRBA its diagonal, ABA inverts both.
+#[test]
+fn panda_arm_with_armature() {
+    check("panda_arm_armature");
+}
+
+/// Armature on a floating base's legs and (not physical, for the code path) on its six-DOF
+/// joint, whose ABA block `D` gains it.
+#[test]
+fn solo12_with_armature() {
+    check("solo12_armature");
+}
+
+/// Armature on a model with a mimic joint (ABA through the mass matrix).
+#[test]
+fn panda_mimic_with_armature() {
+    check("panda_mimic_armature");
+}

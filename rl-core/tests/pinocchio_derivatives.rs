@@ -184,3 +184,16 @@ fn talos_floating_base() {
 fn g1_humanoid_floating_base() {
     check("g1");
 }
+
+/// The FR3's armature on the Panda arm: `M` (and `M⁻¹`) carry it, `∂τ/∂q` and `∂τ/∂q̇` do
+/// not.
+#[test]
+fn panda_arm_with_armature() {
+    check("panda_arm_armature");
+}
+
+/// Armature on a floating base, its six-DOF joint included.
+#[test]
+fn solo12_with_armature() {
+    check("solo12_armature");
+}

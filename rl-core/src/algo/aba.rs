@@ -11,6 +11,9 @@
 //! instead: CRBA, the sparse `LᵀDL` factorisation ([`super::factor_mass_matrix`], whose
 //! elimination tree covers the coupling) and RNEA with `q̈ = 0` for the bias, O(n·depth²).
 //!
+//! The model's armature ([`Model::armature`]) adds to each joint's `D`, as it adds to `M`'s
+//! diagonal (without mimic joints internal and public coordinates are the same).
+//!
 //! Errors: [`Error::NotPositiveDefinite`] names the first DOF found whose joint moves no mass
 //! or inertia (a massless subtree: its row of `M` vanishes).
 
@@ -159,7 +162,7 @@ pub(crate) fn articulated_inertias<const N: usize>(
         if nv == 1 {
             let s = data.world_subspace[sv];
             let u = data.articulated[i].mul_motion(&s);
-            let d = s.dot(&u);
+            let d = s.dot(&u) + model.armature[sv];
             if d.is_nan() || d <= 0.0 {
                 return Err(Error::NotPositiveDefinite { dof: sv });
             }
@@ -189,6 +192,9 @@ pub(crate) fn articulated_inertias<const N: usize>(
                 d[l][k] = x;
                 d[k][l] = x;
             }
+        }
+        for k in 0..nv {
+            d[k][k] += model.armature[sv + k];
         }
         let mut d_inv = [[0.0; 6]; 6];
         if !invert_spd(&d, nv, &mut d_inv) {

@@ -17,6 +17,8 @@
 //! With mimic joints the sweep fills the internal matrix (in `Data`'s factorisation scratch)
 //! and `M = Gᵀ M_int G` is gathered from it ([`crate::model::mimic`]): the leader's row and
 //! column collect the mimic joint's, as in Pinocchio. That last step is O(n_int²).
+//!
+//! The model's armature ([`Model::armature`]) is added to the diagonal.
 
 use crate::error::{Error, check_len};
 use crate::joint::Joint;
@@ -33,6 +35,7 @@ pub fn crba<const N: usize>(model: &Model<N>, data: &mut Data<N>, q: &[f64]) -> 
     } else {
         run::<false, N>(model, data, q);
     }
+    model.add_armature_to_diagonal(&mut data.mass_matrix);
     Ok(())
 }
 

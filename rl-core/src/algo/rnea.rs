@@ -8,6 +8,8 @@
 //! With mimic joints the sweeps run on the internal coordinates, `q̇_int = G q̇`,
 //! `q̈_int = G q̈`, and the result is `τ = Gᵀ τ_int` ([`crate::model::mimic`]): a mimic joint's
 //! torque reaches its leader times the multiplier.
+//!
+//! The model's armature ([`Model::armature`]) adds `armature · q̈` per DOF.
 
 use crate::error::{Error, check_len};
 use crate::model::{Data, Model, ROOT};
@@ -70,6 +72,9 @@ pub(crate) fn inverse_dynamics<const N: usize>(
         inverse_dynamics_mimic(model, data, q, qd, qdd, with_gravity, fext);
     } else {
         run::<false, N>(model, data, q, qd, qdd, with_gravity, fext);
+    }
+    if let Some(qdd) = qdd {
+        model.add_armature_torque(&mut data.tau, qdd);
     }
 }
 
@@ -206,5 +211,46 @@ pub(crate) mod tests {
                 got: 2
             })
         );
+    }
+
+    /// With armature `a_r` the pendulum's inertia about its axis is `m l² + a_r`: RNEA, CRBA and
+    /// ABA all see it; a negative, non-finite or wrongly sized armature is refused.
+    #[test]
+    fn armature_adds_to_the_pendulums_inertia() {
+        let (m, l, g, ar) = (2.0, 0.5, 9.81, 0.3);
+        let mut model = pendulum(m, l, g);
+        model.set_armature(&[ar]).unwrap();
+        assert_eq!(model.armature(), &[ar]);
+        let mut data = Data::new();
+        let (q, qd, qdd) = (0.3, 0.7, -1.1);
+        let tau = rnea(&model, &mut data, &[q], &[qd], &[qdd]).unwrap()[0];
+        let expected = (m * l * l + ar) * qdd + m * g * l * libm::sin(q);
+        assert!((tau - expected).abs() < 1e-12, "{tau} vs {expected}");
+        crate::algo::crba(&model, &mut data, &[q]).unwrap();
+        assert!((data.mass_matrix(0, 0) - (m * l * l + ar)).abs() < 1e-12);
+        let back = crate::algo::aba(&model, &mut data, &[q], &[qd], &[tau]).unwrap()[0];
+        assert!((back - qdd).abs() < 1e-12, "{back} vs {qdd}");
+        for bad in [-1e-3, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                model.set_armature(&[bad]),
+                Err(Error::NotPhysical {
+                    argument: "armature",
+                    index: 0
+                })
+            );
+        }
+        assert!(matches!(
+            model.set_armature(&[0.1, 0.2]),
+            Err(Error::Dimension {
+                argument: "armature",
+                ..
+            })
+        ));
+        // Refused values leave the armature as it was; zeros take it away.
+        assert_eq!(model.armature(), &[ar]);
+        model.set_armature(&[0.0]).unwrap();
+        let tau = rnea(&model, &mut data, &[q], &[qd], &[qdd]).unwrap()[0];
+        let expected = m * l * l * qdd + m * g * l * libm::sin(q);
+        assert!((tau - expected).abs() < 1e-12);
     }
 }

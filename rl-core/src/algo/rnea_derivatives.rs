@@ -169,6 +169,8 @@ pub(crate) fn run<const N: usize>(
         &mut d.mass_matrix,
     );
     symmetrize(&mut d.mass_matrix, model.nv);
+    model.add_armature_to_diagonal(&mut d.mass_matrix);
+    model.add_armature_torque(&mut data.tau, qdd);
 }
 
 /// `Gᵀ X G` of the internal sweeps, for models with mimic joints (out of line).
@@ -184,9 +186,9 @@ fn run_mimic<const N: usize>(
     fext: Option<&[ForceVector]>,
 ) {
     let qd = super::mimic::expand(model, qd);
-    let qdd = super::mimic::expand(model, qdd);
+    let qdd_int = super::mimic::expand(model, qdd);
     let d = &mut *deriv;
-    forward::<true, N>(model, data, &mut d.ws, q, &qd, &qdd, fext);
+    forward::<true, N>(model, data, &mut d.ws, q, &qd, &qdd_int, fext);
     // The internal matrices go to the ABA results' storage, unused here.
     backward::<true, N>(
         model,
@@ -202,6 +204,8 @@ fn run_mimic<const N: usize>(
     contract(model, &d.ddq_dv, &mut d.dtau_dv);
     contract(model, &d.minv, &mut d.mass_matrix);
     super::mimic::contract_tau(model, data);
+    model.add_armature_to_diagonal(&mut d.mass_matrix);
+    model.add_armature_torque(&mut data.tau, qdd);
 }
 
 /// `X = Gᵀ X_int G` for a full internal matrix: each internal entry, scaled by both

@@ -97,6 +97,10 @@ pub struct Model<const N: usize> {
     pub(crate) gravity: DVec3,
     /// Mass rigidly attached to the world (does not move; reported, never simulated).
     pub(crate) base_mass: f64,
+    /// Rotor inertia reflected to each public DOF (kg·m² or kg), on the mass matrix's diagonal.
+    pub(crate) armature: [f64; N],
+    /// Whether any armature is non-zero (the dynamics skip it otherwise).
+    pub(crate) has_armature: bool,
 }
 
 impl<const N: usize> Default for Model<N> {
@@ -142,6 +146,8 @@ impl<const N: usize> Model<N> {
             ntools: 0,
             gravity: DVec3::new(0.0, 0.0, -9.80665),
             base_mass: 0.0,
+            armature: [0.0; N],
+            has_armature: false,
         }
     }
 
@@ -285,6 +291,53 @@ impl<const N: usize> Model<N> {
     /// Sets the physical gravitational acceleration.
     pub fn set_gravity(&mut self, g: DVec3) {
         self.gravity = g;
+    }
+
+    /// The armature of each DOF ([`Model::dof`] elements, kg·m² for a rotation, kg for a
+    /// translation): the inertia of the motor's rotor and gears reflected through the gear
+    /// ratio (`I_rotor · n²`), which moves with the joint but belongs to no link. It adds to
+    /// the mass matrix's diagonal, `M + diag(armature)`, so RNEA adds `armature · q̈`, CRBA its
+    /// diagonal, ABA each joint's `D = Sᵀ Iᴬ S + armature`, and their derivatives follow
+    /// (Pinocchio's `Model::armature`, MuJoCo's joint `armature`). URDF has no field for it:
+    /// 0 unless set ([`Model::set_armature`]).
+    pub fn armature(&self) -> &[f64] {
+        &self.armature[..self.nv]
+    }
+
+    /// Sets the armature of every DOF ([`Model::armature`]): `armature` has [`Model::dof`]
+    /// elements, each finite and not negative.
+    pub fn set_armature(&mut self, armature: &[f64]) -> Result<(), crate::Error> {
+        crate::error::check_len("armature", armature, self.nv)?;
+        if let Some(dof) = armature.iter().position(|a| !(a.is_finite() && *a >= 0.0)) {
+            return Err(crate::Error::NotPhysical {
+                argument: "armature",
+                index: dof,
+            });
+        }
+        self.armature[..self.nv].copy_from_slice(armature);
+        self.has_armature = armature.iter().any(|a| *a != 0.0);
+        Ok(())
+    }
+
+    /// `m[k][k] += armature[k]` for every DOF (the upper triangle's diagonal of a public
+    /// mass matrix).
+    #[inline]
+    pub(crate) fn add_armature_to_diagonal(&self, m: &mut [[f64; N]; N]) {
+        if self.has_armature {
+            for k in 0..self.nv {
+                m[k][k] += self.armature[k];
+            }
+        }
+    }
+
+    /// `tau[k] += armature[k] · qdd[k]` for every DOF.
+    #[inline]
+    pub(crate) fn add_armature_torque(&self, tau: &mut [f64], qdd: &[f64]) {
+        if self.has_armature {
+            for k in 0..self.nv {
+                tau[k] += self.armature[k] * qdd[k];
+            }
+        }
     }
 
     /// Total mass of the moving bodies, kg.

@@ -104,5 +104,10 @@ pub fn build<const N: usize>(fx: &Value) -> Model<N> {
         b.add_tool(f["name"].as_str().unwrap(), parent, pose(&f["placement"]))
             .unwrap();
     }
-    b.build()
+    let mut model = b.build();
+    // The rotor inertia per DOF, where the fixture's robot sets one (Pinocchio's armature).
+    if let Some(a) = fx.get("armature") {
+        model.set_armature(&f64s(a)).unwrap();
+    }
+    model
 }
