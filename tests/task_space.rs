@@ -57,6 +57,9 @@ fn failed_late(r: &RunReport, fake: &FakeFranka) -> Option<String> {
     }
 }
 
+/// franky-sim's FR3 (its MuJoCo model's joint armature, kg·m²).
+const FR3_ARMATURE: &str = "0.195,0.195,0.195,0.195,0.074,0.074,0.074";
+
 fn run_to_end<L>(mut run: ControlRun<FrankaArm, 16, 8, L>) -> RunReport
 where
     L: rl::controller::ControlLaw<16, 8> + 'static,
@@ -192,8 +195,14 @@ fn the_tool_follows_a_figure_eight_at_constant_orientation() {
 /// `rl run --device franka://… --law cartesian-impedance ARGS --json` against `rl fake-robot
 /// franka --model` (the arm's dynamics integrated from the same URDF), as a user runs it: the
 /// exit code, the JSON report and the fake's last status line; `None` when the machine made
-/// every attempt late (SKIPPED by the rule).
-fn cli_run(what: &str, args: &[&str]) -> Option<(Option<i32>, serde_json::Value, String)> {
+/// every attempt late (SKIPPED by the rule). With `armature`, the fake's arm carries it
+/// (`rl fake-robot franka --armature`) and so does the run's model (`rl run --armature`).
+fn cli_run(
+    what: &str,
+    args: &[&str],
+    armature: Option<&str>,
+) -> Option<(Option<i32>, serde_json::Value, String)> {
+    let armature: Vec<&str> = armature.map_or(Vec::new(), |a| vec!["--armature", a]);
     let dir = std::env::temp_dir().join(format!("rl-task-space-{}-{what}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let urdf = dir.join("fr3.urdf");
@@ -211,6 +220,7 @@ fn cli_run(what: &str, args: &[&str]) -> Option<(Option<i32>, serde_json::Value,
                 "--model",
             ])
             .arg(&urdf)
+            .args(&armature)
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
             .spawn()
@@ -238,6 +248,7 @@ fn cli_run(what: &str, args: &[&str]) -> Option<(Option<i32>, serde_json::Value,
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
             .args(["run", "--device", &format!("franka://{addr}"), "--model"])
             .arg(&urdf)
+            .args(&armature)
             .args(["--law", "cartesian-impedance"])
             .args(args)
             .args(["--json", "--no-mlock"])
@@ -283,7 +294,9 @@ fn cli_run(what: &str, args: &[&str]) -> Option<(Option<i32>, serde_json::Value,
 
 /// `rl run --device franka://… --law cartesian-impedance --task figure-eight` against the fake
 /// FR3: the device is opened in torque mode, the tool follows the figure-eight, the robot
-/// raises no reflex, and the JSON report carries the law's numbers.
+/// raises no reflex, and the JSON report carries the law's numbers. The fake's arm carries
+/// franky-sim's joint armature (rotor inertia, which URDF cannot carry) and the run is told it
+/// (`--armature`): without it in the law the orientation strays by about 0.13 rad.
 #[test]
 fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     let args = [
@@ -296,7 +309,11 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
         "--duration",
         "4s",
     ];
-    let Some((code, report, status)) = cli_run("rl run --law cartesian-impedance", &args) else {
+    let Some((code, report, status)) = cli_run(
+        "rl run --law cartesian-impedance",
+        &args,
+        Some(FR3_ARMATURE),
+    ) else {
         return;
     };
     assert_eq!(code, Some(0), "{report}");
@@ -318,6 +335,10 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
     assert_rate(law);
     let max = law["task_error_max_m"].as_f64().expect("max");
     assert!(max < 1e-3, "{law}");
+    let ori = law["orientation_error_max_rad"]
+        .as_f64()
+        .expect("orientation");
+    assert!(ori < 5e-3, "{law}");
     // The headline keys at the report's top.
     assert_eq!(report["result"], "ok", "{report}");
     assert_eq!(report["reflexes"], 0, "{report}");
@@ -344,7 +365,8 @@ fn rl_run_avoids_a_moving_sphere_while_the_orientation_holds() {
         "--duration",
         "4s",
     ];
-    let Some((code, report, status)) = cli_run("rl run --obstacle moving-sphere", &args) else {
+    let Some((code, report, status)) = cli_run("rl run --obstacle moving-sphere", &args, None)
+    else {
         return;
     };
     assert_eq!(code, Some(0), "{report}");

@@ -177,3 +177,39 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     };
     Duration::try_from_secs_f64(seconds).map_err(|e| format!("`{text}`: {e}"))
 }
+
+/// The `--armature` argument: one value for every joint, or one per joint (kg·m², or kg for a
+/// prismatic joint), comma-separated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmatureArg(pub Vec<f64>);
+
+impl ArmatureArg {
+    /// The value of each of `dof` joints.
+    pub fn per_dof(&self, dof: usize) -> Result<Vec<f64>, String> {
+        match self.0.len() {
+            1 => Ok(vec![self.0[0]; dof]),
+            n if n == dof => Ok(self.0.clone()),
+            n => Err(format!(
+                "--armature has {n} values: the model has {dof} joints (give one value, or one \
+                 per joint)"
+            )),
+        }
+    }
+}
+
+/// Parses `0.195,0.195,0.195,0.195,0.074,0.074,0.074` or `0.1`: finite, not negative.
+pub fn parse_armature(text: &str) -> Result<ArmatureArg, String> {
+    let values = text
+        .split(',')
+        .enumerate()
+        .map(|(k, v)| match v.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+            _ => Err(format!(
+                "value {} (`{}`) is not an armature: expected a number ≥ 0 in kg·m²",
+                k + 1,
+                v.trim()
+            )),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(ArmatureArg(values))
+}

@@ -302,6 +302,12 @@ pub struct RunArgs {
         help_heading = "Task-space control"
     )]
     pub tool: Option<String>,
+    /// The rotor inertia of each joint's drive reflected to the joint (kg·m², kg for a
+    /// prismatic joint), which URDF has no field for: added to the model's mass matrix
+    /// (rl-core's `Model::set_armature`) for every law that uses the dynamics. One value for
+    /// all joints, or one per joint (franky-sim's FR3: 0.195,0.195,0.195,0.195,0.074,0.074,0.074).
+    #[arg(long, value_name = "KG_M2[,…]", value_parser = crate::cli::parse_armature)]
+    pub armature: Option<crate::cli::ArmatureArg>,
     /// The emergency-stop input, a GPIO line CHIP:OFFSET (e.g. gpiochip0:17), normally closed:
     /// it reads high while the chain is closed; low (pressed, or a broken wire) stops the arm.
     /// The run does not start with it open; a stop latches: closing it again restarts nothing.
@@ -546,9 +552,16 @@ struct Drive<'a> {
 impl WithModel for Drive<'_> {
     type Output = ExitCode;
 
-    fn run<const N: usize>(self, loaded: Box<LoadedModel<N>>) -> CliResult {
+    fn run<const N: usize>(self, mut loaded: Box<LoadedModel<N>>) -> CliResult {
         for w in &loaded.warnings {
             eprintln!("rl run: warning: {w}");
+        }
+        if let Some(a) = &self.args.armature {
+            let values = a.per_dof(loaded.model.dof()).map_err(CliError::usage)?;
+            loaded
+                .model
+                .set_armature(&values)
+                .map_err(|e| CliError::usage(format!("--armature: {e}")))?;
         }
         let name = match self.name {
             None => "Mitsubishi RV-6SL (embedded)".to_owned(),

@@ -103,6 +103,10 @@ pub struct FakeFrankaConfig {
     pub urdf: Option<String>,
     /// Integrate the arm's dynamics from `urdf` (needs its inertias).
     pub dynamics: bool,
+    /// The rotor inertia of each joint's drive reflected to the joint (kg·m²), which the
+    /// URDF has no field for: the integrated arm carries it (rl-core's `Model::armature`).
+    /// The FR3 in franky-sim's MuJoCo model: 0.195 on joints 1–4, 0.074 on 5–7.
+    pub armature: [f64; DOF],
     /// The joints at power-up, rad.
     pub initial_q: [f64; DOF],
     /// The research-interface version it speaks.
@@ -120,6 +124,7 @@ impl FakeFrankaConfig {
             command_port: crate::franka::COMMAND_PORT,
             urdf: None,
             dynamics: false,
+            armature: [0.0; DOF],
             initial_q: READY,
             version: VERSION,
             on_thread_start: None,
@@ -224,7 +229,7 @@ impl FakeFranka {
         };
         let limits = urdf::joint_limits(&urdf).map_err(invalid)?;
         let dynamics = if config.dynamics {
-            Some(urdf::dynamics(&urdf).map_err(invalid)?)
+            Some(urdf::dynamics(&urdf, &config.armature).map_err(invalid)?)
         } else {
             None
         };

@@ -61,17 +61,22 @@ pub(crate) fn joint_limits(urdf: &str) -> Result<[JointLimits; DOF], String> {
     Ok(out)
 }
 
-/// The arm's dynamics from `urdf`: it must have 7 degrees of freedom.
-pub(crate) fn dynamics(urdf: &str) -> Result<Dynamics, String> {
-    let loaded =
+/// The arm's dynamics from `urdf` with the joints' `armature`: it must have 7 degrees of
+/// freedom.
+pub(crate) fn dynamics(urdf: &str, armature: &[f64; DOF]) -> Result<Dynamics, String> {
+    let mut loaded =
         load_str::<CAPACITY>(urdf, &UrdfOptions::default()).map_err(|e| format!("URDF: {e}"))?;
-    let model = &loaded.model;
-    if model.dof() != DOF || model.nq() != DOF {
+    if loaded.model.dof() != DOF || loaded.model.nq() != DOF {
         return Err(format!(
             "URDF: {} degrees of freedom, a Franka arm has {DOF}",
-            model.dof()
+            loaded.model.dof()
         ));
     }
+    loaded
+        .model
+        .set_armature(armature)
+        .map_err(|e| format!("armature: {e}"))?;
+    let model = &loaded.model;
     let flange = loaded
         .frame_placement("link8")
         .or_else(|| {
