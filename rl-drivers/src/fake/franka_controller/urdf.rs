@@ -189,8 +189,17 @@ mod tests {
     fn the_fr3_shaped_arm_loads_with_seven_joints_and_its_flange() {
         let urdf = fr3_shaped_urdf();
         assert_eq!(joint_limits(&urdf).unwrap(), FR3);
-        let d = dynamics(&urdf).unwrap();
+        let d = dynamics(&urdf, &[0.0; DOF]).unwrap();
         assert_eq!(d.model.dof(), 7);
         assert_eq!(d.flange.1.translation.z, 0.107);
+        // The armature reaches the arm's model; a negative one is refused, by joint.
+        let a = [0.195, 0.195, 0.195, 0.195, 0.074, 0.074, 0.074];
+        assert_eq!(dynamics(&urdf, &a).unwrap().model.armature(), &a);
+        let mut bad = a;
+        bad[4] = -0.1;
+        let Err(e) = dynamics(&urdf, &bad) else {
+            panic!("a negative armature was taken")
+        };
+        assert!(e.starts_with("armature: `armature` element 4"), "{e}");
     }
 }
