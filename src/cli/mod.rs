@@ -213,3 +213,25 @@ pub fn parse_armature(text: &str) -> Result<ArmatureArg, String> {
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ArmatureArg(values))
 }
+
+#[cfg(test)]
+mod armature_tests {
+    use super::*;
+
+    #[test]
+    fn armature_is_one_value_or_one_per_joint_and_never_negative() {
+        let one = parse_armature("0.1").unwrap();
+        assert_eq!(one.per_dof(3).unwrap(), [0.1, 0.1, 0.1]);
+        let seven = parse_armature("0.195,0.195,0.195,0.195,0.074,0.074, 0.074").unwrap();
+        assert_eq!(seven.per_dof(7).unwrap()[6], 0.074);
+        assert!(seven.per_dof(6).unwrap_err().contains("7 values"));
+        for bad in ["-0.1", "0.1,x", "nan", "inf", ""] {
+            assert!(parse_armature(bad).is_err(), "{bad}");
+        }
+        assert!(
+            parse_armature("0.1,-2")
+                .unwrap_err()
+                .contains("value 2 (`-2`)")
+        );
+    }
+}
