@@ -33,7 +33,7 @@ pub enum Error {
     },
     /// A physical parameter that cannot be: negative or not finite.
     NotPhysical {
-        /// The parameter's name (`"armature"`).
+        /// The parameter's name (`"armature"`, `"damping"`, `"friction"`).
         argument: &'static str,
         /// The element (a DOF for the armature).
         index: usize,

@@ -873,3 +873,81 @@ fn the_repulsion_grows_toward_the_margin_and_vanishes_smoothly_at_its_reach() {
         task::MAX_PROXIMITIES
     );
 }
+
+/// The joints' friction in the model (viscous and dry) is what the law adds at the measured
+/// speed, `d q̇ + f tanh(q̇ / v_s)`, and nothing else changes; the dry part is continuous
+/// through rest (0 at q̇ = 0, half its value at q̇ = 0.55 v_s). Bad friction is refused by
+/// argument and joint, and a smoothing that is not one by the law.
+#[test]
+fn the_law_compensates_the_joints_friction_in_the_model() {
+    let mut m = iiwa();
+    let n = m.dof();
+    let mut d = Data::<16>::new();
+    let mut task = TaskData::<16>::new();
+    let mut r = Rng(41);
+    let g = ImpedanceGains::default();
+    let (q, qd, target, posture) = scene(&m, &mut d, &mut r);
+    let mut plain = vec![0.0; n];
+    operational_impedance(
+        &m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut plain,
+    )
+    .unwrap();
+    let damping: Vec<f64> = (0..n).map(|k| 0.1 + 0.05 * k as f64).collect();
+    let friction: Vec<f64> = (0..n).map(|k| 1.2 - 0.1 * k as f64).collect();
+    m.set_joint_friction(&damping, &friction).unwrap();
+    assert_eq!(m.joint_friction(), (&damping[..], &friction[..]));
+    let mut with = vec![0.0; n];
+    operational_impedance(
+        &m, &mut d, &mut task, 0, &g, &target, &q, &qd, &posture, &mut with,
+    )
+    .unwrap();
+    let v_s = g.friction_smoothing;
+    let expected: Vec<f64> = (0..n)
+        .map(|k| plain[k] + damping[k] * qd[k] + friction[k] * (qd[k] / v_s).tanh())
+        .collect();
+    assert_close("τ with friction", &with, &expected, 1e-12);
+    let mut tau = vec![0.0; n];
+    m.friction_torque(&vec![0.0; n], v_s, &mut tau);
+    assert!(tau.iter().all(|t| *t == 0.0), "{tau:?}");
+    m.friction_torque(&vec![0.549_306_144_334_054_8 * v_s; n], v_s, &mut tau);
+    let dry = tau[0] - damping[0] * 0.549_306_144_334_054_8 * v_s;
+    assert!((dry - 0.5 * friction[0]).abs() < 1e-12, "{dry}");
+    let mut bad = friction.clone();
+    bad[3] = -1.0;
+    assert_eq!(
+        m.set_joint_friction(&damping, &bad),
+        Err(rl_core::Error::NotPhysical {
+            argument: "friction",
+            index: 3
+        })
+    );
+    assert!(matches!(
+        m.set_joint_friction(&damping[..2], &friction),
+        Err(rl_core::Error::Dimension {
+            argument: "damping",
+            ..
+        })
+    ));
+    let zero_smoothing = ImpedanceGains {
+        friction_smoothing: 0.0,
+        ..ImpedanceGains::default()
+    };
+    assert_eq!(
+        operational_impedance(
+            &m,
+            &mut d,
+            &mut task,
+            0,
+            &zero_smoothing,
+            &target,
+            &q,
+            &qd,
+            &posture,
+            &mut with,
+        )
+        .err(),
+        Some(TaskError::Gain {
+            gain: "friction_smoothing"
+        })
+    );
+}

@@ -62,8 +62,8 @@ pub struct FrankaArgs {
     /// With --model: the rotor inertia of each joint's drive reflected to the joint (kg·m²),
     /// which URDF has no field for, carried by the integrated arm: one value for all joints,
     /// or seven (franky-sim's FR3: 0.195,0.195,0.195,0.195,0.074,0.074,0.074) [default: 0].
-    #[arg(long, value_name = "KG_M2[,…]", requires = "model", value_parser = crate::cli::parse_armature)]
-    pub armature: Option<crate::cli::ArmatureArg>,
+    #[arg(long, value_name = "KG_M2[,…]", requires = "model", value_parser = crate::cli::parse_per_joint)]
+    pub armature: Option<crate::cli::PerJointArg>,
     /// Stop after this long instead of waiting for Ctrl-C: e.g. 30s, 500ms, 2m (a bare number
     /// is seconds).
     #[arg(long, alias = "seconds", value_parser = crate::cli::parse_duration)]
@@ -754,7 +754,9 @@ fn run_franka(args: &FrankaArgs, stop: &AtomicBool) -> CliResult {
         config.dynamics = !args.kinematic;
     }
     if let Some(a) = &args.armature {
-        let values = a.per_dof(config.armature.len()).map_err(CliError::usage)?;
+        let values = a
+            .per_dof("--armature", config.armature.len())
+            .map_err(CliError::usage)?;
         config.armature.copy_from_slice(&values);
     }
     // The robot's cycle runs at a real-time priority where the process may (root).

@@ -178,19 +178,19 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     Duration::try_from_secs_f64(seconds).map_err(|e| format!("`{text}`: {e}"))
 }
 
-/// The `--armature` argument: one value for every joint, or one per joint (kg·m², or kg for a
-/// prismatic joint), comma-separated.
+/// A per-joint argument (`--armature`, `--joint-damping`, `--joint-friction`): one value for
+/// every joint, or one per joint, comma-separated.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ArmatureArg(pub Vec<f64>);
+pub struct PerJointArg(pub Vec<f64>);
 
-impl ArmatureArg {
-    /// The value of each of `dof` joints.
-    pub fn per_dof(&self, dof: usize) -> Result<Vec<f64>, String> {
+impl PerJointArg {
+    /// The value of each of `dof` joints; `option` names the argument in the error.
+    pub fn per_dof(&self, option: &str, dof: usize) -> Result<Vec<f64>, String> {
         match self.0.len() {
             1 => Ok(vec![self.0[0]; dof]),
             n if n == dof => Ok(self.0.clone()),
             n => Err(format!(
-                "--armature has {n} values: the model has {dof} joints (give one value, or one \
+                "{option} has {n} values: the model has {dof} joints (give one value, or one \
                  per joint)"
             )),
         }
@@ -198,38 +198,39 @@ impl ArmatureArg {
 }
 
 /// Parses `0.195,0.195,0.195,0.195,0.074,0.074,0.074` or `0.1`: finite, not negative.
-pub fn parse_armature(text: &str) -> Result<ArmatureArg, String> {
+pub fn parse_per_joint(text: &str) -> Result<PerJointArg, String> {
     let values = text
         .split(',')
         .enumerate()
         .map(|(k, v)| match v.trim().parse::<f64>() {
             Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
             _ => Err(format!(
-                "value {} (`{}`) is not an armature: expected a number ≥ 0 in kg·m²",
+                "value {} (`{}`) is not a number ≥ 0",
                 k + 1,
                 v.trim()
             )),
         })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(ArmatureArg(values))
+    Ok(PerJointArg(values))
 }
 
 #[cfg(test)]
-mod armature_tests {
+mod per_joint_tests {
     use super::*;
 
     #[test]
-    fn armature_is_one_value_or_one_per_joint_and_never_negative() {
-        let one = parse_armature("0.1").unwrap();
-        assert_eq!(one.per_dof(3).unwrap(), [0.1, 0.1, 0.1]);
-        let seven = parse_armature("0.195,0.195,0.195,0.195,0.074,0.074, 0.074").unwrap();
-        assert_eq!(seven.per_dof(7).unwrap()[6], 0.074);
-        assert!(seven.per_dof(6).unwrap_err().contains("7 values"));
+    fn a_per_joint_value_is_one_or_one_per_joint_and_never_negative() {
+        let one = parse_per_joint("0.1").unwrap();
+        assert_eq!(one.per_dof("--armature", 3).unwrap(), [0.1, 0.1, 0.1]);
+        let seven = parse_per_joint("0.195,0.195,0.195,0.195,0.074,0.074, 0.074").unwrap();
+        assert_eq!(seven.per_dof("--armature", 7).unwrap()[6], 0.074);
+        let e = seven.per_dof("--joint-friction", 6).unwrap_err();
+        assert!(e.starts_with("--joint-friction has 7 values"), "{e}");
         for bad in ["-0.1", "0.1,x", "nan", "inf", ""] {
-            assert!(parse_armature(bad).is_err(), "{bad}");
+            assert!(parse_per_joint(bad).is_err(), "{bad}");
         }
         assert!(
-            parse_armature("0.1,-2")
+            parse_per_joint("0.1,-2")
                 .unwrap_err()
                 .contains("value 2 (`-2`)")
         );

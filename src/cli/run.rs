@@ -306,8 +306,29 @@ pub struct RunArgs {
     /// prismatic joint), which URDF has no field for: added to the model's mass matrix
     /// (rl-core's `Model::set_armature`) for every law that uses the dynamics. One value for
     /// all joints, or one per joint (franky-sim's FR3: 0.195,0.195,0.195,0.195,0.074,0.074,0.074).
-    #[arg(long, value_name = "KG_M2[,…]", value_parser = crate::cli::parse_armature)]
-    pub armature: Option<crate::cli::ArmatureArg>,
+    #[arg(long, value_name = "KG_M2[,…]", value_parser = crate::cli::parse_per_joint)]
+    pub armature: Option<crate::cli::PerJointArg>,
+    /// The joints' viscous friction (N·m·s/rad), which URDF's `<dynamics damping>` may give and
+    /// rl-core does not read from it: the task-space law compensates it at the measured
+    /// speed. One value for all joints, or one per joint (franky-sim's FR3: 0.21).
+    #[arg(long, value_name = "NMS[,…]", value_parser = crate::cli::parse_per_joint)]
+    pub joint_damping: Option<crate::cli::PerJointArg>,
+    /// The joints' dry (Coulomb) friction (N·m), compensated by the task-space law as
+    /// `f·tanh(q̇ / 0.05 rad/s)`. One value for all joints, or one per joint (franky-sim's FR3:
+    /// 1.137,1.137,1.137,1.137,0.763,0.44,0.248).
+    #[arg(long, value_name = "NM[,…]", value_parser = crate::cli::parse_per_joint)]
+    pub joint_friction: Option<crate::cli::PerJointArg>,
+    /// With --law: the task's stiffness in 1/s² (per unit of the arm's operational inertia,
+    /// so the same whatever it carries), the position's and, after a comma, the
+    /// orientation's [default: 400,300]; critically damped.
+    #[arg(
+        long,
+        value_name = "K[,K_ROT]",
+        requires = "law",
+        value_parser = parse_stiffness,
+        help_heading = "Task-space control"
+    )]
+    pub task_stiffness: Option<(f64, f64)>,
     /// The emergency-stop input, a GPIO line CHIP:OFFSET (e.g. gpiochip0:17), normally closed:
     /// it reads high while the chain is closed; low (pressed, or a broken wire) stops the arm.
     /// The run does not start with it open; a stop latches: closing it again restarts nothing.
@@ -355,6 +376,23 @@ pub type GpioLineArg = rl::controller::safety::gpio::GpioLine;
 pub type GpioLineArg = String;
 
 /// `--stop-category`'s value.
+/// `--task-stiffness K[,K_ROT]`: finite, positive; one value sets both.
+fn parse_stiffness(text: &str) -> Result<(f64, f64), String> {
+    let mut values = text.split(',').map(|v| match v.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!(
+            "`{}` is not a stiffness: expected a number > 0 in 1/s²",
+            v.trim()
+        )),
+    });
+    let k = values.next().unwrap_or(Ok(0.0))?;
+    let k_rot = values.next().transpose()?.unwrap_or(k);
+    if values.next().is_some() {
+        return Err(format!("`{text}`: at most two stiffnesses (K,K_ROT)"));
+    }
+    Ok((k, k_rot))
+}
+
 fn parse_category(text: &str) -> Result<StopCategory, String> {
     match text {
         "0" => Ok(StopCategory::Zero),
@@ -456,6 +494,9 @@ fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedanc
         },
         ..ImpedanceGains::default()
     };
+    if let Some((k, k_rot)) = args.task_stiffness {
+        gains.stiffness = [k, k, k, k_rot, k_rot, k_rot];
+    }
     if let Some(margin) = args.obstacle_margin {
         // The repulsion's reach moves with the margin.
         let reach = gains.repulsion.influence - gains.repulsion.margin;
@@ -556,12 +597,26 @@ impl WithModel for Drive<'_> {
         for w in &loaded.warnings {
             eprintln!("rl run: warning: {w}");
         }
+        let dof = loaded.model.dof();
         if let Some(a) = &self.args.armature {
-            let values = a.per_dof(loaded.model.dof()).map_err(CliError::usage)?;
+            let values = a.per_dof("--armature", dof).map_err(CliError::usage)?;
             loaded
                 .model
                 .set_armature(&values)
                 .map_err(|e| CliError::usage(format!("--armature: {e}")))?;
+        }
+        if self.args.joint_damping.is_some() || self.args.joint_friction.is_some() {
+            let zero = crate::cli::PerJointArg(vec![0.0]);
+            let d = self.args.joint_damping.as_ref().unwrap_or(&zero);
+            let f = self.args.joint_friction.as_ref().unwrap_or(&zero);
+            let d = d.per_dof("--joint-damping", dof).map_err(CliError::usage)?;
+            let f = f
+                .per_dof("--joint-friction", dof)
+                .map_err(CliError::usage)?;
+            loaded
+                .model
+                .set_joint_friction(&d, &f)
+                .map_err(|e| CliError::usage(format!("--joint-damping/--joint-friction: {e}")))?;
         }
         let name = match self.name {
             None => "Mitsubishi RV-6SL (embedded)".to_owned(),
@@ -1343,6 +1398,16 @@ fn read_waypoints<const B: usize>(
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn task_stiffness_is_one_or_two_positive_numbers() {
+        assert_eq!(parse_stiffness("2500"), Ok((2500.0, 2500.0)));
+        assert_eq!(parse_stiffness("900, 400"), Ok((900.0, 400.0)));
+        for bad in ["0", "-1", "x", "1,2,3", "inf", ""] {
+            assert!(parse_stiffness(bad).is_err(), "{bad}");
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -101,6 +101,10 @@ pub struct Model<const N: usize> {
     pub(crate) armature: [f64; N],
     /// Whether any armature is non-zero (the dynamics skip it otherwise).
     pub(crate) has_armature: bool,
+    /// Viscous friction per public DOF (N·m·s/rad or N·s/m).
+    pub(crate) damping: [f64; N],
+    /// Dry (Coulomb) friction per public DOF (N·m or N).
+    pub(crate) friction: [f64; N],
 }
 
 impl<const N: usize> Default for Model<N> {
@@ -148,6 +152,8 @@ impl<const N: usize> Model<N> {
             base_mass: 0.0,
             armature: [0.0; N],
             has_armature: false,
+            damping: [0.0; N],
+            friction: [0.0; N],
         }
     }
 
@@ -307,16 +313,52 @@ impl<const N: usize> Model<N> {
     /// Sets the armature of every DOF ([`Model::armature`]): `armature` has [`Model::dof`]
     /// elements, each finite and not negative.
     pub fn set_armature(&mut self, armature: &[f64]) -> Result<(), crate::Error> {
-        crate::error::check_len("armature", armature, self.nv)?;
-        if let Some(dof) = armature.iter().position(|a| !(a.is_finite() && *a >= 0.0)) {
-            return Err(crate::Error::NotPhysical {
-                argument: "armature",
-                index: dof,
-            });
-        }
+        self.check_per_dof("armature", armature)?;
         self.armature[..self.nv].copy_from_slice(armature);
         self.has_armature = armature.iter().any(|a| *a != 0.0);
         Ok(())
+    }
+
+    /// The joints' friction, per DOF: viscous `damping` (N·m·s/rad, N·s/m) and dry `friction`
+    /// (N·m, N) — Pinocchio's `Model::damping` and `Model::friction`, MuJoCo's joint `damping`
+    /// and `frictionloss`. The rigid-body algorithms leave them out (they are not part of
+    /// `M q̈ + C + G`); a controller compensates them with [`Model::friction_torque`]. 0 unless
+    /// set ([`Model::set_joint_friction`]).
+    pub fn joint_friction(&self) -> (&[f64], &[f64]) {
+        (&self.damping[..self.nv], &self.friction[..self.nv])
+    }
+
+    /// Sets the joints' friction ([`Model::joint_friction`]): [`Model::dof`] elements each,
+    /// finite and not negative.
+    pub fn set_joint_friction(
+        &mut self,
+        damping: &[f64],
+        friction: &[f64],
+    ) -> Result<(), crate::Error> {
+        self.check_per_dof("damping", damping)?;
+        self.check_per_dof("friction", friction)?;
+        self.damping[..self.nv].copy_from_slice(damping);
+        self.friction[..self.nv].copy_from_slice(friction);
+        Ok(())
+    }
+
+    /// Adds the joints' friction torque at `qd` to `tau`: `damping · q̇ + friction ·
+    /// tanh(q̇ / smoothing)`, the dry friction smoothed over `smoothing` (rad/s or m/s, > 0)
+    /// so that the torque is continuous through rest. `qd`, `tau`: [`Model::dof`] (shorter
+    /// slices: their length).
+    pub fn friction_torque(&self, qd: &[f64], smoothing: f64, tau: &mut [f64]) {
+        for (k, (t, v)) in tau.iter_mut().zip(qd).take(self.nv).enumerate() {
+            *t += self.damping[k] * v + self.friction[k] * libm::tanh(v / smoothing);
+        }
+    }
+
+    /// `values` has one finite, non-negative element per DOF.
+    fn check_per_dof(&self, argument: &'static str, values: &[f64]) -> Result<(), crate::Error> {
+        crate::error::check_len(argument, values, self.nv)?;
+        match values.iter().position(|a| !(a.is_finite() && *a >= 0.0)) {
+            Some(index) => Err(crate::Error::NotPhysical { argument, index }),
+            None => Ok(()),
+        }
     }
 
     /// `m[k][k] += armature[k]` for every DOF (the upper triangle's diagonal of a public

@@ -12,6 +12,9 @@
 //! a₀  = K_q (q_r − q) − D_q q̇ + a_lim                (posture and joint-limit avoidance)
 //! ```
 //!
+//! plus the joints' own friction where the model has it ([`Model::joint_friction`]:
+//! `d q̇ + f tanh(q̇ / v_s)`, compensated at the measured `q̇`).
+//!
 //! Away from singularities, with the errors under their saturation, the closed loop is
 //! `ë + K_d ė + K_p e = 0` in every task direction (exactly for the position; for the
 //! orientation to first order in the error, as `ė_o` is the angular velocity error only for
@@ -121,6 +124,10 @@ pub struct ImpedanceGains {
     pub priority: Priority,
     /// The repulsion from the proximities in [`TaskData::set_proximities`].
     pub repulsion: Repulsion,
+    /// The joints' friction in the model ([`Model::joint_friction`]) is compensated at the
+    /// measured `q̇`, its dry part smoothed over this speed (rad/s or m/s, > 0;
+    /// [`Model::friction_torque`]).
+    pub friction_smoothing: f64,
 }
 
 /// The order of the task's parts when they cannot all be met (module doc).
@@ -157,6 +164,7 @@ impl Default for ImpedanceGains {
             gravity_by_device: false,
             priority: Priority::Together,
             repulsion: Repulsion::default(),
+            friction_smoothing: 0.05,
         }
     }
 }
@@ -187,6 +195,10 @@ impl ImpedanceGains {
             ("posture_damping_ratio", ok(self.posture_damping_ratio)),
             ("limit_band", ok(self.limit_band)),
             ("limit_stiffness", ok(self.limit_stiffness)),
+            (
+                "friction_smoothing",
+                ok(self.friction_smoothing) && self.friction_smoothing > 0.0,
+            ),
         ];
         if let Some((gain, _)) = checks.iter().find(|(_, good)| !good) {
             return Err(TaskError::Gain { gain });
@@ -649,6 +661,7 @@ pub fn operational_impedance<const N: usize>(
     for k in 0..n {
         tau[k] += tau0[k] + bias[k];
     }
+    model.friction_torque(qd, gains.friction_smoothing, &mut tau[..n]);
 
     let mut tool_velocity = [0.0; 6];
     tool_velocity.copy_from_slice(&xd);
