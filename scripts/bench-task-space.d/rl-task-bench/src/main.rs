@@ -223,6 +223,8 @@ fn main() {
             damping: f(&r["damping"]),
             max_acceleration: f(&r["max_acceleration"]),
         },
+        // The model has no joint friction: nothing to compensate (Pinocchio's side has none).
+        friction_smoothing: 0.05,
     };
     gains.check().unwrap_or_else(|e| die(e));
     let contacts = r["max_contacts"].as_u64().unwrap_or_else(|| die("max_contacts")) as usize;
