@@ -114,7 +114,13 @@ fn load(data: &Path, fx: &Value) -> LoadedModel<N> {
     } else {
         data.join(urdf)
     };
-    loader::load_file_with::<N>(&path, &options(fx)).unwrap_or_else(|e| panic!("{e}"))
+    let mut loaded =
+        loader::load_file_with::<N>(&path, &options(fx)).unwrap_or_else(|e| panic!("{e}"));
+    // URDF has no armature: the fixture's robot sets it as Pinocchio's model did.
+    if let Some(a) = fx.get("armature") {
+        loaded.model.set_armature(&f64s(a)).unwrap();
+    }
+    loaded
 }
 
 #[test]
