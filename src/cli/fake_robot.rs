@@ -718,8 +718,9 @@ fn run_ethercat(args: &EthercatArgs, stop: &AtomicBool) -> CliResult {
             let rate = c.frames - last;
             last = c.frames;
             let mut line = format!(
-                "t={t}s frames={} ({rate}/s) lost={} falsified={} malformed={}",
-                c.frames, c.dropped, c.falsified, c.malformed
+                "t={t}s frames={} ({rate}/s) lost={} falsified={} malformed={} slips={} \
+                 max_lateness_us={}",
+                c.frames, c.dropped, c.falsified, c.malformed, c.slips, c.max_lateness_us
             );
             for d in fake.status() {
                 let _ = write!(

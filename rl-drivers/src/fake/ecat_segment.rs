@@ -86,7 +86,16 @@ pub struct SegmentCounters {
     pub ignored: u64,
     /// Times the interface went down or away (the segment waited for it to come back).
     pub link_down: u64,
+    /// Times the segment's thread came back from waiting for a frame more than
+    /// [`SLIP_US`] µs after its deadline: it was not running (a busy or stalled machine; a
+    /// real segment's ESCs answer in hardware), and frames may have waited that long.
+    pub slips: u64,
+    /// The most its thread came back late, µs.
+    pub max_lateness_us: u64,
 }
+
+/// A wait that ends this much after its deadline is a slip ([`SegmentCounters::slips`]).
+pub const SLIP_US: u64 = 500;
 
 /// What one device looks like from outside, for status lines and tests.
 #[derive(Clone, Debug, PartialEq)]
@@ -495,6 +504,7 @@ fn run(
                 down = Some(Instant::now());
             }
         }
+        let waited_until = next_tick;
         let got = match link.recv_until(&mut buf, next_tick) {
             Ok(got) => {
                 if got.is_some() {
@@ -511,6 +521,19 @@ fn run(
             }
             Err(e) => return Err(e),
         };
+        let late = u64::try_from(
+            Instant::now()
+                .saturating_duration_since(waited_until)
+                .as_micros(),
+        )
+        .unwrap_or(u64::MAX);
+        // (While the link is down the loop sleeps on purpose.)
+        if down.is_none() {
+            segment.counters.max_lateness_us = segment.counters.max_lateness_us.max(late);
+            if late > SLIP_US {
+                segment.counters.slips += 1;
+            }
+        }
         if let Some(n) = got {
             let n = n.min(MAX_FRAME_LEN);
             if segment.process(&mut buf[..n], now()) {
