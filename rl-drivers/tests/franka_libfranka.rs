@@ -97,16 +97,20 @@ fn libfranka_connects_moves_controls_torques_and_recovers_against_the_fake() {
     // thread: under qemu-arm in a clean-clone CI, 9 slips of up to 5.2 ms, 45 states lost)
     // loses commands, and libfranka's motions then end in discontinuity reflexes, as they
     // would on the real robot: such a failed session goes again, at most three times, then
-    // SKIPPED with the numbers (tests/support/stall.rs). A session that fails with the fake on
+    // SKIPPED with the numbers (tests/support/stall.rs). The same when the client lost them:
+    // libfranka's loop in another process, which the canary sees stalled (a thread on each CPU
+    // that woke 0.9 ms late or more). A session that fails with the fake and the machine on
     // time fails the test.
     unless_stalled("libfranka against the fake", || {
         session(&python, urdf.clone(), which)
     });
 }
 
-/// One libfranka session against a new fake; `Err` when it failed while the fake slipped.
+/// One libfranka session against a new fake; `Err` when it failed while the fake slipped or
+/// the machine stalled a thread.
 fn session(python: &Path, urdf: String, which: &str) -> Result<(), String> {
     let fake = spawn_on_own_address(urdf);
+    let canary = support::stall::Canary::start();
     let host = fake.addr().ip().to_string();
     let script = workspace().join("tests/franka_peers/libfranka_session.py");
     let start = Instant::now();
@@ -152,10 +156,18 @@ fn session(python: &Path, urdf: String, which: &str) -> Result<(), String> {
         .all(|step| r["steps"][step]["ok"] == true)
     });
     let ok = out.status.success() && steps_ok && s.reflexes == 1;
+    let stalled = canary.worst();
     if !ok && s.slips > 0 {
         return Err(format!(
             "failed with the fake's tick slipped {} times (at most {} µs late), {} states lost",
             s.slips, s.max_lateness_us, s.lost
+        ));
+    }
+    if !ok && s.lost > 0 && stalled >= support::stall::STALL {
+        return Err(format!(
+            "failed with {} commands lost ({} in a row) while the machine stalled a thread \
+             {stalled:?}",
+            s.lost, s.max_lost_in_a_row
         ));
     }
     assert!(
