@@ -375,7 +375,6 @@ pub type GpioLineArg = rl::controller::safety::gpio::GpioLine;
 #[cfg(not(feature = "gpio"))]
 pub type GpioLineArg = String;
 
-/// `--stop-category`'s value.
 /// `--task-stiffness K[,K_ROT]`: finite, positive; one value sets both.
 fn parse_stiffness(text: &str) -> Result<(f64, f64), String> {
     let mut values = text.split(',').map(|v| match v.trim().parse::<f64>() {
@@ -393,6 +392,7 @@ fn parse_stiffness(text: &str) -> Result<(f64, f64), String> {
     Ok((k, k_rot))
 }
 
+/// `--stop-category`'s value.
 fn parse_category(text: &str) -> Result<StopCategory, String> {
     match text {
         "0" => Ok(StopCategory::Zero),
@@ -1398,6 +1398,7 @@ fn read_waypoints<const B: usize>(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     #[test]
     fn task_stiffness_is_one_or_two_positive_numbers() {
@@ -1407,8 +1408,6 @@ mod tests {
             assert!(parse_stiffness(bad).is_err(), "{bad}");
         }
     }
-
-    use super::*;
 
     #[test]
     fn durations_parse_with_units() {

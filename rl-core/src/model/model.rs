@@ -105,6 +105,8 @@ pub struct Model<const N: usize> {
     pub(crate) damping: [f64; N],
     /// Dry (Coulomb) friction per public DOF (N·m or N).
     pub(crate) friction: [f64; N],
+    /// Whether any damping or friction is non-zero (the compensation skips it otherwise).
+    pub(crate) has_friction: bool,
 }
 
 impl<const N: usize> Default for Model<N> {
@@ -154,6 +156,7 @@ impl<const N: usize> Model<N> {
             has_armature: false,
             damping: [0.0; N],
             friction: [0.0; N],
+            has_friction: false,
         }
     }
 
@@ -339,6 +342,7 @@ impl<const N: usize> Model<N> {
         self.check_per_dof("friction", friction)?;
         self.damping[..self.nv].copy_from_slice(damping);
         self.friction[..self.nv].copy_from_slice(friction);
+        self.has_friction = damping.iter().chain(friction).any(|x| *x != 0.0);
         Ok(())
     }
 
@@ -347,6 +351,9 @@ impl<const N: usize> Model<N> {
     /// so that the torque is continuous through rest. `qd`, `tau`: [`Model::dof`] (shorter
     /// slices: their length).
     pub fn friction_torque(&self, qd: &[f64], smoothing: f64, tau: &mut [f64]) {
+        if !self.has_friction {
+            return;
+        }
         for (k, (t, v)) in tau.iter_mut().zip(qd).take(self.nv).enumerate() {
             *t += self.damping[k] * v + self.friction[k] * libm::tanh(v / smoothing);
         }
