@@ -402,6 +402,100 @@ fn rl_run_avoids_a_moving_sphere_while_the_orientation_holds() {
     assert!(c["p99"].as_f64() <= c["max"].as_f64(), "{c}");
 }
 
+/// `rl run … --obstacle FILE`: a recorded tracker's file — a sphere coming at the tool over
+/// 1.5 s (`at` every 50 ms, a tracker at 20 Hz, with its velocity) and staying where, left alone, it would overlap
+/// the tool's capsule, a capsule put in and cleared, and one line the law's protocol does not
+/// know — replayed into the running law in time. The arm keeps the margin with the orientation
+/// held; every line is accounted for in the report (inputs sent and taken, the malformed one
+/// with its place); the file's end leaves the run going to its duration.
+#[test]
+fn rl_run_avoids_obstacles_replayed_from_a_file() {
+    use rl::controller::task_space::{MovingSphere, SKELETON_RADIUS};
+    use rl::drivers::fake::franka_controller::READY;
+    let m = model(&fr3_shaped_urdf());
+    let p = tool_at(&m.model, &READY).translation;
+    let u = glam::DVec3::new(p.x, p.y, 0.0).normalize();
+    let radius = 0.08;
+    let way = MovingSphere {
+        radius,
+        from: p + u * 0.6,
+        to: p + u * 0.12,
+        period_s: 3.0,
+    };
+    let untouched = (way.to - p).length() - radius - SKELETON_RADIUS;
+    assert!(untouched < 0.0, "left alone it would overlap: {untouched}");
+    let mut lines = vec![
+        "# a tracked hand, recorded: at SECONDS sphere SLOT x y z r velocity vx vy vz".to_owned(),
+    ];
+    let mut inputs = 0;
+    for k in 0..=30 {
+        let t = 0.05 * f64::from(k);
+        let o = way.at(t);
+        let v = if k == 30 {
+            glam::DVec3::ZERO
+        } else {
+            o.velocity
+        };
+        let c = o.shape.a;
+        lines.push(format!(
+            "at {t:.2} sphere 0 {} {} {} {radius} velocity {} {} {}",
+            c.x, c.y, c.z, v.x, v.y, v.z
+        ));
+        inputs += 1;
+    }
+    // A capsule far behind the base, put in and cleared; a line no protocol knows.
+    lines.push("at 1.6 capsule 1, -1 -1 0, -1 1 0, 0.05".into());
+    lines.push("at 1.7 cube 2 0 0 0".into());
+    let cube_line = lines.len(); // counted from 1
+    lines.push("at 2.0 clear 1".into());
+    inputs += 2;
+    let dir = std::env::temp_dir().join(format!("rl-obstacle-file-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("hand.obstacles");
+    std::fs::write(&file, lines.join("\n") + "\n").expect("obstacle file");
+    let args = [
+        "--obstacle",
+        file.to_str().expect("path"),
+        "--duration",
+        "3500ms",
+    ];
+    let Some((code, report, status)) = cli_run("rl run --obstacle FILE", &args, None) else {
+        return;
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, Some(0), "{report}");
+    assert_eq!(report["result"], "ok", "{report}");
+    assert!(status.contains(" reflexes=0 "), "{status}");
+    let seen = &report["obstacles"];
+    println!("obstacle file: {seen}\nlaw: {}", report["law"]["obstacles"]);
+    assert_eq!(seen["lines"], lines.len(), "{seen}");
+    assert_eq!(seen["inputs_sent"], inputs, "{seen}");
+    assert_eq!(seen["malformed"], 1, "{seen}");
+    assert!(
+        seen["first_malformed"]
+            .as_str()
+            .is_some_and(|m| m.starts_with(&format!("line {cube_line}: unknown keyword 'cube'"))),
+        "{seen}"
+    );
+    assert_eq!(seen["ended_by_eof"], true, "{seen}");
+    assert_eq!(seen["rest_at_end"], false, "{seen}");
+    // The file's end did not end the run: its duration did.
+    assert_eq!(
+        report["end"], "duration reached, brought to rest",
+        "{report}"
+    );
+    let o = &report["law"]["obstacles"];
+    assert_eq!(o["inputs"], inputs, "{o}");
+    assert_eq!(o["margin_violations"], 0, "{o}");
+    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
+    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
+    assert!(min >= o["margin_m"].as_f64().expect("margin"), "{o}");
+    assert!(
+        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
+        "{report}"
+    );
+}
+
 /// The seed's tracked worker: a sphere streamed into the running law from another thread (as
 /// a tracker would, 200 times a second, with its velocity) comes at the tool until, left where
 /// it is, it would overlap the tool's capsule. With the orientation first, the position yields:

@@ -36,7 +36,7 @@ use rl::controller::DEFAULT_INPUT_TIMEOUT;
 use rl::controller::plan::joint_name;
 use rl::controller::planned::{PathExecution, PlannedMotion, PlannedMotionError, plan_motion_with};
 use rl::controller::runtime::DEFAULT_SPEED;
-use rl::controller::stream::{self, TargetSource};
+use rl::controller::stream::{self, StreamOptions, TargetSource};
 use rl::controller::task_space::{CartesianImpedance, TaskMotion, TowardTool};
 use rl::controller::{
     ControlLaw, ControlRun, CycleRecord, JointRobot, Motion, RV6SL_XML, RunError, RunOptions,
@@ -256,15 +256,19 @@ pub struct RunArgs {
     /// With --task figure-eight: the time for one figure [default: 4s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "law", help_heading = "Task-space control")]
     pub task_period: Option<Duration>,
-    /// With --law: an obstacle to avoid: `moving-sphere` (a sphere of 8 cm radius that comes
+    /// With --law: obstacles to avoid: `moving-sphere` (a sphere of 8 cm radius that comes
     /// horizontally at the tool's start position from 55 cm beyond it to 15 cm of it and goes
-    /// back, every --obstacle-period). The arm's links are capsules around its skeleton; the
-    /// repulsion keeps them --obstacle-margin away while the orientation holds (see
-    /// --task-priority).
+    /// back, every --obstacle-period), or a stream of them: a FILE, `-` (standard input) or
+    /// `udp:PORT` / `udp:HOST:PORT`, one per line: `sphere SLOT x y z r [velocity vx vy vz]`,
+    /// `capsule SLOT ax ay az bx by bz r [velocity …]`, `clear SLOT`, each maybe after `at
+    /// SECONDS` (from the stream's start: a recorded file replays in time); world coordinates,
+    /// m (rl::controller::task_space documents the lines). The stream's end leaves the last
+    /// obstacles in place. The arm's links are capsules around its skeleton; the repulsion
+    /// keeps them --obstacle-margin away while the orientation holds (see --task-priority).
     #[arg(
         long,
         value_name = "OBSTACLE",
-        value_enum,
+        value_parser = parse_obstacle,
         requires = "law",
         help_heading = "Task-space control"
     )]
@@ -458,10 +462,36 @@ pub enum TaskArg {
 }
 
 /// `--obstacle`'s values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ObstacleArg {
     /// A sphere coming at the tool and going back.
     MovingSphere,
+    /// Obstacle lines from standard input or a UDP socket.
+    Lines(TargetSource),
+    /// Obstacle lines from a file.
+    File(PathBuf),
+}
+
+/// `--obstacle`'s value: `moving-sphere`, a stream source (`-`, `stdin`, `udp:…`) or a file.
+fn parse_obstacle(text: &str) -> Result<ObstacleArg, String> {
+    if text == "moving-sphere" {
+        return Ok(ObstacleArg::MovingSphere);
+    }
+    let is_source = text == "-"
+        || text.eq_ignore_ascii_case("stdin")
+        || text
+            .get(..4)
+            .is_some_and(|p| p.eq_ignore_ascii_case("udp:"));
+    if is_source {
+        return text
+            .parse()
+            .map(ObstacleArg::Lines)
+            .map_err(|e: stream::SourceError| e.to_string());
+    }
+    if text.is_empty() {
+        return Err("give `moving-sphere`, a file, `-` or `udp:PORT`".into());
+    }
+    Ok(ObstacleArg::File(PathBuf::from(text)))
 }
 
 /// `--task-priority`'s values.
@@ -509,6 +539,7 @@ fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedanc
     }
     .gains(gains);
     match args.obstacle {
+        Some(ObstacleArg::Lines(_) | ObstacleArg::File(_)) => law.avoid(),
         Some(ObstacleArg::MovingSphere) => law.moving_sphere(TowardTool {
             period_s: args
                 .obstacle_period
@@ -1080,6 +1111,15 @@ fn drive<const B: usize, const J: usize>(
         e => Err(CliError::failed(setup.device.explain(&e))),
     };
     if args.law.is_some() {
+        // A file of obstacles is opened before anything moves.
+        let file = match &args.obstacle {
+            Some(ObstacleArg::File(path)) => Some(
+                std::fs::File::open(path)
+                    .map(|f| (path.display().to_string(), std::io::BufReader::new(f)))
+                    .map_err(|e| CliError::usage(format!("--obstacle {}: {e}", path.display())))?,
+            ),
+            _ => None,
+        };
         let run = match ControlRun::<_, B, J, _>::start_law(
             robot,
             loaded,
@@ -1089,13 +1129,51 @@ fn drive<const B: usize, const J: usize>(
             Ok(run) => run,
             Err(e) => return refused(e),
         };
+        let obstacles = StreamOptions {
+            role: "obstacles",
+            rest_at_end: false,
+        };
+        let dof = joints.len();
+        let spawned = match (&args.obstacle, file) {
+            (_, Some((name, file))) => Some(stream::spawn_reader_with(
+                file,
+                &name,
+                dof,
+                run.inputs(),
+                stop.clone(),
+                obstacles,
+            )),
+            (Some(ObstacleArg::Lines(source)), None) => Some(stream::spawn_with(
+                source,
+                dof,
+                run.inputs(),
+                stop.clone(),
+                obstacles,
+            )),
+            _ => None,
+        };
+        let stream = match spawned {
+            Some(Ok(handle)) => {
+                if let Some(addr) = handle.local_addr() {
+                    eprintln!("rl run: taking obstacles sent to udp:{addr}");
+                }
+                Some(handle)
+            }
+            Some(Err(e)) => {
+                // The run is started: bring it to rest and report why.
+                stop.request(StopLevel::Now);
+                eprintln!("rl run: --obstacle: {e}");
+                None
+            }
+            None => None,
+        };
         let after = After {
             cell,
             view,
             fake,
             plan_note,
             plan_json,
-            stream: None,
+            stream,
         };
         return supervise(args, setup, run, after, &stop);
     }
@@ -1255,8 +1333,8 @@ fn supervise<const B: usize, const J: usize, L: ControlLaw<B, J> + 'static>(
     let stream_json = stream.map(|handle| {
         let seen = handle.finish();
         report.notes.extend(seen.lines_for_report());
-        ended_by_stream = seen.ended_by_eof || seen.stops > 0;
-        seen.to_json()
+        ended_by_stream = (seen.ended_by_eof && seen.rest_at_end) || seen.stops > 0;
+        (seen.role, seen.to_json())
     });
     let fake_json = fake.as_ref().map(|fake| {
         let seen = fake.after_run(report.shutdown.stopped);
@@ -1287,8 +1365,8 @@ fn supervise<const B: usize, const J: usize, L: ControlLaw<B, J> + 'static>(
         if let (Some(obj), Some(cell)) = (json.as_object_mut(), cell_json) {
             obj.insert("zenoh".into(), cell);
         }
-        if let (Some(obj), Some(follow)) = (json.as_object_mut(), stream_json) {
-            obj.insert("follow".into(), follow);
+        if let (Some(obj), Some((role, seen))) = (json.as_object_mut(), stream_json) {
+            obj.insert(role.into(), seen);
         }
         rl::json::tag("run", 1, &mut json);
         outln!("{json}")

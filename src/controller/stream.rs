@@ -19,7 +19,13 @@
 //! | `position q1 … qn velocity v1 … vn` (`p q1 … qn v v1 … vn`) | arrive at q with velocity v |
 //! | `velocity v1 … vn` (or `v v1 … vn`) | reach velocity v and keep it |
 //! | `stop` | bring the arm to rest and end the run |
+//! | `at SECONDS` then any line | that line, acted on `SECONDS` after the stream started (a recorded file replayed in time; a time already past acts at once) |
 //! | empty, or starting with `#` | ignored (a comment) |
+//!
+//! A law with inputs of its own takes their lines too ([`LineInput`]: e.g. the task-space
+//! law's obstacles, [`crate::controller::task_space`]'s `sphere`, `capsule`, `clear` and
+//! `pose`); a stream of them whose end should leave the run going is started with
+//! [`StreamOptions::rest_at_end`] false ([`spawn_with`]).
 //!
 //! - Keywords are case-insensitive (`Position`, `P`); the line starts with one.
 //! - Values are separated by spaces or tabs; commas count as spaces (`p 0, 0.5, 0, 0, 0, 0`).
@@ -93,7 +99,7 @@ use std::io::{self, BufRead};
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use rl_rt::{StopFlag, StopLevel};
 use serde_json::json;
@@ -118,12 +124,32 @@ const TOKEN_CHARS: usize = 24;
 
 /// One parsed line that asks for something.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Line<const J: usize> {
+pub enum Line<const J: usize, X = ()> {
     /// A target to send (the first `dof` values set, the rest zero).
     Target(Target<J>),
     /// `stop`: bring the arm to rest and end the run.
     Stop,
+    /// One of the law's own inputs ([`LineInput`]).
+    Input(X),
 }
+
+/// The lines of a law's own inputs (e.g. the task-space law's obstacles), beside the joint
+/// targets' `position`, `velocity` and `stop`: a law's input type says which keywords it
+/// takes and parses their values. `()` (a law without inputs of its own) takes none.
+pub trait LineInput: Copy + Send + 'static {
+    /// The keywords, as a list for an error's text (`"sphere, capsule or clear"`); empty
+    /// for none.
+    const KEYWORDS: &'static str = "";
+
+    /// The input a line starting with `keyword` asks for, from the line's other words;
+    /// `None` when `keyword` is not one of this type's.
+    fn parse_words(keyword: &str, words: &[&str]) -> Option<Result<Self, LineError>> {
+        let _ = (keyword, words);
+        None
+    }
+}
+
+impl LineInput for () {}
 
 /// What is wrong with a line.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -142,6 +168,8 @@ pub enum LineError {
     UnknownKeyword {
         /// The first word (cut to a few characters).
         keyword: String,
+        /// The law's own keywords ([`LineInput::KEYWORDS`]), empty for none.
+        also: &'static str,
     },
     /// Not as many values as the model has joints.
     ValueCount {
@@ -175,6 +203,27 @@ pub enum LineError {
         /// The first token after it (cut to a few characters).
         token: String,
     },
+    /// A law's line with the wrong number of values.
+    WordCount {
+        /// The keyword.
+        keyword: String,
+        /// Values given.
+        got: usize,
+        /// What it takes (`"4 (x y z radius), or 7 with velocity vx vy vz"`).
+        takes: &'static str,
+    },
+    /// A value a law's line cannot take (a slot beyond the law's, a negative radius).
+    Invalid {
+        /// The keyword.
+        keyword: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// `at` without a time, or with one that is not a finite number of seconds ≥ 0.
+    BadTime {
+        /// The token after `at` (cut to a few characters), empty when none.
+        token: String,
+    },
     /// The model has more joints than the stream's capacity `J`.
     TooManyJoints {
         /// The model's joints.
@@ -197,9 +246,31 @@ impl fmt::Display for LineError {
             Self::NotUtf8 { valid_up_to } => {
                 write!(f, "not UTF-8 text (invalid from byte {})", valid_up_to + 1)
             }
-            Self::UnknownKeyword { keyword } => write!(
+            Self::UnknownKeyword { keyword, also: "" } => write!(
                 f,
                 "unknown keyword '{keyword}' (a line starts with position, p, velocity, v or stop)"
+            ),
+            Self::UnknownKeyword { keyword, also } => write!(
+                f,
+                "unknown keyword '{keyword}' (a line starts with position, p, velocity, v, \
+                 stop, {also})"
+            ),
+            Self::WordCount {
+                keyword,
+                got,
+                takes,
+            } => write!(
+                f,
+                "{keyword}: {}, it takes {takes}",
+                plural(*got, "value", "values")
+            ),
+            Self::Invalid { keyword, why } => write!(f, "{keyword}: {why}"),
+            Self::BadTime { token } if token.is_empty() => {
+                f.write_str("at: no time (at SECONDS, then the line)")
+            }
+            Self::BadTime { token } => write!(
+                f,
+                "at: '{token}' is not a time (seconds from the stream's start, 0 or more)"
             ),
             Self::ValueCount { quantity, got, dof } => write!(
                 f,
@@ -301,18 +372,24 @@ fn values<'a, const J: usize>(
 ///
 /// `Ok(None)` for a line that asks nothing (blank or a comment), `Ok(Some(_))` for a target
 /// or `stop`, a [`LineError`] saying what is wrong otherwise. Never panics; allocates only
-/// for an error's text. The values are checked to be finite numbers, not against the model's
+/// for an error's text (and a law's line's words). The values are checked to be finite numbers, not against the model's
 /// limits (the [`InputSender`] does that).
 pub fn parse_line<const J: usize>(line: &str, dof: usize) -> Result<Option<Line<J>>, LineError> {
+    parse_line_for::<J, ()>(line, dof)
+}
+
+/// [`parse_line`] for a law whose own inputs `X` have lines too ([`LineInput`]): a line that
+/// starts with one of `X`'s keywords is [`Line::Input`].
+pub fn parse_line_for<const J: usize, X: LineInput>(
+    line: &str,
+    dof: usize,
+) -> Result<Option<Line<J, X>>, LineError> {
     if line.len() > MAX_LINE_BYTES {
         return Err(LineError::TooLong { bytes: line.len() });
     }
     let line = line.trim();
     if line.is_empty() || line.starts_with('#') {
         return Ok(None);
-    }
-    if dof > J {
-        return Err(LineError::TooManyJoints { dof, capacity: J });
     }
     let mut tokens = line
         .split(|c: char| c.is_whitespace() || c == ',')
@@ -323,9 +400,14 @@ pub fn parse_line<const J: usize>(line: &str, dof: usize) -> Result<Option<Line<
     };
     let target = match keyword(first) {
         None => {
-            return Err(LineError::UnknownKeyword {
-                keyword: shown(first),
-            });
+            let words: Vec<&str> = tokens.collect();
+            return match X::parse_words(first, &words) {
+                Some(input) => input.map(|x| Some(Line::Input(x))),
+                None => Err(LineError::UnknownKeyword {
+                    keyword: shown(first),
+                    also: X::KEYWORDS,
+                }),
+            };
         }
         Some(Keyword::Stop) => {
             return match tokens.next() {
@@ -335,6 +417,7 @@ pub fn parse_line<const J: usize>(line: &str, dof: usize) -> Result<Option<Line<
                 }),
             };
         }
+        Some(_) if dof > J => return Err(LineError::TooManyJoints { dof, capacity: J }),
         Some(Keyword::Velocity) => Target::Velocity {
             velocity: values(&mut tokens, "velocity", dof, |_| false)?,
         },
@@ -349,6 +432,56 @@ pub fn parse_line<const J: usize>(line: &str, dof: usize) -> Result<Option<Line<
         }
     };
     Ok(Some(Line::Target(target)))
+}
+
+/// A value of a law's line ([`LineInput::parse_words`]): `token` as a finite number, or the
+/// error naming `keyword`'s value `index` (from 1).
+pub fn finite_value(keyword: &'static str, index: usize, token: &str) -> Result<f64, LineError> {
+    let v: f64 = token.parse().map_err(|_| LineError::NotANumber {
+        quantity: keyword,
+        index,
+        token: shown(token),
+    })?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(LineError::NotFinite {
+            quantity: keyword,
+            index,
+            token: shown(token),
+        })
+    }
+}
+
+/// A line's time, when it starts with `at SECONDS` (case-insensitive; seconds from the
+/// stream's start, finite, 0 or more), and the rest of the line; `None` and the line as it is
+/// otherwise.
+pub fn split_time(line: &str) -> Result<(Option<f64>, &str), LineError> {
+    let trimmed = line.trim_start();
+    let Some(rest) = trimmed
+        .get(..3)
+        .filter(|p| p.eq_ignore_ascii_case("at ") || p.eq_ignore_ascii_case("at\t"))
+        .and_then(|_| trimmed.get(3..))
+    else {
+        return if trimmed.eq_ignore_ascii_case("at") {
+            Err(LineError::BadTime {
+                token: String::new(),
+            })
+        } else {
+            Ok((None, line))
+        };
+    };
+    let rest = rest.trim_start();
+    let end = rest
+        .find(|c: char| c.is_whitespace() || c == ',')
+        .unwrap_or(rest.len());
+    let (token, after) = rest.split_at(end);
+    match token.parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok((Some(t), after)),
+        _ => Err(LineError::BadTime {
+            token: shown(token),
+        }),
+    }
 }
 
 /// Where a stream reads its targets from. Parses from the forms `rl run --follow` takes
@@ -450,6 +583,9 @@ impl FromStr for TargetSource {
 /// [`StreamHandle::finish`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StreamReport {
+    /// What the stream carries, for its report's lines: `follow` (`rl run --follow`) or the
+    /// role given to [`spawn_with`] (`obstacles`).
+    pub role: &'static str,
     /// The source (`stdin`, `udp:127.0.0.1:5000` with the port bound, or a reader's name).
     pub source: String,
     /// UDP: the address datagrams are taken from (the first sender's).
@@ -460,6 +596,8 @@ pub struct StreamReport {
     pub datagrams: u64,
     /// Targets the sender queued for the run.
     pub targets_sent: u64,
+    /// The law's own inputs ([`Line::Input`]) the sender queued for the run.
+    pub inputs_sent: u64,
     /// `stop` lines.
     pub stops: u64,
     /// Lines that did not parse.
@@ -472,8 +610,11 @@ pub struct StreamReport {
     pub after_end: u64,
     /// UDP: datagrams from an address other than the peer, refused unread.
     pub foreign: u64,
-    /// The input ended (EOF) and the stream asked the run to come to rest.
+    /// The input ended (EOF); a stream that rests at its end asked the run to come to rest
+    /// ([`StreamOptions::rest_at_end`]).
     pub ended_by_eof: bool,
+    /// Whether the stream asks the run to come to rest at the end of its input.
+    pub rest_at_end: bool,
     /// Why reading failed, if it did (on stdin the stream then ended and asked for rest).
     pub read_error: Option<String>,
     /// The first malformed line, refused target or foreign datagram, with its place.
@@ -495,10 +636,18 @@ impl StreamReport {
             counts.push(plural(self.datagrams as usize, "datagram", "datagrams"));
         }
         counts.push(plural(self.lines as usize, "line", "lines"));
-        counts.push(format!(
-            "{} sent",
-            plural(self.targets_sent as usize, "target", "targets")
-        ));
+        if self.targets_sent > 0 || self.inputs_sent == 0 {
+            counts.push(format!(
+                "{} sent",
+                plural(self.targets_sent as usize, "target", "targets")
+            ));
+        }
+        if self.inputs_sent > 0 {
+            counts.push(format!(
+                "{} sent",
+                plural(self.inputs_sent as usize, "input", "inputs")
+            ));
+        }
         if self.stops > 0 {
             counts.push(plural(self.stops as usize, "stop", "stops"));
         }
@@ -545,19 +694,22 @@ impl StreamReport {
             .peer
             .map(|p| format!(" (peer {p})"))
             .unwrap_or_default();
+        let role = self.role;
         let mut out = vec![format!(
-            "follow {}{peer}: {}",
+            "{role} {}{peer}: {}",
             self.source,
             counts.join(", ")
         )];
         if let Some(e) = &self.read_error {
-            out.push(format!("follow {}: read error: {e}", self.source));
+            out.push(format!("{role} {}: read error: {e}", self.source));
         }
-        if self.ended_by_eof {
+        if self.ended_by_eof && self.rest_at_end {
             out.push(format!(
-                "follow {}: end of input, the run was asked to come to rest",
+                "{role} {}: end of input, the run was asked to come to rest",
                 self.source
             ));
+        } else if self.ended_by_eof {
+            out.push(format!("{role} {}: end of input", self.source));
         }
         out
     }
@@ -571,6 +723,7 @@ impl StreamReport {
             "lines": self.lines,
             "datagrams": self.datagrams,
             "targets_sent": self.targets_sent,
+            "inputs_sent": self.inputs_sent,
             "stops": self.stops,
             "malformed": self.malformed,
             "refused": self.refused,
@@ -578,6 +731,7 @@ impl StreamReport {
             "after_end": self.after_end,
             "foreign": self.foreign,
             "ended_by_eof": self.ended_by_eof,
+            "rest_at_end": self.rest_at_end,
             "read_error": self.read_error,
             "first_problem": self.first_problem,
             "first_malformed": self.first_malformed,
@@ -619,10 +773,12 @@ impl Texts {
 /// What a stream's thread and its handle share (never the real-time thread).
 #[derive(Debug, Default)]
 struct Shared {
+    role: &'static str,
     source: String,
     lines: AtomicU64,
     datagrams: AtomicU64,
     targets_sent: AtomicU64,
+    inputs_sent: AtomicU64,
     stops: AtomicU64,
     malformed: AtomicU64,
     refused: AtomicU64,
@@ -630,13 +786,16 @@ struct Shared {
     after_end: AtomicU64,
     foreign: AtomicU64,
     ended_by_eof: AtomicBool,
+    rest_at_end: bool,
     finishing: AtomicBool,
     texts: Mutex<Texts>,
 }
 
 impl Shared {
-    fn new(source: String) -> Self {
+    fn new(options: StreamOptions, source: String) -> Self {
         Self {
+            role: options.role,
+            rest_at_end: options.rest_at_end,
             source,
             ..Self::default()
         }
@@ -677,11 +836,13 @@ impl Shared {
         let n = |c: &AtomicU64| c.load(Ordering::Relaxed);
         let texts = self.texts();
         StreamReport {
+            role: self.role,
             source: self.source.clone(),
             peer: texts.peer,
             lines: n(&self.lines),
             datagrams: n(&self.datagrams),
             targets_sent: n(&self.targets_sent),
+            inputs_sent: n(&self.inputs_sent),
             stops: n(&self.stops),
             malformed: n(&self.malformed),
             refused: n(&self.refused),
@@ -689,6 +850,7 @@ impl Shared {
             after_end: n(&self.after_end),
             foreign: n(&self.foreign),
             ended_by_eof: self.ended_by_eof.load(Ordering::Acquire),
+            rest_at_end: self.rest_at_end,
             read_error: texts.read_error.clone(),
             first_problem: texts.first_problem.clone(),
             first_malformed: texts.first_malformed.clone(),
@@ -704,9 +866,29 @@ struct Follow<const J: usize, X> {
     sender: InputSender<J, X>,
     stop: StopFlag,
     shared: Arc<Shared>,
+    /// At the end of input (EOF), ask the run to come to rest.
+    rest_at_end: bool,
+    /// When the stream started: `at` lines count from here.
+    started: Instant,
 }
 
-impl<const J: usize, X: Copy + Send> Follow<J, X> {
+impl<const J: usize, X: LineInput> Follow<J, X> {
+    /// Waits until `at` seconds after the stream's start, in slices that look whether the
+    /// stream is finishing or the run over; false when it is (the line is not acted on).
+    fn wait_until(&self, at: f64) -> bool {
+        let due = self.started + Duration::from_secs_f64(at);
+        loop {
+            if self.shared.is_finishing() || self.sender.is_ended() {
+                return false;
+            }
+            let now = Instant::now();
+            if now >= due {
+                return true;
+            }
+            std::thread::sleep((due - now).min(UDP_READ_TIMEOUT));
+        }
+    }
+
     /// Acts on one line's bytes (without its line end, possibly cut: `len` is its whole
     /// length); `place` says where it was, for a problem's text.
     fn line(&self, bytes: &[u8], len: usize, place: impl Fn() -> String) {
@@ -716,14 +898,32 @@ impl<const J: usize, X: Copy + Send> Follow<J, X> {
             Err(LineError::TooLong { bytes: len })
         } else {
             match core::str::from_utf8(bytes) {
-                Ok(text) => parse_line::<J>(text, self.dof),
+                Ok(text) => split_time(text).and_then(|(at, rest)| {
+                    parse_line_for::<J, X>(rest, self.dof).map(|l| l.map(|l| (at, l)))
+                }),
                 Err(e) => Err(LineError::NotUtf8 {
                     valid_up_to: e.valid_up_to(),
                 }),
             }
         };
+        let parsed = match parsed {
+            Ok(Some((Some(at), line))) => {
+                if !self.wait_until(at) {
+                    Shared::count(&s.after_end);
+                    return;
+                }
+                Ok(Some(line))
+            }
+            other => other.map(|l| l.map(|(_, line)| line)),
+        };
         match parsed {
             Ok(None) => {}
+            Ok(Some(Line::Input(input))) => match self.sender.send(input) {
+                Ok(()) => Shared::count(&s.inputs_sent),
+                Err(InputError::Full) => Shared::count(&s.dropped),
+                Err(InputError::Ended) => Shared::count(&s.after_end),
+                Err(e) => s.problem(Problem::Refused, || format!("{}: {e}", place())),
+            },
             Ok(Some(Line::Stop)) => {
                 Shared::count(&s.stops);
                 self.stop.request(StopLevel::Rest);
@@ -755,14 +955,18 @@ impl<const J: usize, X: Copy + Send> Follow<J, X> {
                 }
                 Ok(None) => {
                     s.ended_by_eof.store(true, Ordering::Release);
-                    self.stop.request(StopLevel::Rest);
+                    if self.rest_at_end {
+                        self.stop.request(StopLevel::Rest);
+                    }
                     return;
                 }
                 Err(e) => {
                     s.texts()
                         .read_error
                         .get_or_insert_with(|| format!("after line {number}: {e}"));
-                    self.stop.request(StopLevel::Rest);
+                    if self.rest_at_end {
+                        self.stop.request(StopLevel::Rest);
+                    }
                     return;
                 }
             }
@@ -906,9 +1110,34 @@ fn start(shared: &Arc<Shared>, body: impl FnOnce() + Send + 'static) -> io::Resu
         .map_err(|e| {
             io::Error::new(
                 e.kind(),
-                format!("follow {}: cannot start its thread: {e}", shared.source),
+                format!(
+                    "{} {}: cannot start its thread: {e}",
+                    shared.role, shared.source
+                ),
             )
         })
+}
+
+/// How a stream behaves beyond its source: what its report calls it, and what the end of its
+/// input means.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamOptions {
+    /// What the stream carries, first word of its report's lines (`follow`, `obstacles`).
+    pub role: &'static str,
+    /// At the end of input (EOF) or a read error, ask the run to come to rest (a stream of
+    /// targets: nothing more will come). `false` for a stream beside the law's own motion
+    /// (obstacles: the run goes on with the last ones).
+    pub rest_at_end: bool,
+}
+
+impl Default for StreamOptions {
+    /// `rl run --follow`'s: `follow`, resting at the end of input.
+    fn default() -> Self {
+        Self {
+            role: "follow",
+            rest_at_end: true,
+        }
+    }
 }
 
 /// Starts a stream from `source` to a run: one non-real-time thread ([`THREAD_NAME`]) that
@@ -917,44 +1146,51 @@ fn start(shared: &Arc<Shared>, body: impl FnOnce() + Send + 'static) -> io::Resu
 /// joints (the values each line carries).
 ///
 /// UDP: the socket is bound here; a bind error is returned, naming the address.
-pub fn spawn<const J: usize, X: Copy + Send + 'static>(
+pub fn spawn<const J: usize, X: LineInput>(
     source: &TargetSource,
     dof: usize,
     sender: InputSender<J, X>,
     stop: StopFlag,
 ) -> io::Result<StreamHandle> {
+    spawn_with(source, dof, sender, stop, StreamOptions::default())
+}
+
+/// [`spawn`] with [`StreamOptions`]: e.g. a stream of a law's own inputs ([`LineInput`])
+/// whose end leaves the run going.
+pub fn spawn_with<const J: usize, X: LineInput>(
+    source: &TargetSource,
+    dof: usize,
+    sender: InputSender<J, X>,
+    stop: StopFlag,
+    options: StreamOptions,
+) -> io::Result<StreamHandle> {
     match *source {
-        TargetSource::Stdin => {
-            let shared = Arc::new(Shared::new(source.to_string()));
-            let follow = Follow {
-                dof,
-                sender,
-                stop,
-                shared: Arc::clone(&shared),
-            };
-            let thread = start(&shared, move || follow.read(io::stdin().lock()))?;
-            Ok(StreamHandle {
-                shared,
-                thread: Some(thread),
-                local_addr: None,
-                joins: false,
-            })
-        }
+        TargetSource::Stdin => spawn_reader_with(
+            io::BufReader::new(io::stdin()),
+            &source.to_string(),
+            dof,
+            sender,
+            stop,
+            options,
+        ),
         TargetSource::Udp(addr) => {
+            let role = options.role;
             let fail = |e: io::Error| {
-                io::Error::new(e.kind(), format!("follow: cannot bind udp:{addr}: {e}"))
+                io::Error::new(e.kind(), format!("{role}: cannot bind udp:{addr}: {e}"))
             };
             let socket = UdpSocket::bind(addr).map_err(fail)?;
             socket
                 .set_read_timeout(Some(UDP_READ_TIMEOUT))
                 .map_err(fail)?;
             let local = socket.local_addr().map_err(fail)?;
-            let shared = Arc::new(Shared::new(TargetSource::Udp(local).to_string()));
+            let shared = Arc::new(Shared::new(options, TargetSource::Udp(local).to_string()));
             let follow = Follow {
                 dof,
                 sender,
                 stop,
                 shared: Arc::clone(&shared),
+                rest_at_end: options.rest_at_end,
+                started: Instant::now(),
             };
             let thread = start(&shared, move || follow.receive(&socket))?;
             Ok(StreamHandle {
@@ -969,19 +1205,33 @@ pub fn spawn<const J: usize, X: Copy + Send + 'static>(
 
 /// Starts a stream reading lines from any `reader`, as [`spawn`] does from stdin (`name` is
 /// the source in the report): at its end the stream raises `stop` at [`StopLevel::Rest`].
-pub fn spawn_reader<const J: usize, X: Copy + Send + 'static>(
+pub fn spawn_reader<const J: usize, X: LineInput>(
     reader: impl BufRead + Send + 'static,
     name: &str,
     dof: usize,
     sender: InputSender<J, X>,
     stop: StopFlag,
 ) -> io::Result<StreamHandle> {
-    let shared = Arc::new(Shared::new(name.to_owned()));
+    spawn_reader_with(reader, name, dof, sender, stop, StreamOptions::default())
+}
+
+/// [`spawn_reader`] with [`StreamOptions`] (e.g. a file of timed obstacle lines).
+pub fn spawn_reader_with<const J: usize, X: LineInput>(
+    reader: impl BufRead + Send + 'static,
+    name: &str,
+    dof: usize,
+    sender: InputSender<J, X>,
+    stop: StopFlag,
+    options: StreamOptions,
+) -> io::Result<StreamHandle> {
+    let shared = Arc::new(Shared::new(options, name.to_owned()));
     let follow = Follow {
         dof,
         sender,
         stop,
         shared: Arc::clone(&shared),
+        rest_at_end: options.rest_at_end,
+        started: Instant::now(),
     };
     let thread = start(&shared, move || follow.read(reader))?;
     Ok(StreamHandle {
@@ -1268,6 +1518,104 @@ mod tests {
         assert_eq!(json["malformed"], 2);
         assert_eq!(json["ended_by_eof"], true);
         assert_eq!(json["peer"], serde_json::Value::Null);
+    }
+
+    /// A law's own input for the tests: `mark N`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    struct Mark(u32);
+
+    impl LineInput for Mark {
+        const KEYWORDS: &'static str = "mark";
+
+        fn parse_words(keyword: &str, words: &[&str]) -> Option<Result<Self, LineError>> {
+            keyword.eq_ignore_ascii_case("mark").then(|| match words {
+                [n] => n.parse().map(Mark).map_err(|_| LineError::Invalid {
+                    keyword: "mark".into(),
+                    why: format!("'{n}' is not a count"),
+                }),
+                _ => Err(LineError::WordCount {
+                    keyword: "mark".into(),
+                    got: words.len(),
+                    takes: "1",
+                }),
+            })
+        }
+    }
+
+    #[test]
+    fn a_laws_own_lines_go_in_time_and_their_end_leaves_the_run_going() {
+        let m = model();
+        let (tx, mut rx) = channel::<16, 8, Mark>(&m, 64);
+        let stop = StopFlag::new();
+        let text = "mark 1\n\
+                    at 0.3 mark 2\n\
+                    at 0.1, mark 3\n\
+                    at -1 mark 4\n\
+                    at\n\
+                    mark x\n\
+                    box 1\n\
+                    AT 0.35 p 0 0 0 0 0 0\n";
+        let began = Instant::now();
+        let options = StreamOptions {
+            role: "marks",
+            rest_at_end: false,
+        };
+        let stream = spawn_reader_with(
+            Cursor::new(text),
+            "recorded",
+            DOF,
+            tx,
+            stop.clone(),
+            options,
+        )
+        .expect("thread starts");
+        wait_until("the end of input", || stream.is_finished());
+        let took = began.elapsed();
+        // The lines wait for their time (0.3 s, then 0.35 s; 0.1 s was already past).
+        assert!(took >= Duration::from_millis(350), "{took:?}");
+        assert_eq!(
+            stop.level(),
+            StopLevel::None,
+            "the end leaves the run going"
+        );
+        let mut inputs = Inputs::<8, Mark>::default();
+        let (mut marks, mut targets) = (Vec::new(), 0);
+        inputs.receive(&mut rx, MonoTime::now(), |i| {
+            match i {
+                Input::Other(Mark(n)) => marks.push(*n),
+                Input::Target(_) => targets += 1,
+            }
+            Ok(())
+        });
+        assert_eq!((marks, targets), (vec![1, 2, 3], 1));
+        let r = stream.finish();
+        assert_eq!(
+            (r.lines, r.inputs_sent, r.targets_sent, r.malformed),
+            (8, 3, 1, 4)
+        );
+        assert!(r.ended_by_eof && !r.rest_at_end);
+        assert_eq!(
+            r.first_malformed.as_deref(),
+            Some("line 4: at: '-1' is not a time (seconds from the stream's start, 0 or more)")
+        );
+        let text = r.lines_for_report();
+        assert!(
+            text[0]
+                .starts_with("marks recorded: 8 lines, 1 target sent, 3 inputs sent, 4 malformed"),
+            "{text:?}"
+        );
+        assert_eq!(text[1], "marks recorded: end of input", "{text:?}");
+        assert_eq!(
+            parse_line_for::<8, Mark>("box 1", DOF)
+                .expect_err("unknown")
+                .to_string(),
+            "unknown keyword 'box' (a line starts with position, p, velocity, v, stop, mark)"
+        );
+        assert_eq!(
+            split_time("at").expect_err("no time").to_string(),
+            "at: no time (at SECONDS, then the line)"
+        );
+        assert_eq!(split_time("p 0").expect("no time"), (None, "p 0"));
     }
 
     #[test]

@@ -41,6 +41,7 @@
 //! positions' differences over the period.
 
 mod compute;
+pub mod lines;
 mod obstacles;
 
 use std::f64::consts::PI;
@@ -57,7 +58,8 @@ use serde_json::json;
 pub use compute::ComputeTimes;
 use obstacles::Obstacles;
 pub use obstacles::{
-    MAX_ARM_CAPSULES, MAX_OBSTACLES, MovingSphere, Obstacle, SKELETON_RADIUS, TowardTool,
+    MAX_ARM_CAPSULES, MAX_OBSTACLES, MovingSphere, Obstacle, PREDICTION_HORIZON_S, SKELETON_RADIUS,
+    TowardTool,
 };
 use rl_sg::capsule::CapsuleModel;
 
@@ -260,8 +262,8 @@ impl<const B: usize, const J: usize> CartesianImpedance<B, J> {
     /// An obstacle from the start, in the first free slot (ignored when all are taken);
     /// avoidance on.
     pub fn obstacle(mut self, obstacle: Obstacle) -> Self {
-        if let Some(slot) = self.obstacles.slots.iter_mut().find(|s| s.is_none()) {
-            *slot = Some(obstacle);
+        if let Some(slot) = self.obstacles.slots.iter().position(Option::is_none) {
+            self.obstacles.set(slot, Some(obstacle));
         }
         self.avoid()
     }
@@ -701,7 +703,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                 if obstacle.is_some_and(|o| !o.is_valid()) {
                     return Err(Refused("an obstacle that is not finite"));
                 }
-                self.obstacles.slots[*slot] = *obstacle;
+                self.obstacles.set(*slot, *obstacle);
                 self.stats.obstacle_inputs += 1;
                 Ok(())
             }
