@@ -197,10 +197,12 @@ fn the_tool_follows_a_figure_eight_at_constant_orientation() {
 /// exit code, the JSON report and the fake's last status line; `None` when the machine made
 /// every attempt late (SKIPPED by the rule). With `armature`, the fake's arm carries it
 /// (`rl fake-robot franka --armature`) and so does the run's model (`rl run --armature`).
+/// `beside` runs on a thread of its own while `rl run` does (a peer that talks to it).
 fn cli_run(
     what: &str,
     args: &[&str],
     armature: Option<&str>,
+    beside: Option<&(dyn Fn() + Sync)>,
 ) -> Option<(Option<i32>, serde_json::Value, String)> {
     let armature: Vec<&str> = armature.map_or(Vec::new(), |a| vec!["--armature", a]);
     let dir = std::env::temp_dir().join(format!("rl-task-space-{}-{what}", std::process::id()));
@@ -245,15 +247,20 @@ fn cli_run(
             .and_then(|s| s.split(',').next())
             .unwrap_or_else(|| panic!("no address in {first:?}"))
             .to_owned();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
-            .args(["run", "--device", &format!("franka://{addr}"), "--model"])
-            .arg(&urdf)
-            .args(&armature)
-            .args(["--law", "cartesian-impedance"])
-            .args(args)
-            .args(["--json", "--no-mlock"])
-            .output()
-            .expect("rl run");
+        let out = std::thread::scope(|s| {
+            if let Some(beside) = beside {
+                s.spawn(beside);
+            }
+            std::process::Command::new(env!("CARGO_BIN_EXE_rl"))
+                .args(["run", "--device", &format!("franka://{addr}"), "--model"])
+                .arg(&urdf)
+                .args(&armature)
+                .args(["--law", "cartesian-impedance"])
+                .args(args)
+                .args(["--json", "--no-mlock"])
+                .output()
+                .expect("rl run")
+        });
         // One more status line of the fake's (each second), then it is stopped.
         let mut status = lines.try_iter().last();
         if let Ok(line) = lines.recv_timeout(Duration::from_millis(1500)) {
@@ -313,6 +320,7 @@ fn rl_run_with_the_cartesian_impedance_law_on_the_fake_franka() {
         "rl run --law cartesian-impedance",
         &args,
         Some(FR3_ARMATURE),
+        None,
     ) else {
         return;
     };
@@ -365,7 +373,8 @@ fn rl_run_avoids_a_moving_sphere_while_the_orientation_holds() {
         "--duration",
         "4s",
     ];
-    let Some((code, report, status)) = cli_run("rl run --obstacle moving-sphere", &args, None)
+    let Some((code, report, status)) =
+        cli_run("rl run --obstacle moving-sphere", &args, None, None)
     else {
         return;
     };
@@ -459,7 +468,7 @@ fn rl_run_avoids_obstacles_replayed_from_a_file() {
         "--duration",
         "3500ms",
     ];
-    let Some((code, report, status)) = cli_run("rl run --obstacle FILE", &args, None) else {
+    let Some((code, report, status)) = cli_run("rl run --obstacle FILE", &args, None, None) else {
         return;
     };
     let _ = std::fs::remove_dir_all(&dir);
@@ -486,6 +495,102 @@ fn rl_run_avoids_obstacles_replayed_from_a_file() {
     );
     let o = &report["law"]["obstacles"];
     assert_eq!(o["inputs"], inputs, "{o}");
+    assert_eq!(o["margin_violations"], 0, "{o}");
+    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
+    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
+    assert!(min >= o["margin_m"].as_f64().expect("margin"), "{o}");
+    assert!(
+        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
+        "{report}"
+    );
+}
+
+/// `rl run … --obstacle zenoh`: a tracker not written here — a Python publisher (PyPI
+/// eclipse-zenoh and rosbags' CDR, `geometry_msgs/PoseStamped` on the cell's
+/// `obstacles/hand` topic, 50 Hz) — brings a hand at the tool and leaves it where, left alone,
+/// it would overlap the tool's capsule. The cell turns each pose into a sphere of
+/// `--obstacle-radius` moving at the velocity its stamps give; the arm keeps the margin with
+/// the orientation held, and the cell's report counts every pose taken.
+#[cfg(feature = "zenoh")]
+#[test]
+fn rl_run_avoids_a_hand_a_zenoh_peer_publishes() {
+    #[path = "../rl-cell/tests/support/mod.rs"]
+    mod support;
+    use rl::controller::task_space::{MovingSphere, SKELETON_RADIUS};
+    use rl::drivers::fake::franka_controller::READY;
+    use rl_cell::ros2::msg::POSE_STAMPED;
+    use rl_cell::ros2::names::topic_key;
+    let Some(python) = support::python() else {
+        println!(
+            "SKIPPED: no Python with eclipse-zenoh and rosbags (scripts/test makes target/cell-venv)"
+        );
+        return;
+    };
+    let m = model(&fr3_shaped_urdf());
+    let p = tool_at(&m.model, &READY).translation;
+    let u = glam::DVec3::new(p.x, p.y, 0.0).normalize();
+    let radius = 0.08;
+    let way = MovingSphere {
+        radius,
+        from: p + u * 0.6,
+        to: p + u * 0.12,
+        period_s: 3.0,
+    };
+    assert!((way.to - p).length() - radius - SKELETON_RADIUS < 0.0);
+    let key = topic_key(0, "/arm1/obstacles/hand", &POSE_STAMPED);
+    let poses: Vec<serde_json::Value> = (0..=75)
+        .map(|k| {
+            let t = 0.02 * f64::from(k);
+            let c = way.at(t).shape.a;
+            // The tracker's own clock in the header: 20 ms apart.
+            let ns = 1_000_000_000_000_u64 + 20_000_000 * k as u64;
+            serde_json::json!({"key": key, "type": "geometry_msgs/msg/PoseStamped",
+                "sequence": k + 1, "after_s": if k == 0 { 0.0 } else { 0.02 },
+                "msg": {"header": {"stamp": {"sec": ns / 1_000_000_000,
+                    "nanosec": ns % 1_000_000_000}, "frame_id": "world"},
+                    "pose": {"position": {"x": c.x, "y": c.y, "z": c.z},
+                        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}})
+        })
+        .collect();
+    let sent = poses.len();
+    let dir = std::env::temp_dir().join(format!("rl-obstacle-zenoh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let plan = dir.join("plan.json");
+    // The run opens the cell, then connects to the robot; the publisher (Python: 1–3 s to
+    // start) connects to the cell, and the hand comes 0.5 s later, while the law runs.
+    let plan_json = serde_json::json!({"settle_s": 0.5, "samples": poses, "linger_s": 0.2});
+    std::fs::write(&plan, plan_json.to_string()).expect("plan");
+    let port = support::free_port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let publish = || {
+        let out = support::publish(&python, &endpoint, &plan);
+        assert!(out.status.success(), "the publisher failed");
+    };
+    let args = [
+        "--obstacle",
+        "zenoh",
+        "--obstacle-radius",
+        "0.08",
+        "--zenoh-listen",
+        &endpoint,
+        "--zenoh-namespace",
+        "/arm1",
+        "--duration",
+        "8s",
+    ];
+    let Some((code, report, status)) =
+        cli_run("rl run --obstacle zenoh", &args, None, Some(&publish))
+    else {
+        return;
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, Some(0), "{report}");
+    assert!(status.contains(" reflexes=0 "), "{status}");
+    let o = &report["law"]["obstacles"];
+    let inbound = &report["zenoh"]["inbound"]["obstacles"];
+    println!("zenoh obstacles: {inbound}\nlaw: {o}");
+    assert_eq!(inbound["accepted"], sent, "{inbound}");
+    assert_eq!(o["inputs"], sent, "{o}");
     assert_eq!(o["margin_violations"], 0, "{o}");
     assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
     let min = report["min_obstacle_distance_m"].as_f64().expect("min");

@@ -294,14 +294,32 @@ pub struct RunCell<const J: usize> {
     // The drain sink and the progress loop both hold it; only `forward` needs it mutably.
     cell: std::cell::RefCell<rl_cell::Cell<J>>,
     targets: std::sync::Arc<std::sync::OnceLock<rl::controller::InputSender<J, ()>>>,
+    obstacles: std::sync::Arc<std::sync::OnceLock<ObstacleSink<J>>>,
 }
 
+/// Where the cell's obstacles go: the task-space law's input channel, each a sphere.
+#[cfg(feature = "zenoh")]
+struct ObstacleSink<const J: usize> {
+    sender: rl::controller::InputSender<J, rl::controller::task_space::TaskInput>,
+    radius: f64,
+}
+
+/// The longest gap between two poses of one obstacle over which its velocity is estimated
+/// from their stamps, s (a longer one: at rest).
+#[cfg(feature = "zenoh")]
+const VELOCITY_GAP_S: f64 = 0.5;
+
 /// The cell's inbound for a run: targets to the run's input channel (`--follow zenoh`),
-/// obstacles refused.
+/// obstacles to the task-space law's (`--law … --obstacle zenoh`), each refused with the
+/// reason otherwise.
 #[cfg(feature = "zenoh")]
 struct ToRun<const J: usize> {
     targets: std::sync::Arc<std::sync::OnceLock<rl::controller::InputSender<J, ()>>>,
     follows: bool,
+    obstacles: std::sync::Arc<std::sync::OnceLock<ObstacleSink<J>>>,
+    avoids: bool,
+    /// Each obstacle's last position and its message's stamp (ns), for its velocity.
+    last: [Option<(glam::DVec3, i64)>; rl_cell::inbound::MAX_OBSTACLES],
 }
 
 #[cfg(feature = "zenoh")]
@@ -326,8 +344,43 @@ impl<const J: usize> rl_cell::Inbound<J> for ToRun<J> {
         sender.send_target(target).map_err(|e| e.to_string())
     }
 
-    fn obstacle(&mut self, _: &rl_cell::Obstacle, _: &rl_cell::Arrival) -> Result<(), String> {
-        Err("this run's law takes no obstacles".into())
+    fn obstacle(&mut self, o: &rl_cell::Obstacle, _: &rl_cell::Arrival) -> Result<(), String> {
+        use rl::controller::task_space::{Obstacle, TaskInput};
+        if !self.avoids {
+            return Err(
+                "this run's law takes no obstacles (start it with --law cartesian-impedance \
+                 --obstacle zenoh)"
+                    .into(),
+            );
+        }
+        let Some(sink) = self.obstacles.get() else {
+            return Err("the run has not started yet".into());
+        };
+        let id = usize::from(o.id);
+        let position = glam::DVec3::from_array(o.position);
+        // The velocity from this obstacle's last pose, by the messages' own stamps.
+        let velocity = match self.last.get(id).copied().flatten() {
+            Some((before, stamp)) => {
+                let dt = (o.stamp_ns - stamp) as f64 * 1e-9;
+                if dt > 0.0 && dt <= VELOCITY_GAP_S {
+                    (position - before) / dt
+                } else {
+                    glam::DVec3::ZERO
+                }
+            }
+            None => glam::DVec3::ZERO,
+        };
+        if let Some(last) = self.last.get_mut(id) {
+            *last = Some((position, o.stamp_ns));
+        }
+        let mut obstacle = Obstacle::sphere(position, sink.radius);
+        obstacle.velocity = velocity;
+        sink.sender
+            .send(TaskInput::Obstacle {
+                slot: id,
+                obstacle: Some(obstacle),
+            })
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -344,6 +397,7 @@ impl<const J: usize> RunCell<J> {
         period: Duration,
         stop: &rl_rt::StopFlag,
         follows: bool,
+        avoids: bool,
     ) -> Result<Option<Self>, CliError> {
         use rl::controller::plan::joint_name;
         if !args.wanted() {
@@ -372,12 +426,17 @@ impl<const J: usize> RunCell<J> {
             wait_for_subscriber: args.wait,
             ..rl_cell::CellConfig::default()
         };
-        // Streamed targets go to the run's input channel once it runs, with `--follow zenoh`;
-        // otherwise they are refused, counted, with the reason. No law here takes obstacles.
+        // Streamed targets go to the run's input channel once it runs, with `--follow zenoh`,
+        // obstacles to the task-space law's with `--obstacle zenoh`; otherwise they are
+        // refused, counted, with the reason.
         let targets = std::sync::Arc::new(std::sync::OnceLock::new());
+        let obstacles = std::sync::Arc::new(std::sync::OnceLock::new());
         let inbound = Box::new(ToRun {
             targets: targets.clone(),
             follows,
+            obstacles: obstacles.clone(),
+            avoids,
+            last: [None; rl_cell::inbound::MAX_OBSTACLES],
         });
         let cell = rl_cell::Cell::open(config, joints, inbound, stop.clone())
             .map_err(|e| CliError::usage(format!("--zenoh: {e}")))?;
@@ -402,12 +461,24 @@ impl<const J: usize> RunCell<J> {
         Ok(Some(Self {
             cell: std::cell::RefCell::new(cell),
             targets,
+            obstacles,
         }))
     }
 
     /// From now on, the cell's targets go to `sender` (the run's input channel).
     pub fn take_targets(&self, sender: rl::controller::InputSender<J, ()>) {
         let _ = self.targets.set(sender);
+    }
+
+    /// From now on, the cell's obstacles go to `sender` (the task-space law's input channel),
+    /// each a sphere of `radius` m at its pose's position, moving at the velocity its last
+    /// two poses' stamps give (slot: the obstacle's index among the names the cell has seen).
+    pub fn take_obstacles(
+        &self,
+        sender: rl::controller::InputSender<J, rl::controller::task_space::TaskInput>,
+        radius: f64,
+    ) {
+        let _ = self.obstacles.set(ObstacleSink { sender, radius });
     }
 
     /// Passes one cycle's record on (wait-free).
@@ -454,11 +525,19 @@ impl<const J: usize> RunCell<J> {
         _: Duration,
         _: &rl_rt::StopFlag,
         _: bool,
+        _: bool,
     ) -> Result<Option<Self>, CliError> {
         Ok(None)
     }
     /// Nothing.
     pub fn take_targets(&self, _: rl::controller::InputSender<J, ()>) {}
+    /// Nothing.
+    pub fn take_obstacles(
+        &self,
+        _: rl::controller::InputSender<J, rl::controller::task_space::TaskInput>,
+        _: f64,
+    ) {
+    }
     /// Nothing.
     pub fn forward(&self, _: &rl::controller::CycleRecord<J>) {}
     /// Nothing.

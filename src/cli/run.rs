@@ -273,6 +273,15 @@ pub struct RunArgs {
         help_heading = "Task-space control"
     )]
     pub obstacle: Option<ObstacleArg>,
+    /// With --obstacle zenoh: the radius of the sphere each obstacle pose stands for, m
+    /// [default: 0.1].
+    #[arg(
+        long,
+        value_name = "M",
+        requires = "obstacle",
+        help_heading = "Task-space control"
+    )]
+    pub obstacle_radius: Option<f64>,
     /// With --obstacle moving-sphere: the time it takes to come and go back [default: 8s].
     #[arg(long, value_parser = parse_duration, value_name = "DURATION", requires = "obstacle", help_heading = "Task-space control")]
     pub obstacle_period: Option<Duration>,
@@ -461,6 +470,10 @@ pub enum TaskArg {
     Hold,
 }
 
+/// `--obstacle zenoh`: the radius of the sphere an obstacle pose stands for, m (a hand or a
+/// forearm with a tracker's error).
+const DEFAULT_OBSTACLE_RADIUS: f64 = 0.1;
+
 /// `--obstacle`'s values.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ObstacleArg {
@@ -470,12 +483,17 @@ pub enum ObstacleArg {
     Lines(TargetSource),
     /// Obstacle lines from a file.
     File(PathBuf),
+    /// The cell's obstacle poses (`--zenoh`), spheres of `--obstacle-radius`.
+    Cell,
 }
 
 /// `--obstacle`'s value: `moving-sphere`, a stream source (`-`, `stdin`, `udp:…`) or a file.
 fn parse_obstacle(text: &str) -> Result<ObstacleArg, String> {
     if text == "moving-sphere" {
         return Ok(ObstacleArg::MovingSphere);
+    }
+    if text == "zenoh" {
+        return Ok(ObstacleArg::Cell);
     }
     let is_source = text == "-"
         || text.eq_ignore_ascii_case("stdin")
@@ -539,7 +557,7 @@ fn task_law<const B: usize, const J: usize>(args: &RunArgs) -> CartesianImpedanc
     }
     .gains(gains);
     match args.obstacle {
-        Some(ObstacleArg::Lines(_) | ObstacleArg::File(_)) => law.avoid(),
+        Some(ObstacleArg::Lines(_) | ObstacleArg::File(_) | ObstacleArg::Cell) => law.avoid(),
         Some(ObstacleArg::MovingSphere) => law.moving_sphere(TowardTool {
             period_s: args
                 .obstacle_period
@@ -732,6 +750,25 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
         }
         if args.task_period.is_some_and(|p| p.is_zero()) {
             return Err(CliError::usage("--task-period: give a time above 0"));
+        }
+        if args
+            .obstacle_radius
+            .is_some_and(|r| !(r.is_finite() && r >= 0.0))
+        {
+            return Err(CliError::usage(
+                "--obstacle-radius: give a radius in m, 0 or more",
+            ));
+        }
+        if args.obstacle_radius.is_some() && args.obstacle != Some(ObstacleArg::Cell) {
+            return Err(CliError::usage(
+                "--obstacle-radius is for --obstacle zenoh (obstacle lines carry their radius)",
+            ));
+        }
+        if args.obstacle == Some(ObstacleArg::Cell) && !args.zenoh.wanted() {
+            return Err(CliError::usage(
+                "--obstacle zenoh takes the cell's obstacles: add --zenoh ENDPOINT or \
+                 --zenoh-listen ENDPOINT",
+            ));
         }
     }
     if matches!(args.follow, Some(Follow::Cell)) && !args.zenoh.wanted() {
@@ -1062,6 +1099,7 @@ fn drive<const B: usize, const J: usize>(
         period,
         &stop,
         matches!(args.follow, Some(Follow::Cell)),
+        matches!(args.obstacle, Some(ObstacleArg::Cell)),
     )?;
     if !args.tracking_bound.is_empty() {
         supervision.tracking_error = match args.tracking_bound.as_slice() {
@@ -1167,6 +1205,12 @@ fn drive<const B: usize, const J: usize>(
             }
             None => None,
         };
+        if let (Some(ObstacleArg::Cell), Some(c)) = (&args.obstacle, &cell) {
+            c.take_obstacles(
+                run.inputs(),
+                args.obstacle_radius.unwrap_or(DEFAULT_OBSTACLE_RADIUS),
+            );
+        }
         let after = After {
             cell,
             view,
