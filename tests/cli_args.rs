@@ -142,3 +142,36 @@ fn an_output_file_that_cannot_be_created_is_refused_before_the_work() {
     }
     assert!(start.elapsed() < Duration::from_secs(10));
 }
+
+/// `--obstacle`'s forms that cannot work are refused before anything connects (the device
+/// here is a Franka address nothing listens on: reaching it would be a device error, not 2).
+#[test]
+fn obstacle_flags_that_cannot_work_are_refused_before_the_run() {
+    let law = [
+        "run",
+        "--device",
+        "franka://127.0.0.1:9",
+        "--law",
+        "cartesian-impedance",
+    ];
+    let with =
+        |more: &[&'static str]| -> Vec<&'static str> { law.iter().chain(more).copied().collect() };
+    refused(
+        &with(&["--obstacle", "/nonexistent-dir/hand.obstacles"]),
+        &["--obstacle /nonexistent-dir/hand.obstacles", "No such file"],
+    );
+    refused(
+        &with(&["--obstacle", "zenoh"]),
+        &["--obstacle zenoh", "--zenoh ENDPOINT"],
+    );
+    refused(
+        &with(&["--obstacle", "moving-sphere", "--obstacle-radius", "0.1"]),
+        &["--obstacle-radius is for --obstacle zenoh"],
+    );
+    refused(
+        &with(&["--obstacle", "udp:notaport"]),
+        &["'notaport' is not a port"],
+    );
+    // Without --law, obstacles have no law to go to.
+    refused(&["run", "--obstacle", "-"], &["--law"]);
+}

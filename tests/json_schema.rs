@@ -330,7 +330,7 @@ fn every_output_is_versioned_and_documented_key_by_key() {
 
 /// Keys documented for conditions the runs above do not meet (a device, a feature, an error),
 /// named one by one so that a key dropped from the code is dropped from the document too.
-const NOT_EXERCISED: [(&str, &str); 10] = [
+const NOT_EXERCISED: [(&str, &str); 11] = [
     ("rl model eval", "qdd_error"),
     ("rl model bench", "rnea_check"),
     ("rl run", "plan"),
@@ -343,6 +343,8 @@ const NOT_EXERCISED: [(&str, &str); 10] = [
     ("rl run", "min_obstacle_distance_m"),
     ("rl run", "torque_rate_max"),
     ("rl run", "compute_us"),
+    // `--obstacle FILE` goes with `--law` too: checked in tests/task_space.rs.
+    ("rl run", "obstacles"),
 ];
 
 /// `rl run --device fake-cia402`'s keys.

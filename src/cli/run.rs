@@ -764,6 +764,15 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
                 "--obstacle-radius is for --obstacle zenoh (obstacle lines carry their radius)",
             ));
         }
+        if let Some(ObstacleArg::File(path)) = &args.obstacle {
+            // Before anything connects; the stream opens it once the run runs.
+            if let Err(e) = std::fs::File::open(path) {
+                return Err(CliError::usage(format!(
+                    "--obstacle {}: {e}",
+                    path.display()
+                )));
+            }
+        }
         if args.obstacle == Some(ObstacleArg::Cell) && !args.zenoh.wanted() {
             return Err(CliError::usage(
                 "--obstacle zenoh takes the cell's obstacles: add --zenoh ENDPOINT or \
