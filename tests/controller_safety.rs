@@ -52,23 +52,26 @@ fn options() -> RunOptions {
 /// Run again, from a new robot, while the run failed from the machine's lateness (the host
 /// held the loop's CPU for milliseconds on a shared VM: [`late::failed_late`]); `None` after
 /// three such runs (SKIPPED, printed). A run that failed with nobody late is returned to its
-/// checks, and the expected faults are not timing failures, so nothing is loosened.
+/// checks; the faults these runs expect are not timing failures (the tests that expect one
+/// use [`run_once`]), so nothing is loosened.
 fn run(
     what: &str,
     make: impl Fn() -> SimRobot,
     options: RunOptions,
 ) -> Option<(RunReport, Arc<Mutex<SimStatus>>)> {
-    on_time(what, || {
-        let robot = make();
-        let status = robot.status();
-        let mut run =
-            ControlRun::<_, 16, 8>::start(robot, model(), options.clone()).expect("starts");
-        let deadline = Instant::now() + Duration::from_secs(60);
-        while run.poll(Duration::from_millis(20)).is_some() {
-            assert!(Instant::now() < deadline, "the run did not end within 60 s");
-        }
-        (run.join(), status)
-    })
+    on_time(what, || run_once(make(), options.clone()))
+}
+
+/// Runs `robot` to the end (bounded), once: the report and what the robot saw. For the tests
+/// that expect a timing fault (lost replies): a late machine cannot make one pass.
+fn run_once(robot: SimRobot, options: RunOptions) -> (RunReport, Arc<Mutex<SimStatus>>) {
+    let status = robot.status();
+    let mut run = ControlRun::<_, 16, 8>::start(robot, model(), options).expect("starts");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while run.poll(Duration::from_millis(20)).is_some() {
+        assert!(Instant::now() < deadline, "the run did not end within 60 s");
+    }
+    (run.join(), status)
 }
 
 /// `attempt` (a whole run) again while it failed from the machine's lateness; see [`run`].
@@ -299,13 +302,10 @@ fn a_lost_connection_stops_at_once_and_still_switches_off() {
 
 #[test]
 fn a_silent_peer_ends_the_run_after_a_few_cycles() {
-    let Some((report, status)) = run(
-        "a silent peer",
-        || robot(&[0.0; 6]).misbehave(Misbehaviour::Silent, 50),
+    let (report, status) = run_once(
+        robot(&[0.0; 6]).misbehave(Misbehaviour::Silent, 50),
         options(),
-    ) else {
-        return;
-    };
+    );
     // Three lost: a short loss, the arm brought to rest; ten: a dead link, stopped at once.
     let f = fault(&report);
     assert!(
@@ -327,13 +327,10 @@ fn a_silent_peer_ends_the_run_after_a_few_cycles() {
 #[test]
 fn a_lossy_link_ends_the_run_with_the_loss_rate() {
     // Every other reply lost: 50 % over the 100-cycle window.
-    let Some((report, _)) = run(
-        "a lossy link",
-        || robot(&[0.0; 6]).misbehave(Misbehaviour::LoseEvery(2), 20),
+    let (report, _) = run_once(
+        robot(&[0.0; 6]).misbehave(Misbehaviour::LoseEvery(2), 20),
         options(),
-    ) else {
-        return;
-    };
+    );
     let f = fault(&report);
     assert!(matches!(f, Fault::LossRate { .. }), "{f:?}");
     assert!(!f.stops_at_once());

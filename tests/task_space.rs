@@ -562,9 +562,11 @@ fn rl_run_avoids_a_hand_a_zenoh_peer_publishes() {
     std::fs::write(&plan, plan_json.to_string()).expect("plan");
     let port = support::free_port();
     let endpoint = format!("tcp/127.0.0.1:{port}");
+    // Whether it published is judged by what the run took (below): a run the machine made
+    // late may end before the publisher found it, and goes again.
     let publish = || {
         let out = support::publish(&python, &endpoint, &plan);
-        assert!(out.status.success(), "the publisher failed");
+        println!("the publisher: {}", out.status);
     };
     let args = [
         "--obstacle",

@@ -308,6 +308,10 @@ struct ObstacleSink<const J: usize> {
 /// from their stamps, s (a longer one: at rest).
 #[cfg(feature = "zenoh")]
 const VELOCITY_GAP_S: f64 = 0.5;
+/// The shortest such gap, s: two poses stamped closer say nothing reliable about a speed (a
+/// tracker's jitter over microseconds is kilometres per second); the last velocity is kept.
+#[cfg(feature = "zenoh")]
+const VELOCITY_MIN_GAP_S: f64 = 0.005;
 
 /// The cell's inbound for a run: targets to the run's input channel (`--follow zenoh`),
 /// obstacles to the task-space law's (`--law … --obstacle zenoh`), each refused with the
@@ -318,8 +322,8 @@ struct ToRun<const J: usize> {
     follows: bool,
     obstacles: std::sync::Arc<std::sync::OnceLock<ObstacleSink<J>>>,
     avoids: bool,
-    /// Each obstacle's last position and its message's stamp (ns), for its velocity.
-    last: [Option<(glam::DVec3, i64)>; rl_cell::inbound::MAX_OBSTACLES],
+    /// Each obstacle's last position, its message's stamp (ns) and the velocity sent with it.
+    last: [Option<(glam::DVec3, i64, glam::DVec3)>; rl_cell::inbound::MAX_OBSTACLES],
 }
 
 #[cfg(feature = "zenoh")]
@@ -356,25 +360,39 @@ impl<const J: usize> rl_cell::Inbound<J> for ToRun<J> {
         let Some(sink) = self.obstacles.get() else {
             return Err("the run has not started yet".into());
         };
+        use rl::controller::task_space::MAX_OBSTACLE_SPEED;
         let id = usize::from(o.id);
         let position = glam::DVec3::from_array(o.position);
-        // The velocity from this obstacle's last pose, by the messages' own stamps.
-        let velocity = match self.last.get(id).copied().flatten() {
-            Some((before, stamp)) => {
+        // The velocity from this obstacle's last pose, by the messages' own stamps, at most
+        // the law's fastest; a pose stamped before the last one is refused.
+        let last = self.last.get(id).copied().flatten();
+        let velocity = match last {
+            Some((_, stamp, _)) if o.stamp_ns < stamp => {
+                return Err(format!(
+                    "obstacle pose stamped {} ns before the last one of its name",
+                    stamp - o.stamp_ns
+                ));
+            }
+            Some((before, stamp, velocity)) => {
                 let dt = (o.stamp_ns - stamp) as f64 * 1e-9;
-                if dt > 0.0 && dt <= VELOCITY_GAP_S {
-                    (position - before) / dt
+                if dt < VELOCITY_MIN_GAP_S {
+                    velocity
+                } else if dt <= VELOCITY_GAP_S {
+                    ((position - before) / dt).clamp_length_max(MAX_OBSTACLE_SPEED)
                 } else {
                     glam::DVec3::ZERO
                 }
             }
             None => glam::DVec3::ZERO,
         };
-        if let Some(last) = self.last.get_mut(id) {
-            *last = Some((position, o.stamp_ns));
-        }
         let mut obstacle = Obstacle::sphere(position, sink.radius);
         obstacle.velocity = velocity;
+        // A pose too close in time to its last keeps that last one's place as the velocity's
+        // start.
+        let keep = matches!(last, Some((_, stamp, _)) if ((o.stamp_ns - stamp) as f64) * 1e-9 < VELOCITY_MIN_GAP_S);
+        if let (Some(slot), false) = (self.last.get_mut(id), keep) {
+            *slot = Some((position, o.stamp_ns, velocity));
+        }
         sink.sender
             .send(TaskInput::Obstacle {
                 slot: id,

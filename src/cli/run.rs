@@ -258,8 +258,10 @@ pub struct RunArgs {
     pub task_period: Option<Duration>,
     /// With --law: obstacles to avoid: `moving-sphere` (a sphere of 8 cm radius that comes
     /// horizontally at the tool's start position from 55 cm beyond it to 15 cm of it and goes
-    /// back, every --obstacle-period), or a stream of them: a FILE, `-` (standard input) or
-    /// `udp:PORT` / `udp:HOST:PORT`, one per line: `sphere SLOT x y z r [velocity vx vy vz]`,
+    /// back, every --obstacle-period), `zenoh` (the cell's obstacle poses, spheres of
+    /// --obstacle-radius; needs --zenoh or --zenoh-listen), or a stream of them: a FILE, `-`
+    /// (standard input) or `udp:PORT` / `udp:HOST:PORT`, one per line: `sphere SLOT x y z r
+    /// [velocity vx vy vz]`,
     /// `capsule SLOT ax ay az bx by bz r [velocity …]`, `clear SLOT`, each maybe after `at
     /// SECONDS` (from the stream's start: a recorded file replays in time); world coordinates,
     /// m (rl::controller::task_space documents the lines). The stream's end leaves the last
@@ -766,12 +768,26 @@ fn check(args: &RunArgs) -> Result<Setup, CliError> {
         }
         if let Some(ObstacleArg::File(path)) = &args.obstacle {
             // Before anything connects; the stream opens it once the run runs.
-            if let Err(e) = std::fs::File::open(path) {
+            let readable = std::fs::metadata(path).and_then(|m| {
+                if m.is_file() {
+                    std::fs::File::open(path).map(drop)
+                } else {
+                    Err(std::io::Error::other("not a file"))
+                }
+            });
+            if let Err(e) = readable {
                 return Err(CliError::usage(format!(
-                    "--obstacle {}: {e}",
+                    "--obstacle {}: {e} (give moving-sphere, zenoh, -, udp:PORT or a file of \
+                     obstacle lines)",
                     path.display()
                 )));
             }
+        }
+        if args.obstacle_period.is_some() && args.obstacle != Some(ObstacleArg::MovingSphere) {
+            return Err(CliError::usage(
+                "--obstacle-period is for --obstacle moving-sphere (a stream's lines carry \
+                 their own times)",
+            ));
         }
         if args.obstacle == Some(ObstacleArg::Cell) && !args.zenoh.wanted() {
             return Err(CliError::usage(
@@ -1179,6 +1195,7 @@ fn drive<const B: usize, const J: usize>(
         let obstacles = StreamOptions {
             role: "obstacles",
             rest_at_end: false,
+            targets: false,
         };
         let dof = joints.len();
         let spawned = match (&args.obstacle, file) {

@@ -106,6 +106,9 @@ use serde_json::json;
 
 use super::input::{InputError, InputSender, Target};
 
+/// The latest time an `at` line may name, s from the stream's start (about 11.6 days).
+pub const MAX_AT_S: f64 = 1e6;
+
 /// The longest line a stream takes, in bytes (its line end not counted); a longer one is
 /// malformed ([`LineError::TooLong`]).
 pub const MAX_LINE_BYTES: usize = 4096;
@@ -209,7 +212,7 @@ pub enum LineError {
         keyword: String,
         /// Values given.
         got: usize,
-        /// What it takes (`"4 (x y z radius), or 7 with velocity vx vy vz"`).
+        /// What it takes (`"5 (slot x y z radius), or 9 with velocity vx vy vz"`).
         takes: &'static str,
     },
     /// A value a law's line cannot take (a slot beyond the law's, a negative radius).
@@ -219,7 +222,16 @@ pub enum LineError {
         /// What is wrong.
         why: String,
     },
-    /// `at` without a time, or with one that is not a finite number of seconds ≥ 0.
+    /// A line this stream does not take: a joint target or `stop` in a stream of a law's own
+    /// inputs ([`StreamOptions::targets`] false).
+    NotTaken {
+        /// The keyword.
+        keyword: String,
+        /// What the stream takes ([`LineInput::KEYWORDS`]).
+        takes: &'static str,
+    },
+    /// `at` without a time, or with one that is not a number of seconds from 0 to
+    /// [`MAX_AT_S`].
     BadTime {
         /// The token after `at` (cut to a few characters), empty when none.
         token: String,
@@ -265,12 +277,17 @@ impl fmt::Display for LineError {
                 plural(*got, "value", "values")
             ),
             Self::Invalid { keyword, why } => write!(f, "{keyword}: {why}"),
+            Self::NotTaken { keyword, takes } => write!(
+                f,
+                "'{keyword}' is not taken here (a line starts with {takes})"
+            ),
             Self::BadTime { token } if token.is_empty() => {
                 f.write_str("at: no time (at SECONDS, then the line)")
             }
             Self::BadTime { token } => write!(
                 f,
-                "at: '{token}' is not a time (seconds from the stream's start, 0 or more)"
+                "at: '{token}' is not a time (seconds from the stream's start, 0 to {MAX_AT_S}, \
+                 then the line)"
             ),
             Self::ValueCount { quantity, got, dof } => write!(
                 f,
@@ -346,18 +363,7 @@ fn values<'a, const J: usize>(
     let mut got = 0;
     while let Some(token) = tokens.next_if(|t| !ends(t)) {
         got += 1;
-        let v: f64 = token.parse().map_err(|_| LineError::NotANumber {
-            quantity,
-            index: got,
-            token: shown(token),
-        })?;
-        if !v.is_finite() {
-            return Err(LineError::NotFinite {
-                quantity,
-                index: got,
-                token: shown(token),
-            });
-        }
+        let v = finite_value(quantity, got, token)?;
         if let Some(slot) = out.get_mut(got - 1) {
             *slot = v;
         }
@@ -476,8 +482,15 @@ pub fn split_time(line: &str) -> Result<(Option<f64>, &str), LineError> {
         .find(|c: char| c.is_whitespace() || c == ',')
         .unwrap_or(rest.len());
     let (token, after) = rest.split_at(end);
+    let blank = after
+        .trim_matches(|c: char| c.is_whitespace() || c == ',')
+        .is_empty();
     match token.parse::<f64>() {
-        Ok(t) if t.is_finite() && t >= 0.0 => Ok((Some(t), after)),
+        Ok(_) if blank => Err(LineError::Invalid {
+            keyword: "at".into(),
+            why: format!("nothing after the time '{}'", shown(token)),
+        }),
+        Ok(t) if (0.0..=MAX_AT_S).contains(&t) => Ok((Some(t), after)),
         _ => Err(LineError::BadTime {
             token: shown(token),
         }),
@@ -866,8 +879,7 @@ struct Follow<const J: usize, X> {
     sender: InputSender<J, X>,
     stop: StopFlag,
     shared: Arc<Shared>,
-    /// At the end of input (EOF), ask the run to come to rest.
-    rest_at_end: bool,
+    options: StreamOptions,
     /// When the stream started: `at` lines count from here.
     started: Instant,
 }
@@ -907,6 +919,17 @@ impl<const J: usize, X: LineInput> Follow<J, X> {
             }
         };
         let parsed = match parsed {
+            Ok(Some((_, Line::Target(_) | Line::Stop))) if !self.options.targets => {
+                let word = core::str::from_utf8(bytes)
+                    .ok()
+                    .and_then(|t| split_time(t).ok())
+                    .and_then(|(_, rest)| rest.split_whitespace().next())
+                    .unwrap_or_default();
+                Err(LineError::NotTaken {
+                    keyword: shown(word),
+                    takes: X::KEYWORDS,
+                })
+            }
             Ok(Some((Some(at), line))) => {
                 if !self.wait_until(at) {
                     Shared::count(&s.after_end);
@@ -955,7 +978,7 @@ impl<const J: usize, X: LineInput> Follow<J, X> {
                 }
                 Ok(None) => {
                     s.ended_by_eof.store(true, Ordering::Release);
-                    if self.rest_at_end {
+                    if self.options.rest_at_end {
                         self.stop.request(StopLevel::Rest);
                     }
                     return;
@@ -964,7 +987,7 @@ impl<const J: usize, X: LineInput> Follow<J, X> {
                     s.texts()
                         .read_error
                         .get_or_insert_with(|| format!("after line {number}: {e}"));
-                    if self.rest_at_end {
+                    if self.options.rest_at_end {
                         self.stop.request(StopLevel::Rest);
                     }
                     return;
@@ -1128,6 +1151,9 @@ pub struct StreamOptions {
     /// targets: nothing more will come). `false` for a stream beside the law's own motion
     /// (obstacles: the run goes on with the last ones).
     pub rest_at_end: bool,
+    /// Whether joint targets and `stop` lines are taken; `false` for a stream of a law's own
+    /// inputs alone (such lines are then malformed: [`LineError::NotTaken`]).
+    pub targets: bool,
 }
 
 impl Default for StreamOptions {
@@ -1136,6 +1162,7 @@ impl Default for StreamOptions {
         Self {
             role: "follow",
             rest_at_end: true,
+            targets: true,
         }
     }
 }
@@ -1189,7 +1216,7 @@ pub fn spawn_with<const J: usize, X: LineInput>(
                 sender,
                 stop,
                 shared: Arc::clone(&shared),
-                rest_at_end: options.rest_at_end,
+                options,
                 started: Instant::now(),
             };
             let thread = start(&shared, move || follow.receive(&socket))?;
@@ -1230,7 +1257,7 @@ pub fn spawn_reader_with<const J: usize, X: LineInput>(
         sender,
         stop,
         shared: Arc::clone(&shared),
-        rest_at_end: options.rest_at_end,
+        options,
         started: Instant::now(),
     };
     let thread = start(&shared, move || follow.read(reader))?;
@@ -1559,6 +1586,7 @@ mod tests {
         let options = StreamOptions {
             role: "marks",
             rest_at_end: false,
+            targets: true,
         };
         let stream = spawn_reader_with(
             Cursor::new(text),
@@ -1596,7 +1624,10 @@ mod tests {
         assert!(r.ended_by_eof && !r.rest_at_end);
         assert_eq!(
             r.first_malformed.as_deref(),
-            Some("line 4: at: '-1' is not a time (seconds from the stream's start, 0 or more)")
+            Some(
+                "line 4: at: '-1' is not a time (seconds from the stream's start, 0 to 1000000, \
+                 then the line)"
+            )
         );
         let text = r.lines_for_report();
         assert!(
@@ -1616,6 +1647,42 @@ mod tests {
             "at: no time (at SECONDS, then the line)"
         );
         assert_eq!(split_time("p 0").expect("no time"), (None, "p 0"));
+    }
+
+    #[test]
+    fn a_stream_of_a_laws_inputs_alone_takes_no_targets_and_no_stop() {
+        let m = model();
+        let (tx, mut rx) = channel::<16, 8, Mark>(&m, 64);
+        let stop = StopFlag::new();
+        let text = "p 0 0 0 0 0 0\nat 0.01 stop\nat 0.01\nat 1e7 mark 2\nmark 1\n";
+        let options = StreamOptions {
+            role: "marks",
+            rest_at_end: false,
+            targets: false,
+        };
+        let stream = spawn_reader_with(Cursor::new(text), "only", DOF, tx, stop.clone(), options)
+            .expect("thread starts");
+        wait_until("the end of input", || stream.is_finished());
+        assert_eq!(stop.level(), StopLevel::None, "no stop line taken");
+        let mut inputs = Inputs::<8, Mark>::default();
+        let mut got = Vec::new();
+        inputs.receive(&mut rx, MonoTime::now(), |i| {
+            got.push(*i);
+            Ok(())
+        });
+        assert_eq!(got, [Input::Other(Mark(1))]);
+        let r = stream.finish();
+        assert_eq!((r.lines, r.inputs_sent, r.malformed), (5, 1, 4));
+        assert_eq!(
+            r.first_malformed.as_deref(),
+            Some("line 1: 'p' is not taken here (a line starts with mark)")
+        );
+        assert_eq!(
+            split_time("at 0.01")
+                .expect_err("nothing after")
+                .to_string(),
+            "at: nothing after the time '0.01'"
+        );
     }
 
     #[test]

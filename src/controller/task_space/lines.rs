@@ -9,15 +9,16 @@
 //! | `sphere SLOT x y z r velocity vx vy vz` | the same, moving at (vx, vy, vz) (`v` for short) |
 //! | `capsule SLOT ax ay az bx by bz r [velocity vx vy vz]` | a capsule from a to b |
 //! | `clear SLOT` | the slot emptied (the obstacle is gone) |
-//! | `pose x y z qx qy qz qw` | the tool's goal (with `--task stream`): position and unit quaternion |
+//! | `pose x y z qx qy qz qw` | the tool's goal, for a law built with [`TaskMotion::Streamed`](super::TaskMotion::Streamed) (the library's; `rl run` has no streamed task: it refuses poses): position and unit quaternion |
 //! | `at SECONDS …` | any line, acted on that long after the stream started (a recorded file) |
 //!
-//! World coordinates in m, velocities in m/s; `SLOT` from 0 to [`MAX_OBSTACLES`] − 1 (an
-//! obstacle stays in its slot, the conservative choice, until replaced or cleared). Keywords
-//! are case-insensitive; commas count as spaces; `#` starts a comment line. A line that does
-//! not parse is counted malformed with its place and what is wrong (`line 3: sphere: 3
-//! values, it takes 4 (x y z radius) …`); the law refuses what it cannot take (a non-finite
-//! obstacle, a pose while braking), and that is counted too.
+//! World coordinates in m, velocities in m/s (at most [`MAX_OBSTACLE_SPEED`]); `SLOT` from 0
+//! to [`MAX_OBSTACLES`] − 1 (an obstacle stays in its slot, the conservative choice, until
+//! replaced or cleared). Keywords are case-insensitive; commas count as spaces; `#` starts a
+//! comment line. A line that does not parse is counted malformed in the stream's report with
+//! its place and what is wrong (`line 3: sphere: 4 values, it takes 5 (slot x y z radius) …`);
+//! what the law refuses once it has the input (a pose while braking, a pose to a law without a
+//! streamed task) is counted in the run's inputs (`refused_by_law`, the first reason kept).
 //!
 //! ```
 //! use rl::controller::stream::{Line, parse_line_for};
@@ -28,7 +29,7 @@
 //!     panic!("{line:?}")
 //! };
 //! assert_eq!((o.shape.radius, o.velocity.x), (0.08, -0.1));
-//! let e = parse_line_for::<8, TaskInput>("sphere 2 0.5 0 0.08", 7).expect_err("3 values");
+//! let e = parse_line_for::<8, TaskInput>("sphere 2 0.5 0 0.08", 7).expect_err("4 values");
 //! assert!(e.to_string().starts_with("sphere: 4 values, it takes 5"), "{e}");
 //! # Ok::<(), rl::controller::stream::LineError>(())
 //! ```
@@ -37,7 +38,7 @@ use glam::{DMat3, DQuat, DVec3};
 use rl_core::spatial::PlueckerTransform;
 use rl_sg::capsule::Capsule;
 
-use super::{MAX_OBSTACLES, Obstacle, TaskInput};
+use super::{MAX_OBSTACLE_SPEED, MAX_OBSTACLES, Obstacle, TaskInput};
 use crate::controller::stream::{LineError, LineInput, finite_value};
 
 /// How far from unit length a streamed quaternion may be (it is normalised).
@@ -143,6 +144,15 @@ fn obstacle(
         Some(v) => DVec3::from_array(numbers::<3>(keyword, plain + 2, v)?),
         None => DVec3::ZERO,
     };
+    if velocity.length() > MAX_OBSTACLE_SPEED {
+        return Err(LineError::Invalid {
+            keyword: keyword.to_owned(),
+            why: format!(
+                "speed {:.3} m/s, beyond the law's {MAX_OBSTACLE_SPEED} m/s",
+                velocity.length()
+            ),
+        });
+    }
     Ok(TaskInput::Obstacle {
         slot,
         obstacle: Some(Obstacle {
@@ -262,6 +272,10 @@ mod tests {
         assert_eq!(
             text("sphere 0 1 2 3 -0.1"),
             "sphere: radius -0.1 is negative"
+        );
+        assert_eq!(
+            text("sphere 0 1 2 3 0.1 v 0 6 0"),
+            "sphere: speed 6.000 m/s, beyond the law's 5 m/s"
         );
         assert_eq!(
             text("sphere 0 1 2 3 0.1 w 0 0 0"),

@@ -58,8 +58,8 @@ use serde_json::json;
 pub use compute::ComputeTimes;
 use obstacles::Obstacles;
 pub use obstacles::{
-    MAX_ARM_CAPSULES, MAX_OBSTACLES, MovingSphere, Obstacle, PREDICTION_HORIZON_S, SKELETON_RADIUS,
-    TowardTool,
+    MAX_ARM_CAPSULES, MAX_OBSTACLE_SPEED, MAX_OBSTACLES, MovingSphere, Obstacle,
+    PREDICTION_HORIZON_S, SKELETON_RADIUS, TowardTool,
 };
 use rl_sg::capsule::CapsuleModel;
 
@@ -628,7 +628,11 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
         }
         for o in self.obstacles.slots.iter().flatten() {
             if !o.is_valid() {
-                return Err(format!("an obstacle that is not finite: {o:?}").into());
+                return Err(format!(
+                    "an obstacle that is not finite, has a negative radius or moves faster than \
+                     {MAX_OBSTACLE_SPEED} m/s: {o:?}"
+                )
+                .into());
             }
         }
         if self.obstacles.enabled {
@@ -669,6 +673,7 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
             .obstacles
             .script
             .map(|s| s.sphere(self.start_pose.translation));
+        self.obstacles.restart();
         self.compute.clear();
         Ok(())
     }
@@ -701,7 +706,10 @@ impl<const B: usize, const J: usize> ControlLaw<B, J> for CartesianImpedance<B, 
                     return Err(Refused("an obstacle slot beyond the law's"));
                 }
                 if obstacle.is_some_and(|o| !o.is_valid()) {
-                    return Err(Refused("an obstacle that is not finite"));
+                    return Err(Refused(
+                        "an obstacle that is not finite, has a negative radius or moves faster \
+                         than MAX_OBSTACLE_SPEED",
+                    ));
                 }
                 self.obstacles.set(*slot, *obstacle);
                 self.stats.obstacle_inputs += 1;

@@ -4,12 +4,18 @@
 //!
 //! Streamed obstacles (a tracked worker) arrive as [`super::TaskInput::Obstacle`] into one of
 //! [`MAX_OBSTACLES`] slots; each keeps its last shape and velocity until replaced or cleared.
-//! Between two updates a moving obstacle is predicted at its velocity from the cycle its update
+//! Between two updates a moving sphere is predicted at its velocity from the cycle its update
 //! arrived in, for at most [`PREDICTION_HORIZON_S`]: a tracker at camera rates (30 Hz) moves
 //! the obstacle in steps of centimetres, and the repulsion would step with it (measured on the
 //! fake FR3: a sphere sent every 50 ms at 0.5 m/s shook the held orientation by 11 mrad, every
-//! 5 ms by 0.6; predicted, 50 ms updates hold it as 5 ms ones do). A tracker that stops leaves
-//! the obstacle where it was predicted last (the conservative choice).
+//! 5 ms by 0.6; predicted, 50 ms updates hold it as 5 ms ones do). The prediction sweeps the
+//! sphere from where it was seen to where it is predicted (a capsule), so the place it was
+//! seen stays covered whatever the velocity says; a tracker that stops leaves it swept to where
+//! it was predicted last (the conservative choice), with its velocity still damping the
+//! approach. Capsule obstacles are not predicted (a sweep of a capsule is no capsule). An
+//! obstacle given at the start ([`super::CartesianImpedance::obstacle`]) with a velocity is
+//! swept for the horizon from the first cycle, as a streamed one. Velocities above
+//! [`MAX_OBSTACLE_SPEED`] are refused.
 //! A scripted [`MovingSphere`] goes back and forth between two points along a cosine profile
 //! (no step in velocity), for demonstrations and tests.
 
@@ -27,6 +33,9 @@ pub const MAX_ARM_CAPSULES: usize = 64;
 /// The longest a streamed obstacle is predicted at its velocity after its last update, s;
 /// after that it stays where it was predicted last.
 pub const PREDICTION_HORIZON_S: f64 = 0.1;
+/// The fastest obstacle the law takes, m/s (a hand moves at up to about 2 m/s; a faster
+/// velocity is a tracker's error, and its prediction would reach far).
+pub const MAX_OBSTACLE_SPEED: f64 = 5.0;
 /// The radius of the skeleton capsules the law puts on an arm when given none, m (a Franka
 /// arm's links are 6–7 cm thick around their axes: this is a little under; give fitted
 /// capsules for a bound).
@@ -50,13 +59,15 @@ impl Obstacle {
         }
     }
 
-    /// Whether every number is finite and the radius ≥ 0.
+    /// Whether every number is finite, the radius ≥ 0 and the speed at most
+    /// [`MAX_OBSTACLE_SPEED`].
     pub fn is_valid(&self) -> bool {
         self.shape.a.is_finite()
             && self.shape.b.is_finite()
             && self.shape.radius.is_finite()
             && self.shape.radius >= 0.0
             && self.velocity.is_finite()
+            && self.velocity.length() <= MAX_OBSTACLE_SPEED
     }
 }
 
@@ -169,7 +180,7 @@ impl Obstacles {
             enabled: false,
             capsules: None,
             slots: [None; MAX_OBSTACLES],
-            arrived: [0.0; MAX_OBSTACLES],
+            arrived: [f64::NAN; MAX_OBSTACLES],
             script: None,
             moving: None,
             shapes: [Capsule::sphere(DVec3::ZERO, 0.0); MAX_OBSTACLES + 1],
@@ -186,6 +197,12 @@ impl Obstacles {
             *s = obstacle;
             *a = f64::NAN;
         }
+    }
+
+    /// At a run's start: the obstacles' predictions start again in its first cycle (the law's
+    /// clock starts again).
+    pub fn restart(&mut self) {
+        self.arrived = [f64::NAN; MAX_OBSTACLES];
     }
 
     /// The arm's skeleton when no capsules were given (at the run's start).
@@ -213,9 +230,19 @@ impl Obstacles {
             if arrived.is_nan() {
                 *arrived = t;
             }
-            // Predicted at its velocity since it arrived, for at most the horizon.
-            let shift = o.velocity * (t - *arrived).clamp(0.0, PREDICTION_HORIZON_S);
-            self.shapes[n] = Capsule::new(o.shape.a + shift, o.shape.b + shift, o.shape.radius);
+            // A sphere swept at its velocity since it arrived, for at most the horizon (NaN:
+            // not at all).
+            let elapsed = t - *arrived;
+            let ahead = if elapsed.is_nan() {
+                0.0
+            } else {
+                elapsed.clamp(0.0, PREDICTION_HORIZON_S)
+            };
+            self.shapes[n] = if o.shape.a == o.shape.b {
+                Capsule::new(o.shape.a, o.shape.a + o.velocity * ahead, o.shape.radius)
+            } else {
+                o.shape
+            };
             self.velocities[n] = o.velocity;
             n += 1;
         }
@@ -247,7 +274,7 @@ mod tests {
     use rl_core::algo;
 
     #[test]
-    fn a_streamed_obstacle_is_predicted_at_its_velocity_up_to_the_horizon() {
+    fn a_streamed_sphere_is_swept_at_its_velocity_up_to_the_horizon() {
         let model = crate::controller::rv6sl().expect("embedded model").model;
         let mut data = Box::new(Data::<16>::new());
         algo::forward_position(&model, &mut data, &[0.0; 6]).expect("fk");
@@ -263,22 +290,52 @@ mod tests {
                 velocity: v,
             }),
         );
-        let centre = |o: &mut Obstacles, t: f64| {
+        // Where it was seen, and where it is predicted.
+        let ends = |o: &mut Obstacles, t: f64| {
             o.nearest(&data, t, 0.2);
-            o.shapes[0].a
+            (o.shapes[0].a, o.shapes[0].b)
         };
+        let near = |a: DVec3, b: DVec3| (a - b).length() < 1e-12;
         // It arrived in the cycle at t = 2 s: there it is where it was sent.
-        assert_eq!(centre(&mut o, 2.0), start);
-        assert!((centre(&mut o, 2.05) - (start + v * 0.05)).length() < 1e-12);
-        // After the horizon it stays where it was predicted last.
-        let last = start + v * PREDICTION_HORIZON_S;
-        assert!((centre(&mut o, 2.5) - last).length() < 1e-12);
-        // An update starts over from where it was sent.
+        assert_eq!(ends(&mut o, 2.0), (start, start));
+        let (seen, ahead) = ends(&mut o, 2.05);
+        assert!(seen == start && near(ahead, start + v * 0.05));
+        // After the horizon it reaches no farther.
+        let (seen, ahead) = ends(&mut o, 2.5);
+        assert!(seen == start && near(ahead, start + v * PREDICTION_HORIZON_S));
+        // An update starts over from where it was sent; one at rest stays.
         o.set(3, Some(Obstacle::sphere(start, 0.1)));
-        assert_eq!(centre(&mut o, 3.0), start);
-        assert_eq!(centre(&mut o, 3.05), start, "at rest: not moved");
+        assert_eq!(ends(&mut o, 3.0), (start, start));
+        assert_eq!(ends(&mut o, 3.05), (start, start));
+        // A new run: the prediction starts again in its first cycle (its clock from 0).
+        o.set(
+            3,
+            Some(Obstacle {
+                shape: Capsule::sphere(start, 0.1),
+                velocity: v,
+            }),
+        );
+        o.nearest(&data, 5.0, 0.2);
+        o.restart();
+        assert_eq!(ends(&mut o, 0.0), (start, start));
+        // A capsule is not predicted; a clear empties the slot.
+        let capsule = Capsule::new(start, start + DVec3::X, 0.05);
+        o.set(
+            3,
+            Some(Obstacle {
+                shape: capsule,
+                velocity: v,
+            }),
+        );
+        o.nearest(&data, 1.0, 0.2);
+        assert_eq!(ends(&mut o, 1.05), (capsule.a, capsule.b));
         o.set(3, None);
-        o.nearest(&data, 3.1, 0.2);
         assert!(o.slots.iter().all(Option::is_none));
+        // Too fast is not valid.
+        let fast = Obstacle {
+            shape: Capsule::sphere(start, 0.1),
+            velocity: DVec3::X * 6.0,
+        };
+        assert!(!fast.is_valid());
     }
 }
