@@ -431,6 +431,21 @@ fn a_hand_at_the_tool() -> (rl::controller::task_space::MovingSphere, f64) {
     (way, radius)
 }
 
+/// The hand's run ended with the law having taken `inputs` obstacles, never nearer than the
+/// margin, repelling for over half a second, with the orientation held.
+fn assert_kept_away(report: &serde_json::Value, inputs: usize) {
+    let o = &report["law"]["obstacles"];
+    assert_eq!(o["inputs"], inputs, "{o}");
+    assert_eq!(o["margin_violations"], 0, "{o}");
+    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
+    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
+    assert!(min >= o["margin_m"].as_f64().expect("margin"), "{o}");
+    assert!(
+        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
+        "{report}"
+    );
+}
+
 /// `rl run … --obstacle FILE`: a recorded tracker's file — a sphere coming at the tool over
 /// 1.5 s (`at` every 50 ms, a tracker at 20 Hz, with its velocity) and staying where, left alone, it would overlap
 /// the tool's capsule, a capsule put in and cleared, and one line the law's protocol does not
@@ -503,16 +518,7 @@ fn rl_run_avoids_obstacles_replayed_from_a_file() {
         report["end"], "duration reached, brought to rest",
         "{report}"
     );
-    let o = &report["law"]["obstacles"];
-    assert_eq!(o["inputs"], inputs, "{o}");
-    assert_eq!(o["margin_violations"], 0, "{o}");
-    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
-    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
-    assert!(min >= o["margin_m"].as_f64().expect("margin"), "{o}");
-    assert!(
-        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
-        "{report}"
-    );
+    assert_kept_away(&report, inputs);
 }
 
 /// `rl run … --obstacle zenoh`: a tracker not written here — a Python publisher (PyPI
@@ -589,19 +595,13 @@ fn rl_run_avoids_a_hand_a_zenoh_peer_publishes() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(code, Some(0), "{report}");
     assert!(status.contains(" reflexes=0 "), "{status}");
-    let o = &report["law"]["obstacles"];
     let inbound = &report["zenoh"]["inbound"]["obstacles"];
-    println!("zenoh obstacles: {inbound}\nlaw: {o}");
-    assert_eq!(inbound["accepted"], sent, "{inbound}");
-    assert_eq!(o["inputs"], sent, "{o}");
-    assert_eq!(o["margin_violations"], 0, "{o}");
-    assert!(o["repelling_cycles"].as_u64() > Some(500), "{o}");
-    let min = report["min_obstacle_distance_m"].as_f64().expect("min");
-    assert!(min >= o["margin_m"].as_f64().expect("margin"), "{o}");
-    assert!(
-        report["orientation_error_max_rad"].as_f64() < Some(5e-3),
-        "{report}"
+    println!(
+        "zenoh obstacles: {inbound}\nlaw: {}",
+        report["law"]["obstacles"]
     );
+    assert_eq!(inbound["accepted"], sent, "{inbound}");
+    assert_kept_away(&report, sent);
 }
 
 /// The seed's tracked worker: a sphere streamed into the running law from another thread (as
